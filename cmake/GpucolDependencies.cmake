@@ -1,0 +1,10 @@
+# Every dependency comes from Debian's packages (scripts/deps.sh installs them).
+find_package(PkgConfig REQUIRED)
+# Debian's BulletConfig.cmake carries relative paths, so Bullet is found through pkg-config.
+pkg_check_modules(BULLET REQUIRED IMPORTED_TARGET bullet>=3.0)
+find_package(Eigen3 3.3 REQUIRED NO_MODULE)
+find_package(TBB REQUIRED)
+find_package(assimp REQUIRED)
+if(GPUCOL_WITH_OPENCL)
+  find_package(OpenCL REQUIRED)
+endif()

@@ -1,0 +1,73 @@
+#pragma once
+
+#include <LinearMath/btTransform.h>
+#include <LinearMath/btVector3.h>
+
+#include <cstdint>
+#include <vector>
+
+#include "gpucol/config.h"
+
+namespace gpucol {
+
+class MeshShape;
+
+/// A triangle of mesh A and a triangle of mesh B (indices into each mesh's triangle list).
+struct TrianglePair {
+  std::uint32_t triangleA = 0;  ///< Triangle index in mesh A.
+  std::uint32_t triangleB = 0;  ///< Triangle index in mesh B.
+  /// Pairs compare by (triangleA, triangleB): the order in which results are reported.
+  friend bool operator==(const TrianglePair& l, const TrianglePair& r) {
+    return l.triangleA == r.triangleA && l.triangleB == r.triangleB;
+  }
+  friend bool operator<(const TrianglePair& l, const TrianglePair& r) {
+    return l.triangleA != r.triangleA ? l.triangleA < r.triangleA : l.triangleB < r.triangleB;
+  }
+};
+
+/// One contact between two meshes, in Bullet's conventions.
+struct MeshContact {
+  std::uint32_t triangleA = 0;  ///< Triangle of mesh A that generated the contact.
+  std::uint32_t triangleB = 0;  ///< Triangle of mesh B that generated the contact.
+  btVector3 pointWorld;         ///< A point shared by both triangles, in world space.
+  btVector3 normalWorldOnB;     ///< Unit normal on B pointing towards A, in world space.
+  btScalar depth = 0;           ///< Signed distance along the normal: negative when penetrating.
+};
+
+/// Counters and timings of one mesh pair query.
+struct MeshPairStats {
+  std::uint64_t nodeTests = 0;      ///< Box-box tests of the middle phase.
+  std::uint64_t triangleTests = 0;  ///< Exact triangle-triangle tests of the near phase.
+  double middlePhaseMs = 0;         ///< Time of the tree-vs-tree traversal.
+  double nearPhaseMs = 0;           ///< Time of the exact tests and contact generation.
+  double reductionMs = 0;           ///< Time of the contact reduction.
+  Backend backendUsed = Backend::Cpu;  ///< Where the pair ran.
+  bool rootBoxesMissed = false;     ///< True when the root boxes missed and nothing else ran.
+};
+
+/// Everything one mesh pair query finds, each list sorted for determinism.
+struct MeshPairResult {
+  std::vector<TrianglePair> candidatePairs;     ///< Middle phase output: triangle boxes overlap.
+  std::vector<TrianglePair> intersectingPairs;  ///< Candidates whose triangles really intersect.
+  std::vector<MeshContact> contacts;            ///< One contact per kept intersecting pair (thesis §5.3.4).
+  std::vector<MeshContact> reducedContacts;     ///< What the 6-D binning kept (thesis §5.3.5).
+  MeshPairStats stats;                          ///< Counters and timings.
+};
+
+/// One pair of a batch query.
+struct MeshPairQuery {
+  const MeshShape* shapeA = nullptr;  ///< First shape (its triangles are "A" in the result).
+  btTransform transformA;             ///< World transform of shape A.
+  const MeshShape* shapeB = nullptr;  ///< Second shape.
+  btTransform transformB;             ///< World transform of shape B.
+};
+
+/// Collides two mesh shapes at the given world transforms, without a world.
+MeshPairResult collideMeshes(const MeshShape& shapeA, const btTransform& transformA, const MeshShape& shapeB,
+                             const btTransform& transformB, const Config& config = Config());
+
+/// Collides every pair of the batch, in parallel; results come back in the order of the queries.
+std::vector<MeshPairResult> collideMeshesBatch(const std::vector<MeshPairQuery>& queries,
+                                               const Config& config = Config());
+
+}  // namespace gpucol

@@ -1,0 +1,26 @@
+#pragma once
+
+#include <string>
+
+namespace gpucol {
+
+/// Where a stage runs: Auto chooses per batch from its size, Cpu and OpenCL force one.
+enum class Backend { Auto, Cpu, OpenCL };
+
+/// The knobs of the plugin, each with a measured default (see README, "Options").
+struct Config {
+  /// Backend of the mesh pipeline (middle phase, near phase, reduction).
+  Backend meshBackend = Backend::Auto;
+  /// Backend of the grid broad phase.
+  Backend broadphaseBackend = Backend::Auto;
+  /// Bins per dimension of the 6-D contact binning (thesis §5.3.5); 0 turns reduction off.
+  int reductionResolution = 4;
+  /// Triangles per leaf of the non-updated AABB tree (thesis §5.3.2 uses 1).
+  int trianglesPerLeaf = 1;
+  /// Proxy count under which the broad phase tests all pairs without a grid (paper Table 7).
+  int bruteForceBelow = 1000;
+  /// Substring of the OpenCL device name to use; the environment variable GPUCOL_OPENCL_DEVICE overrides it.
+  std::string openclDevice;
+};
+
+}  // namespace gpucol

@@ -1,0 +1,10 @@
+#pragma once
+
+/// Everything of gpucol's public API.
+#include "gpucol/collide_meshes.h"
+#include "gpucol/config.h"
+#include "gpucol/mass_properties.h"
+#include "gpucol/mesh_error.h"
+#include "gpucol/mesh_report.h"
+#include "gpucol/mesh_shape.h"
+#include "gpucol/triangle_mesh.h"

@@ -1,0 +1,59 @@
+#pragma once
+
+#include <array>
+#include <cstdint>
+#include <string>
+#include <vector>
+
+#include "gpucol/mass_properties.h"
+#include "gpucol/mesh_report.h"
+
+namespace gpucol {
+
+/// A validated, immutable triangle mesh: float xyz vertices and uint32 triangles, in its own frame.
+/// Construction validates the input (thesis §5.3.1) and throws MeshError on bad data; the report
+/// describes what the mesh is (open, non-manifold, degenerate triangles...) without rejecting it.
+class TriangleMesh {
+ public:
+  /// Builds a mesh from xyz triples and index triples; `name` appears in error messages.
+  static TriangleMesh fromArrays(std::vector<float> xyz, std::vector<std::uint32_t> indices,
+                                 std::string name = "arrays");
+
+  /// Number of vertices.
+  std::size_t vertexCount() const { return m_positions.size() / 3; }
+  /// Number of triangles.
+  std::size_t triangleCount() const { return m_indices.size() / 3; }
+  /// Vertex coordinates, x y z per vertex.
+  const std::vector<float>& positions() const { return m_positions; }
+  /// Vertex indices, three per triangle, counter-clockwise seen from outside.
+  const std::vector<std::uint32_t>& indices() const { return m_indices; }
+  /// Where the mesh came from: a file path or the name given to fromArrays.
+  const std::string& name() const { return m_name; }
+  /// Topology and quality report, computed once at construction.
+  const MeshReport& report() const { return m_report; }
+
+  /// Volume, centre of mass and inertia for a uniform density; throws MeshError for an open mesh.
+  MassProperties massProperties(double density = 1.0) const;
+
+  /// The same mesh with every vertex mapped by p' = rotation * p + translation (rotation row-major).
+  TriangleMesh transformed(const std::array<double, 9>& rotation, const std::array<double, 3>& translation) const;
+
+  /// The mesh moved into its principal frame (centre of mass at the origin, principal axes along x, y, z),
+  /// so that a btRigidBody gets a diagonal inertia; `massProperties()` of the result has a diagonal tensor.
+  /// `fromPrincipal` receives the transform from the principal frame back to the original frame.
+  TriangleMesh inPrincipalFrame(double density, std::array<double, 9>* fromPrincipalRotation = nullptr,
+                                std::array<double, 3>* fromPrincipalTranslation = nullptr) const;
+
+ private:
+  TriangleMesh() = default;
+
+  std::vector<float> m_positions;
+  std::vector<std::uint32_t> m_indices;
+  std::string m_name;
+  MeshReport m_report;
+};
+
+/// Loads a mesh file (PLY, OBJ, STL and the other formats assimp reads); throws MeshError naming the file.
+TriangleMesh loadMesh(const std::string& path);
+
+}  // namespace gpucol
