@@ -1,0 +1,148 @@
+#pragma once
+// The pair-finding stage of the grid broad phase (Avril et al. 2012, §3–§4) on plain types: AABBs in,
+// the sorted list of overlapping proxy pairs out. GridBroadphase (plugin/src/bullet) owns the Bullet side;
+// this file is the seam where the CPU implementation and the OpenCL one (opencl/host, registered through
+// registerOpenClPairFinder) plug in, and the contract both must meet bit for bit.
+//
+// The stages, which the OpenCL kernels mirror one to one:
+//  0. Active proxies: slots with kProxyActive set; the rest are holes left by destroyed proxies.
+//  1. Path choice: fewer than Options::bruteForceBelow active proxies → every pair of the active list goes
+//     through the mapping function (pair_mapping.h) with no grid (paper §3, Table 7).
+//  2. Cell size (§4.1): CellSizeRule::Size = kSizeFactor × median of the objects' largest extent;
+//     CellSizeRule::Density = cbrt(kObjectsPerCell × volume of the scene / count), the paper's rule. Cells
+//     are cubes; the grid's origin is the min corner of all boxes. When a grid would need more than 2^21
+//     cells along an axis or 2^32 cells in all, the cell is enlarged (coarser, never inexact).
+//  3. Huge objects: a box that covers more than Options::hugeCellLimit cells stays out of the grid and is
+//     tested against every other active proxy (brute force), so one huge ground box does not fill the grid.
+//  4. Keys (§4.2): each other box goes into every cell it overlaps; cell coordinate of x on an axis is
+//     cellOf(x) = clamp(floor((x - origin) * invCell), 0, dim-1) in float, a monotone function, and the cell
+//     index is cx + dimX*(cy + dimY*cz). One 64-bit key per (cell, proxy): (cell << 32) | proxy. Count
+//     first (cells per box, exclusive prefix sum), then allocate and fill: no capacity to overflow.
+//  5. Sort the keys by (cell, proxy): a counting sort over cells when the grid is dense (cells <= 4 × keys),
+//     else tbb::parallel_sort. Equal cells become runs; proxies inside a run ascend.
+//  6. Per-cell counts: a run of m proxies holds m(m-1)/2 candidate pairs; an exclusive prefix sum over the
+//     runs numbers every candidate globally, k in [0, total).
+//  7. Mapping function: candidate k → its run (binary search in the prefix sum) → local index → (i, j) in
+//     the run by gpucol_pair_from_index (on the CPU once per chunk, then stepped; on a GPU once per item).
+//  8. AABB test + filter: overlap on all three axes with touching counting (min <= other max);
+//     (groupA & maskB) && (groupB & maskA); not both kProxyStatic.
+//  9. Dedupe: two boxes share every cell around their overlap; the pair is reported only by the run whose
+//     cell holds the overlap's min corner, i.e. cellOf(max(minA, minB)) on each axis == the run's cell.
+// 10. Output: set bits in a bit mask over the candidates (§3.4) or append to per-chunk lists (compacted);
+//     either way the pair keys are gathered and sorted, so the order never depends on threads or device.
+//
+// Pair key: (std::uint64_t(lower slot) << 32) | higher slot. Slots are the indices into ProxyArrays.
+#include <cstdint>
+#include <functional>
+#include <memory>
+#include <string>
+#include <vector>
+
+#include "gpucol/config.h"
+
+namespace gpucol {
+
+/// Flag bit of ProxyArrays::flags: the slot holds a live proxy.
+constexpr std::uint8_t kProxyActive = 1u;
+/// Flag bit of ProxyArrays::flags: the proxy is static (static–static pairs are never generated).
+constexpr std::uint8_t kProxyStatic = 2u;
+
+/// Structure-of-arrays view of every proxy slot (the pair finder reads it, never writes it).
+struct ProxyArrays {
+  /// Number of slots (live proxies and holes); every array below has this many entries.
+  std::uint32_t count = 0;
+  /// AABB min corner per axis.
+  const float* minX = nullptr;
+  /// AABB min corner, y.
+  const float* minY = nullptr;
+  /// AABB min corner, z.
+  const float* minZ = nullptr;
+  /// AABB max corner, x.
+  const float* maxX = nullptr;
+  /// AABB max corner, y.
+  const float* maxY = nullptr;
+  /// AABB max corner, z.
+  const float* maxZ = nullptr;
+  /// Collision filter group (Bullet's m_collisionFilterGroup).
+  const std::int32_t* group = nullptr;
+  /// Collision filter mask (Bullet's m_collisionFilterMask).
+  const std::int32_t* mask = nullptr;
+  /// kProxyActive | kProxyStatic bits per slot.
+  const std::uint8_t* flags = nullptr;
+};
+
+/// How the grid's cell size is chosen (paper §4.1 and the alternative it is measured against).
+enum class CellSizeRule { Size, Density };
+
+/// How candidate results are written before the final sort (paper §3.4 bit mask, or a compacted list).
+enum class PairOutput { BitMask, Compacted };
+
+/// Square root used for the mapping function's first guess (paper §3.3); results are identical.
+enum class MappingSqrt { Double, Newton };
+
+/// Knobs of one pair search.
+struct PairFinderOptions {
+  /// Below this many active proxies all pairs are tested without a grid (Config::bruteForceBelow).
+  std::uint32_t bruteForceBelow = 1000;
+  /// Cell size rule of the grid.
+  CellSizeRule cellSizeRule = CellSizeRule::Size;
+  /// Output form of the candidate tests.
+  PairOutput output = PairOutput::Compacted;
+  /// Square root of the mapping function's guess.
+  MappingSqrt mappingSqrt = MappingSqrt::Double;
+  /// A box covering more cells than this is tested against all instead of being binned.
+  std::uint32_t hugeCellLimit = 64;
+};
+
+/// What one search did (for benchmarks, tests and printStats).
+struct PairFinderStats {
+  /// True when the grid was used, false for the brute-force path.
+  bool usedGrid = false;
+  /// Cell edge length used (0 without grid).
+  float cellSize = 0.0f;
+  /// Cells per axis.
+  std::uint32_t dims[3] = {0, 0, 0};
+  /// (cell, proxy) keys written.
+  std::uint64_t keys = 0;
+  /// Candidate pairs tested through the mapping function (grid or brute force).
+  std::uint64_t candidates = 0;
+  /// Proxies kept out of the grid as huge.
+  std::uint32_t hugeProxies = 0;
+  /// Bytes of scratch memory held by the finder after the search.
+  std::size_t scratchBytes = 0;
+};
+
+/// Finds every pair of active proxies whose AABBs overlap (touching counts) and pass the filters.
+class PairFinder {
+ public:
+  virtual ~PairFinder() = default;
+  /// Replaces `pairs` with the sorted, duplicate-free pair keys of `proxies`.
+  virtual void findPairs(const ProxyArrays& proxies, const PairFinderOptions& options,
+                         std::vector<std::uint64_t>& pairs) = 0;
+  /// Statistics of the last findPairs call.
+  virtual const PairFinderStats& stats() const = 0;
+  /// Short name for logs and benchmarks ("cpu", "opencl").
+  virtual std::string name() const = 0;
+};
+
+/// The CPU implementation (oneTBB), the reference the OpenCL path must match bit for bit.
+std::unique_ptr<PairFinder> makeCpuPairFinder();
+
+/// Makes an OpenCL pair finder for `config`, or returns nullptr when no device/setup is available.
+using PairFinderFactory = std::function<std::unique_ptr<PairFinder>(const Config& config)>;
+
+/// Installs the OpenCL factory (called once by opencl/host at static initialisation).
+void registerOpenClPairFinder(PairFinderFactory factory);
+
+/// Calls the installed OpenCL factory; nullptr when none is installed or it returned none.
+std::unique_ptr<PairFinder> makeOpenClPairFinder(const Config& config);
+
+/// Pair key of slots a and b (either order): lower slot in the high 32 bits.
+inline std::uint64_t makePairKey(std::uint32_t a, std::uint32_t b) {
+  return a < b ? (std::uint64_t(a) << 32) | b : (std::uint64_t(b) << 32) | a;
+}
+
+/// Brute-force reference: all active pairs tested one by one in double precision; sorted keys.
+std::vector<std::uint64_t> findPairsBruteForce(const ProxyArrays& proxies);
+
+}  // namespace gpucol
