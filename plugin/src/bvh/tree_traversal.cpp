@@ -1,0 +1,246 @@
+#include "bvh/tree_traversal.h"
+
+#include <tbb/blocked_range.h>
+#include <tbb/enumerable_thread_specific.h>
+#include <tbb/parallel_for.h>
+#include <tbb/parallel_sort.h>
+
+#include <algorithm>
+#include <cmath>
+
+namespace gpucol {
+namespace {
+
+/// A box of B carried into A's frame.
+struct CarriedBox {
+  float min[3];
+  float max[3];
+};
+
+/// A pair of nodes whose boxes are already known to overlap, with B's box carried (so it is carried once).
+struct NodePair {
+  std::uint32_t a;
+  std::uint32_t b;
+  CarriedBox boxB;
+};
+
+/// Front size at which the breadth-first expansion stops and the parallel depth-first traversal starts:
+/// a few thousand independent subproblems keep every core busy even when most of them die after a test or two.
+constexpr std::size_t kParallelFront = 4096;
+
+/// The map of one call, prepared once (thesis §3.3.3: with non-updated AABBs the rotation is set up once for the
+/// two hierarchies and reused by every box test), with |M| and the inflation.
+class BoxCarrier {
+ public:
+  BoxCarrier(const AabbTree& b, const AffineMap& map) {
+    const Eigen::Vector3f inflation = carriedBoxInflation(b, map);
+    for (int i = 0; i < 3; ++i) {
+      for (int j = 0; j < 3; ++j) {
+        m_m[i][j] = map.linear(i, j);
+        m_abs[i][j] = std::fabs(map.linear(i, j));
+      }
+      m_t[i] = map.translation(i);
+      m_inflation[i] = inflation(i);
+    }
+  }
+
+  /// centre' = M c + t, extents' = |M| e + inflation: contains every point of the box mapped by M, t.
+  CarriedBox carry(const float* lo, const float* hi) const {
+    float c[3], e[3];
+    for (int j = 0; j < 3; ++j) {
+      c[j] = (lo[j] + hi[j]) * 0.5f;
+      e[j] = (hi[j] - lo[j]) * 0.5f;
+    }
+    CarriedBox out;
+    for (int i = 0; i < 3; ++i) {
+      const float ci = m_m[i][0] * c[0] + m_m[i][1] * c[1] + m_m[i][2] * c[2] + m_t[i];
+      const float ei = m_abs[i][0] * e[0] + m_abs[i][1] * e[1] + m_abs[i][2] * e[2] + m_inflation[i];
+      out.min[i] = ci - ei;
+      out.max[i] = ci + ei;
+    }
+    return out;
+  }
+
+ private:
+  float m_m[3][3];
+  float m_abs[3][3];
+  float m_t[3];
+  float m_inflation[3];
+};
+
+/// Touching counts as overlapping: the comparisons are exact on float, all rounding went into the inflation.
+inline bool overlaps(const float* lo, const float* hi, const CarriedBox& b) {
+  return lo[0] <= b.max[0] && b.min[0] <= hi[0] && lo[1] <= b.max[1] && b.min[1] <= hi[1] && lo[2] <= b.max[2] &&
+         b.min[2] <= hi[2];
+}
+
+/// Depth-first simultaneous descent from a set of overlapping node pairs (thesis Alg. 5.1), with an explicit stack.
+class Traverser {
+ public:
+  Traverser(const AabbTree& a, const AabbTree& b, const BoxCarrier& carrier)
+      : m_nodesA(a.nodes().data()), m_nodesB(b.nodes().data()), m_entriesA(a.leafEntries().data()),
+        m_entriesB(b.leafEntries().data()), m_carrier(carrier) {}
+
+  /// Expands one overlapping pair by one level: children pairs that overlap go to `next`, leaf pairs to `out`.
+  template <typename Sink>
+  void expand(const NodePair& pair, Sink& next, std::vector<TrianglePair>& out, std::uint64_t& tests) const {
+    const AabbNode& na = m_nodesA[pair.a];
+    const AabbNode& nb = m_nodesB[pair.b];
+    if (na.isLeaf()) {
+      if (nb.isLeaf()) {
+        emitLeafPair(na, nb, pair.boxB, out, tests);
+        return;
+      }
+      // Leaf against node: two tests, B's children carried.
+      const std::uint32_t childrenB[2] = {pair.b + 1, nb.first};
+      for (std::uint32_t cb : childrenB) {
+        const AabbNode& child = m_nodesB[cb];
+        const CarriedBox box = m_carrier.carry(child.min, child.max);
+        ++tests;
+        if (overlaps(na.min, na.max, box)) next.push_back({pair.a, cb, box});
+      }
+      return;
+    }
+    const std::uint32_t childrenA[2] = {pair.a + 1, na.first};
+    if (nb.isLeaf()) {
+      // Node against leaf: two tests, B's box already carried.
+      for (std::uint32_t ca : childrenA) {
+        const AabbNode& child = m_nodesA[ca];
+        ++tests;
+        if (overlaps(child.min, child.max, pair.boxB)) next.push_back({ca, pair.b, pair.boxB});
+      }
+      return;
+    }
+    // Node against node: both descend at once, four tests; each of B's children is carried once for two tests.
+    const std::uint32_t childrenB[2] = {pair.b + 1, nb.first};
+    for (std::uint32_t cb : childrenB) {
+      const AabbNode& childB = m_nodesB[cb];
+      const CarriedBox box = m_carrier.carry(childB.min, childB.max);
+      for (std::uint32_t ca : childrenA) {
+        const AabbNode& childA = m_nodesA[ca];
+        ++tests;
+        if (overlaps(childA.min, childA.max, box)) next.push_back({ca, cb, box});
+      }
+    }
+  }
+
+  /// Runs the depth-first descent below `start` (already known to overlap) to the end.
+  void run(const NodePair& start, std::vector<NodePair>& stack, std::vector<TrianglePair>& out,
+           std::uint64_t& tests) const {
+    stack.clear();
+    stack.push_back(start);
+    while (!stack.empty()) {
+      const NodePair pair = stack.back();
+      stack.pop_back();
+      expand(pair, stack, out, tests);
+    }
+  }
+
+ private:
+  /// Two overlapping leaves. Leaves of one triangle are the thesis's case: the leaf box is the triangle box, so the
+  /// pair is a candidate. Leaves of several triangles test their triangles' boxes, so that every leaf size gives
+  /// the same candidates as one triangle per leaf.
+  void emitLeafPair(const AabbNode& na, const AabbNode& nb, const CarriedBox& boxB, std::vector<TrianglePair>& out,
+                    std::uint64_t& tests) const {
+    if (na.count == 1 && nb.count == 1) {
+      out.push_back({na.first, nb.first});
+      return;
+    }
+    for (std::uint32_t j = 0; j < nb.count; ++j) {
+      CarriedBox triB = boxB;
+      std::uint32_t triangleB = nb.first;
+      if (nb.count > 1) {
+        const AabbLeafEntry& entry = m_entriesB[nb.first + j];
+        triB = m_carrier.carry(entry.min, entry.max);
+        triangleB = entry.triangle;
+      }
+      if (na.count == 1) {
+        ++tests;
+        if (overlaps(na.min, na.max, triB)) out.push_back({na.first, triangleB});
+        continue;
+      }
+      for (std::uint32_t i = 0; i < na.count; ++i) {
+        const AabbLeafEntry& entry = m_entriesA[na.first + i];
+        ++tests;
+        if (overlaps(entry.min, entry.max, triB)) out.push_back({entry.triangle, triangleB});
+      }
+    }
+  }
+
+  const AabbNode* m_nodesA;
+  const AabbNode* m_nodesB;
+  const AabbLeafEntry* m_entriesA;
+  const AabbLeafEntry* m_entriesB;
+  const BoxCarrier& m_carrier;
+};
+
+/// What each worker thread keeps between the front's pairs.
+struct WorkerState {
+  std::vector<NodePair> stack;
+  std::vector<TrianglePair> out;
+  std::uint64_t tests = 0;
+};
+
+}  // namespace
+
+Eigen::Vector3f carriedBoxInflation(const AabbTree& b, const AffineMap& bToA) {
+  const Eigen::Vector3f rootMin = b.rootMin().cwiseAbs();
+  const Eigen::Vector3f rootMax = b.rootMax().cwiseAbs();
+  // Every node of B lies in the root box, so |c| + e <= R_B on each of B's axes.
+  const float radius = rootMin.cwiseMax(rootMax).maxCoeff();
+  const Eigen::Vector3f rowAbsSum = bToA.linear.cwiseAbs().rowwise().sum();
+  return kCarryRelativeEpsilon * (rowAbsSum * radius + bToA.translation.cwiseAbs());
+}
+
+void findCandidatePairs(const AabbTree& a, const AabbTree& b, const AffineMap& bToA, std::vector<TrianglePair>& out,
+                        TraversalStats* stats, bool parallel) {
+  out.clear();
+  const BoxCarrier carrier(b, bToA);
+  const Traverser traverser(a, b, carrier);
+
+  std::uint64_t tests = 1;
+  const AabbNode& rootA = a.node(0);
+  const AabbNode& rootB = b.node(0);
+  const NodePair root{0, 0, carrier.carry(rootB.min, rootB.max)};
+  if (!overlaps(rootA.min, rootA.max, root.boxB)) {
+    if (stats) stats->nodeTests += tests;
+    return;
+  }
+
+  if (!parallel) {
+    std::vector<NodePair> stack;
+    traverser.run(root, stack, out, tests);
+  } else {
+    // Breadth-first until the front holds enough independent pairs (thesis §5.4.2 expands level by level too),
+    // then each worker finishes its share depth first with its own stack and output.
+    std::vector<NodePair> front{root}, next;
+    while (!front.empty() && front.size() < kParallelFront) {
+      next.clear();
+      for (const NodePair& pair : front) traverser.expand(pair, next, out, tests);
+      front.swap(next);
+    }
+    if (!front.empty()) {
+      tbb::enumerable_thread_specific<WorkerState> workers;
+      tbb::parallel_for(tbb::blocked_range<std::size_t>(0, front.size(), 16),
+                        [&](const tbb::blocked_range<std::size_t>& range) {
+                          WorkerState& w = workers.local();
+                          for (std::size_t i = range.begin(); i != range.end(); ++i) {
+                            traverser.run(front[i], w.stack, w.out, w.tests);
+                          }
+                        });
+      std::size_t total = out.size();
+      for (const WorkerState& w : workers) total += w.out.size();
+      out.reserve(total);
+      for (const WorkerState& w : workers) {
+        out.insert(out.end(), w.out.begin(), w.out.end());
+        tests += w.tests;
+      }
+    }
+  }
+  // Each triangle sits in exactly one leaf and each leaf pair is reached along one path, so there are no
+  // duplicates; only the order depends on the traversal, and sorting makes it independent of the threads.
+  tbb::parallel_sort(out.begin(), out.end());
+  if (stats) stats->nodeTests += tests;
+}
+
+}  // namespace gpucol

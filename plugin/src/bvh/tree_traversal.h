@@ -1,0 +1,43 @@
+#pragma once
+
+#include <Eigen/Core>
+
+#include <cstdint>
+#include <vector>
+
+#include "bvh/aabb_tree.h"
+#include "gpucol/collide_meshes.h"
+
+namespace gpucol {
+
+/// Maps mesh-B coordinates into mesh-A coordinates: p_A = linear * p_B + translation. linear is a general 3x3
+/// (rotation times non-uniform scale factors), so boxes are carried with the |M| trick: centre' = M c + t, extents' = |M| e.
+struct AffineMap {
+  Eigen::Matrix3f linear = Eigen::Matrix3f::Identity();        ///< Rotation times scale, B to A.
+  Eigen::Vector3f translation = Eigen::Vector3f::Zero();       ///< Origin of B in A's frame.
+};
+
+/// Counters of one traversal.
+struct TraversalStats {
+  std::uint64_t nodeTests = 0;  ///< Box-box overlap tests, root test and triangle-box tests of multi-triangle leaves included.
+};
+
+/// Relative widening of a carried box, times the magnitude bound of the carried coordinates (see carriedBoxInflation).
+/// Carrying a box in float rounds about 8 times (centre and extent of the stored box, three products and sums per
+/// row, the final centre +- extent), each by at most 2^-24 of the largest magnitude involved; 16 * 2^-24 covers
+/// that twice, so a carried float box always contains the exactly carried triangle.
+constexpr float kCarryRelativeEpsilon = 16.0f / 16777216.0f;
+
+/// Absolute widening of B's carried boxes along each of A's axes for one call: kCarryRelativeEpsilon times a bound
+/// on every carried coordinate, sum_j |M_ij| * R_B + |t_i|, where R_B is the largest coordinate magnitude of B's
+/// root box. Exposed so tests can check the traversal against the same definition in double.
+Eigen::Vector3f carriedBoxInflation(const AabbTree& b, const AffineMap& bToA);
+
+/// All (triangle of A, triangle of B) whose leaf boxes overlap (touching counts), B's boxes carried into A's frame;
+/// sorted by (triangleA, triangleB), no duplicates. Parallel with oneTBB over the traversal front when `parallel`.
+/// `stats`, when given, has its counters increased (so one struct can sum several calls).
+/// Follows thesis Alg. 5.1 (simultaneous descent: node-node gives 4 tests, leaf-node 2) with an explicit stack.
+void findCandidatePairs(const AabbTree& a, const AabbTree& b, const AffineMap& bToA,
+                        std::vector<TrianglePair>& out, TraversalStats* stats = nullptr, bool parallel = true);
+
+}  // namespace gpucol
