@@ -1,0 +1,40 @@
+#pragma once
+
+#include <Eigen/Core>
+#include <optional>
+
+namespace gpucol {
+
+/// One contact between triangle A and triangle B, in Bullet's conventions and the frame of the inputs.
+struct TriangleContact {
+  /// A point shared by both triangles: the midpoint of their common segment on the planes' intersection
+  /// line (coplanar pairs: the mean of the corners of their overlap polygon).
+  Eigen::Vector3f point;
+  /// Unit normal on B pointing towards A: moving A along it by -depth separates the pair.
+  Eigen::Vector3f normalOnB;
+  /// Signed distance along normalOnB: <= 0; negative when penetrating, 0 when touching.
+  float depth;
+};
+
+/// Contact of two intersecting triangles (thesis §5.3.4); std::nullopt when none is kept.
+///
+/// Triangles are counter-clockwise seen from outside: the outward normal is (v1 - v0) x (v2 - v0).
+/// For each triangle, the distance to move it along the other's outward normal until all its vertices are
+/// on the outer side of the other's plane is measured; the smaller one wins:
+///   A moves least along nB  ->  normalOnB =  nB, depth = -(A's distance);
+///   B moves least along nA  ->  normalOnB = -nA, depth = -(B's distance)  (ties go to A moving along nB).
+/// The contact is dropped when the triangles separate along their intersection line (direction nA x nB,
+/// the overlap of the projections of the whole triangles on it) by less than the depth's magnitude: such a
+/// pair says little about the bodies' collision, and neighbouring pairs give the contact (§5.3.4).
+///
+/// Returns std::nullopt when the triangles do not intersect (this function repeats Möller's test, so the
+/// GPU style of calling it on every candidate pair is correct, thesis §5.4.1), when either triangle is
+/// degenerate (see trianglesIntersect), or when the contact is dropped as above. It agrees with
+/// trianglesIntersect: a contact is returned only for pairs that function reports as intersecting.
+///
+/// Coplanar pairs (every vertex of one in the other's plane, within trianglesIntersect's tolerance) have
+/// no intersection line: both distances are 0, so the contact is normalOnB = nB, depth = 0 (resting
+/// face-on-face contact), never dropped, at the mean of the corners of the overlap polygon.
+std::optional<TriangleContact> generateContact(const Eigen::Vector3f (&a)[3], const Eigen::Vector3f (&b)[3]);
+
+}  // namespace gpucol

@@ -1,0 +1,44 @@
+#include "narrowphase/triangle_intersection.h"
+
+#include "narrowphase/coplanar_triangles.h"
+#include "narrowphase/triangle_plane.h"
+
+namespace gpucol {
+
+bool trianglesIntersect(const Eigen::Vector3f& a0, const Eigen::Vector3f& a1, const Eigen::Vector3f& a2,
+                        const Eigen::Vector3f& b0, const Eigen::Vector3f& b1, const Eigen::Vector3f& b2) {
+  // Möller 1997, step 1: B's vertices against A's plane; all strictly on one side rejects.
+  const detail::TrianglePlane planeA = detail::makePlane(a0, a1, a2);
+  const detail::TrianglePlane planeB = detail::makePlane(b0, b1, b2);
+  if (planeA.degenerate || planeB.degenerate) return false;
+  float dB[3];
+  detail::signedDistances(planeA, b0, b1, b2, dB);
+  if (detail::allOnOneSide(dB)) return false;
+
+  const Eigen::Vector3f* const a[3] = {&a0, &a1, &a2};
+  const Eigen::Vector3f* const b[3] = {&b0, &b1, &b2};
+  if (detail::allInPlane(dB)) {
+    return detail::coplanarTrianglesOverlap(a, b, detail::dominantAxis(planeA.normal), nullptr);
+  }
+
+  // Step 2: A's vertices against B's plane.
+  float dA[3];
+  detail::signedDistances(planeB, a0, a1, a2, dA);
+  if (detail::allOnOneSide(dA)) return false;
+  if (detail::allInPlane(dA)) {
+    return detail::coplanarTrianglesOverlap(a, b, detail::dominantAxis(planeB.normal), nullptr);
+  }
+
+  // Step 3: both triangles cross the line L where the planes meet; they intersect iff their intervals
+  // on L overlap. Möller's simplification: the coordinate along L's dominant axis orders points on L
+  // like the true line parameter, so no dot products are needed.
+  const int axis = detail::dominantAxis(planeA.normal.cross(planeB.normal));
+  const float pA[3] = {a0[axis], a1[axis], a2[axis]};
+  const float pB[3] = {b0[axis], b1[axis], b2[axis]};
+  float loA, hiA, loB, hiB;
+  detail::lineInterval(pA, dA, loA, hiA);
+  detail::lineInterval(pB, dB, loB, hiB);
+  return loA <= hiB && loB <= hiA;
+}
+
+}  // namespace gpucol
