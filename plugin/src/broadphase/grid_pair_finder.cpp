@@ -1,0 +1,495 @@
+// CPU implementation of the grid pair finder; the stage numbers in comments refer to grid_pair_finder.h.
+#include "broadphase/grid_pair_finder.h"
+
+#include <tbb/blocked_range.h>
+#include <tbb/parallel_for.h>
+#include <tbb/parallel_sort.h>
+
+#include <algorithm>
+#include <cmath>
+#include <limits>
+#include <stdexcept>
+#include <utility>
+
+#include "broadphase/pair_mapping.h"
+
+namespace gpucol {
+namespace {
+
+/// Size rule: cell edge = this × median largest extent. 2 was measured best of {1, 1.5, 2, 3} on the
+/// benchmark scenes (gpucol-bench broadphase --cell-factor): smaller cells mean more keys per box,
+/// larger ones more candidate pairs per cell.
+constexpr float kSizeFactor = 2.0f;
+/// Density rule (paper §4.1): the cell volume that holds this many objects on average.
+constexpr float kObjectsPerCell = 4.0f;
+/// Cell coordinates must fit the 32-bit cell index of a key (dims product < 2^32).
+constexpr std::uint64_t kMaxCells = (std::uint64_t(1) << 32) - 1;
+/// Candidates per parallel chunk at least (a multiple of 64 so bit-mask words are never shared).
+constexpr std::uint64_t kMinChunk = 16384;
+/// Chunks per search at most, so per-chunk bookkeeping stays small next to the work.
+constexpr std::uint64_t kMaxChunks = 256;
+
+inline bool aabbOverlap(const ProxyArrays& p, std::uint32_t a, std::uint32_t b) {
+  // Touching counts: boxes that share a face, edge or corner overlap (min <= other max on every axis).
+  return p.minX[a] <= p.maxX[b] && p.minX[b] <= p.maxX[a] && p.minY[a] <= p.maxY[b] &&
+         p.minY[b] <= p.maxY[a] && p.minZ[a] <= p.maxZ[b] && p.minZ[b] <= p.maxZ[a];
+}
+
+inline bool passesFilter(const ProxyArrays& p, std::uint32_t a, std::uint32_t b) {
+  // Bullet's default filter (btOverlappingPairCache::needsBroadphaseCollision without a callback), and
+  // static–static pairs never exist.
+  return (p.group[a] & p.mask[b]) != 0 && (p.group[b] & p.mask[a]) != 0 &&
+         ((p.flags[a] & p.flags[b] & kProxyStatic) == 0);
+}
+
+/// Cell coordinate of x on one axis: floor((x - origin) * invCell) clamped to [0, dim-1]. Monotone in x
+/// (float subtraction and multiplication by a positive number round monotonically), which is all the
+/// dedupe rule needs: the overlap's min corner lies inside both boxes, so its cell lies in both ranges.
+inline std::uint32_t cellOf(float x, float origin, float invCell, std::uint32_t dim) {
+  const float t = (x - origin) * invCell;
+  if (!(t > 0.0f)) return 0;
+  if (t >= float(dim - 1)) return dim - 1;
+  return std::min(std::uint32_t(t), dim - 1);
+}
+
+struct Grid {
+  float origin[3] = {0, 0, 0};
+  float cell = 1.0f;
+  float invCell = 1.0f;
+  std::uint32_t dims[3] = {1, 1, 1};
+  std::uint64_t cells() const { return std::uint64_t(dims[0]) * dims[1] * dims[2]; }
+};
+
+/// Cell ranges [lo, hi] of one box on the three axes.
+struct CellRange {
+  std::uint32_t lo[3];
+  std::uint32_t hi[3];
+  std::uint64_t count() const {
+    return std::uint64_t(hi[0] - lo[0] + 1) * (hi[1] - lo[1] + 1) * (hi[2] - lo[2] + 1);
+  }
+};
+
+inline CellRange cellRange(const ProxyArrays& p, std::uint32_t s, const Grid& g) {
+  CellRange r;
+  r.lo[0] = cellOf(p.minX[s], g.origin[0], g.invCell, g.dims[0]);
+  r.lo[1] = cellOf(p.minY[s], g.origin[1], g.invCell, g.dims[1]);
+  r.lo[2] = cellOf(p.minZ[s], g.origin[2], g.invCell, g.dims[2]);
+  r.hi[0] = cellOf(p.maxX[s], g.origin[0], g.invCell, g.dims[0]);
+  r.hi[1] = cellOf(p.maxY[s], g.origin[1], g.invCell, g.dims[1]);
+  r.hi[2] = cellOf(p.maxZ[s], g.origin[2], g.invCell, g.dims[2]);
+  return r;
+}
+
+template <typename F>
+inline void forEachCell(const CellRange& r, const Grid& g, F&& f) {
+  for (std::uint32_t z = r.lo[2]; z <= r.hi[2]; ++z)
+    for (std::uint32_t y = r.lo[1]; y <= r.hi[1]; ++y) {
+      const std::uint64_t row = (std::uint64_t(z) * g.dims[1] + y) * g.dims[0];
+      for (std::uint32_t x = r.lo[0]; x <= r.hi[0]; ++x) f(std::uint32_t(row + x));
+    }
+}
+
+/// Splits [0, total) into deterministic chunks (boundaries depend only on total).
+inline std::uint64_t chunkSize(std::uint64_t total) {
+  std::uint64_t size = std::max(kMinChunk, (total + kMaxChunks - 1) / kMaxChunks);
+  return (size + 63) / 64 * 64;
+}
+
+class CpuPairFinder final : public PairFinder {
+ public:
+  void findPairs(const ProxyArrays& proxies, const PairFinderOptions& options,
+                 std::vector<std::uint64_t>& pairs) override;
+  const PairFinderStats& stats() const override { return m_stats; }
+  std::string name() const override { return "cpu"; }
+
+ private:
+  void bruteForce(const ProxyArrays& p, const PairFinderOptions& options, std::vector<std::uint64_t>& pairs);
+  void grid(const ProxyArrays& p, const PairFinderOptions& options, std::vector<std::uint64_t>& pairs);
+  Grid chooseGrid(const ProxyArrays& p, const PairFinderOptions& options);
+  void binSorted(const ProxyArrays& p, const Grid& g);
+  void testRuns(const ProxyArrays& p, const PairFinderOptions& options, const Grid& g);
+  void testHuge(const ProxyArrays& p);
+  void gather(std::vector<std::uint64_t>& pairs);
+  std::size_t scratchBytes() const;
+
+  PairFinderStats m_stats;
+  std::vector<std::uint32_t> m_active;   // active slots, ascending
+  std::vector<std::uint32_t> m_binned;   // active slots that go into the grid
+  std::vector<std::uint32_t> m_huge;     // active slots kept out of the grid (stage 3)
+  std::vector<float> m_extent;           // scratch for the median extent
+  std::vector<std::uint32_t> m_cellStart;  // dense counting sort: first entry per cell (+1 sentinel)
+  std::vector<std::uint64_t> m_keys;     // sparse path: (cell << 32) | slot
+  std::vector<std::uint32_t> m_sorted;   // slots sorted by (cell, slot)
+  std::vector<std::uint32_t> m_runCell;  // runs of >= 2 entries: cell index
+  std::vector<std::uint32_t> m_runStart; // first entry in m_sorted
+  std::vector<std::uint32_t> m_runLength;
+  std::vector<std::uint64_t> m_runPrefix;  // exclusive prefix sum of m(m-1)/2, plus the total at the end
+  std::vector<std::uint64_t> m_bits;     // bit mask output (stage 10)
+  std::vector<std::vector<std::uint64_t>> m_chunkPairs;  // output per chunk (kept for its capacity)
+  std::size_t m_chunksUsed = 0;          // chunks of m_chunkPairs filled by this search
+
+  /// Reserves `count` more output chunks and returns the index of the first.
+  std::size_t takeChunks(std::size_t count) {
+    const std::size_t first = m_chunksUsed;
+    m_chunksUsed += count;
+    if (m_chunkPairs.size() < m_chunksUsed) m_chunkPairs.resize(m_chunksUsed);
+    return first;
+  }
+};
+
+void CpuPairFinder::findPairs(const ProxyArrays& proxies, const PairFinderOptions& options,
+                              std::vector<std::uint64_t>& pairs) {
+  m_stats = PairFinderStats{};
+  m_chunksUsed = 0;
+  pairs.clear();
+  // Stage 0: the active list, ascending, so brute force emits keys already in order.
+  m_active.clear();
+  for (std::uint32_t s = 0; s < proxies.count; ++s)
+    if (proxies.flags[s] & kProxyActive) m_active.push_back(s);
+  if (m_active.size() < 2) return;
+  // Stage 1: the path.
+  if (m_active.size() < options.bruteForceBelow)
+    bruteForce(proxies, options, pairs);
+  else
+    grid(proxies, options, pairs);
+  m_stats.scratchBytes = scratchBytes();
+}
+
+void CpuPairFinder::bruteForce(const ProxyArrays& p, const PairFinderOptions& options,
+                               std::vector<std::uint64_t>& pairs) {
+  const std::uint64_t n = m_active.size();
+  const std::uint64_t total = gpucol_pair_count(n);
+  m_stats.candidates = total;
+  const std::uint64_t chunk = chunkSize(total);
+  const std::uint64_t chunks = (total + chunk - 1) / chunk;
+  const std::size_t firstChunk = takeChunks(chunks);
+  const bool newton = options.mappingSqrt == MappingSqrt::Newton;
+  tbb::parallel_for(std::uint64_t(0), chunks, [&](std::uint64_t c) {
+    const std::uint64_t k0 = c * chunk;
+    const std::uint64_t k1 = std::min(total, k0 + chunk);
+    gpucol_u64 a = 0, b = 0;
+    // The mapping function places the chunk's first item; the rest of the chunk steps through the row,
+    // which on a CPU is cheaper than a square root per item and visits the same pairs in the same order.
+    if (newton)
+      gpucol_pair_from_index_newton(n, k0, &a, &b);
+    else
+      gpucol_pair_from_index(n, k0, &a, &b);
+    auto& out = m_chunkPairs[firstChunk + c];
+    out.clear();
+    for (std::uint64_t k = k0; k < k1; ++k) {
+      const std::uint32_t sa = m_active[a], sb = m_active[b];
+      if (aabbOverlap(p, sa, sb) && passesFilter(p, sa, sb)) out.push_back((std::uint64_t(sa) << 32) | sb);
+      if (++b == n) {
+        ++a;
+        b = a + 1;
+      }
+    }
+  });
+  // Row-major order over ascending slots is key order, and chunks are in k order: no sort needed.
+  gather(pairs);
+}
+
+Grid CpuPairFinder::chooseGrid(const ProxyArrays& p, const PairFinderOptions& options) {
+  const std::size_t n = m_active.size();
+  // Stage 2: the median of the largest extent, robust to a few huge boxes (a mean would follow them).
+  m_extent.resize(n);
+  float lo[3] = {p.minX[m_active[0]], p.minY[m_active[0]], p.minZ[m_active[0]]};
+  float hi[3] = {p.maxX[m_active[0]], p.maxY[m_active[0]], p.maxZ[m_active[0]]};
+  for (std::size_t i = 0; i < n; ++i) {
+    const std::uint32_t s = m_active[i];
+    m_extent[i] = std::max({p.maxX[s] - p.minX[s], p.maxY[s] - p.minY[s], p.maxZ[s] - p.minZ[s]});
+  }
+  std::nth_element(m_extent.begin(), m_extent.begin() + n / 2, m_extent.end());
+  const float median = m_extent[n / 2];
+  float cell = kSizeFactor * median;
+  if (options.cellSizeRule == CellSizeRule::Density || !(cell > 0.0f)) {
+    for (std::uint32_t s : m_active) {
+      lo[0] = std::min(lo[0], p.minX[s]), lo[1] = std::min(lo[1], p.minY[s]), lo[2] = std::min(lo[2], p.minZ[s]);
+      hi[0] = std::max(hi[0], p.maxX[s]), hi[1] = std::max(hi[1], p.maxY[s]), hi[2] = std::max(hi[2], p.maxZ[s]);
+    }
+    // A flat scene has zero volume; count each axis at least one object thick so the rule stays finite.
+    double volume = 1.0;
+    for (int a = 0; a < 3; ++a) volume *= std::max(double(hi[a]) - double(lo[a]), double(median));
+    const float density = float(std::cbrt(double(kObjectsPerCell) * volume / double(n)));
+    if (density > 0.0f && std::isfinite(density)) cell = std::max(density, median);
+  }
+  if (!(cell > 0.0f) || !std::isfinite(cell)) cell = 1.0f;  // all boxes are points at one spot
+
+  // Stage 3: huge boxes (estimated from extents, independent of the grid's origin).
+  m_binned.clear();
+  m_huge.clear();
+  const double inv = 1.0 / double(cell);
+  for (std::uint32_t s : m_active) {
+    const double covered = (double(p.maxX[s] - p.minX[s]) * inv + 1.0) * (double(p.maxY[s] - p.minY[s]) * inv + 1.0) *
+                           (double(p.maxZ[s] - p.minZ[s]) * inv + 1.0);
+    (covered > double(options.hugeCellLimit) ? m_huge : m_binned).push_back(s);
+  }
+  m_stats.hugeProxies = std::uint32_t(m_huge.size());
+
+  Grid g;
+  if (m_binned.empty()) return g;
+  const std::uint32_t f = m_binned[0];
+  float bmin[3] = {p.minX[f], p.minY[f], p.minZ[f]};
+  float bmax[3] = {p.maxX[f], p.maxY[f], p.maxZ[f]};
+  for (std::uint32_t s : m_binned) {
+    bmin[0] = std::min(bmin[0], p.minX[s]), bmin[1] = std::min(bmin[1], p.minY[s]), bmin[2] = std::min(bmin[2], p.minZ[s]);
+    bmax[0] = std::max(bmax[0], p.maxX[s]), bmax[1] = std::max(bmax[1], p.maxY[s]), bmax[2] = std::max(bmax[2], p.maxZ[s]);
+  }
+  // Coarsen until the cell index fits 32 bits: exactness never depends on the cell size.
+  for (;;) {
+    std::uint64_t total = 1;
+    bool fits = true;
+    for (int a = 0; a < 3; ++a) {
+      const double d = std::floor((double(bmax[a]) - double(bmin[a])) / double(cell)) + 1.0;
+      if (d > double(kMaxCells)) {
+        fits = false;
+        break;
+      }
+      g.dims[a] = std::uint32_t(d);
+      total *= g.dims[a];
+      if (total > kMaxCells) {
+        fits = false;
+        break;
+      }
+    }
+    if (fits) break;
+    cell *= 2.0f;
+  }
+  for (int a = 0; a < 3; ++a) g.origin[a] = bmin[a];
+  g.cell = cell;
+  g.invCell = 1.0f / cell;
+  return g;
+}
+
+void CpuPairFinder::binSorted(const ProxyArrays& p, const Grid& g) {
+  const std::size_t n = m_binned.size();
+  // Stage 4: count cells per box, then an exclusive prefix sum gives each box's first key.
+  std::vector<std::uint64_t> offsets(n + 1);
+  tbb::parallel_for(tbb::blocked_range<std::size_t>(0, n, 4096), [&](const tbb::blocked_range<std::size_t>& r) {
+    for (std::size_t i = r.begin(); i != r.end(); ++i) offsets[i + 1] = cellRange(p, m_binned[i], g).count();
+  });
+  offsets[0] = 0;
+  for (std::size_t i = 0; i < n; ++i) offsets[i + 1] += offsets[i];
+  const std::uint64_t keys = offsets[n];
+  m_stats.keys = keys;
+  if (keys > std::numeric_limits<std::uint32_t>::max())
+    throw std::runtime_error("gpucol::GridBroadphase: " + std::to_string(keys) +
+                             " (cell, proxy) entries exceed the 2^32 entry limit of one grid");
+  m_sorted.resize(keys);
+  const std::uint64_t cells = g.cells();
+  if (cells <= 2 * keys + 1024) {
+    // Stage 5, dense grid: counting sort by cell. Filling in ascending slot order keeps each cell's
+    // slots ascending, which is the (cell, slot) order without a comparison sort and without keys.
+    m_cellStart.assign(cells + 1, 0);
+    for (std::uint32_t s : m_binned) forEachCell(cellRange(p, s, g), g, [&](std::uint32_t c) { ++m_cellStart[c + 1]; });
+    for (std::uint64_t c = 0; c < cells; ++c) m_cellStart[c + 1] += m_cellStart[c];
+    std::vector<std::uint32_t>& cursor = m_runStart;  // reused as scratch; rebuilt below
+    cursor.assign(m_cellStart.begin(), m_cellStart.end() - 1);
+    for (std::uint32_t s : m_binned) forEachCell(cellRange(p, s, g), g, [&](std::uint32_t c) { m_sorted[cursor[c]++] = s; });
+    // Stage 6: runs of two or more proxies.
+    m_runCell.clear();
+    m_runStart.clear();
+    m_runLength.clear();
+    for (std::uint64_t c = 0; c < cells; ++c) {
+      const std::uint32_t m = m_cellStart[c + 1] - m_cellStart[c];
+      if (m >= 2) {
+        m_runCell.push_back(std::uint32_t(c));
+        m_runStart.push_back(m_cellStart[c]);
+        m_runLength.push_back(m);
+      }
+    }
+  } else {
+    // Stage 5, sparse grid (far-apart clusters, thin scenes): sort explicit keys.
+    m_cellStart.clear();
+    m_keys.resize(keys);
+    tbb::parallel_for(tbb::blocked_range<std::size_t>(0, n, 4096), [&](const tbb::blocked_range<std::size_t>& r) {
+      for (std::size_t i = r.begin(); i != r.end(); ++i) {
+        std::uint64_t o = offsets[i];
+        const std::uint32_t s = m_binned[i];
+        forEachCell(cellRange(p, s, g), g, [&](std::uint32_t c) { m_keys[o++] = (std::uint64_t(c) << 32) | s; });
+      }
+    });
+    tbb::parallel_sort(m_keys.begin(), m_keys.end());
+    m_runCell.clear();
+    m_runStart.clear();
+    m_runLength.clear();
+    for (std::uint64_t i = 0; i < keys;) {
+      std::uint64_t j = i + 1;
+      const std::uint64_t cell = m_keys[i] >> 32;
+      while (j < keys && (m_keys[j] >> 32) == cell) ++j;
+      if (j - i >= 2) {
+        m_runCell.push_back(std::uint32_t(cell));
+        m_runStart.push_back(std::uint32_t(i));
+        m_runLength.push_back(std::uint32_t(j - i));
+      }
+      i = j;
+    }
+    for (std::uint64_t i = 0; i < keys; ++i) m_sorted[i] = std::uint32_t(m_keys[i]);
+  }
+  // Stage 6: exclusive prefix sum of the per-run pair counts.
+  const std::size_t runs = m_runCell.size();
+  m_runPrefix.resize(runs + 1);
+  m_runPrefix[0] = 0;
+  for (std::size_t r = 0; r < runs; ++r) m_runPrefix[r + 1] = m_runPrefix[r] + gpucol_pair_count(m_runLength[r]);
+}
+
+void CpuPairFinder::testRuns(const ProxyArrays& p, const PairFinderOptions& options, const Grid& g) {
+  const std::uint64_t total = m_runPrefix.back();
+  m_stats.candidates += total;
+  const std::uint64_t chunk = chunkSize(total);
+  const std::uint64_t chunks = total == 0 ? 0 : (total + chunk - 1) / chunk;
+  const bool bitMask = options.output == PairOutput::BitMask;
+  const bool newton = options.mappingSqrt == MappingSqrt::Newton;
+  if (bitMask) m_bits.assign((total + 63) / 64, 0);
+  const std::size_t firstChunk = takeChunks(chunks);
+
+  // Stage 7: run and (i, j) of candidate k.
+  auto locate = [&](std::uint64_t k, std::size_t& run, gpucol_u64& i, gpucol_u64& j) {
+    run = std::size_t(std::upper_bound(m_runPrefix.begin(), m_runPrefix.end(), k) - m_runPrefix.begin()) - 1;
+    const std::uint64_t local = k - m_runPrefix[run];
+    if (newton)
+      gpucol_pair_from_index_newton(m_runLength[run], local, &i, &j);
+    else
+      gpucol_pair_from_index(m_runLength[run], local, &i, &j);
+  };
+  // Stages 8–9 for one candidate.
+  auto accept = [&](std::size_t run, std::uint32_t sa, std::uint32_t sb) {
+    if (!aabbOverlap(p, sa, sb) || !passesFilter(p, sa, sb)) return false;
+    const std::uint32_t cx = cellOf(std::max(p.minX[sa], p.minX[sb]), g.origin[0], g.invCell, g.dims[0]);
+    const std::uint32_t cy = cellOf(std::max(p.minY[sa], p.minY[sb]), g.origin[1], g.invCell, g.dims[1]);
+    const std::uint32_t cz = cellOf(std::max(p.minZ[sa], p.minZ[sb]), g.origin[2], g.invCell, g.dims[2]);
+    return (std::uint64_t(cz) * g.dims[1] + cy) * g.dims[0] + cx == m_runCell[run];
+  };
+
+  tbb::parallel_for(std::uint64_t(0), chunks, [&](std::uint64_t c) {
+    const std::uint64_t k0 = c * chunk;
+    const std::uint64_t k1 = std::min(total, k0 + chunk);
+    std::size_t run = 0;
+    gpucol_u64 i = 0, j = 0;
+    locate(k0, run, i, j);
+    auto& out = m_chunkPairs[firstChunk + c];
+    out.clear();
+    for (std::uint64_t k = k0; k < k1; ++k) {
+      const std::uint32_t* slots = m_sorted.data() + m_runStart[run];
+      const std::uint32_t sa = slots[i], sb = slots[j];
+      if (accept(run, sa, sb)) {
+        if (bitMask)
+          m_bits[k >> 6] |= std::uint64_t(1) << (k & 63);  // chunks are 64-aligned: no word is shared
+        else
+          out.push_back((std::uint64_t(sa) << 32) | sb);
+      }
+      if (++j == m_runLength[run]) {
+        if (++i + 1 == m_runLength[run]) {
+          ++run;
+          i = 0;
+        }
+        j = i + 1;
+      }
+    }
+    if (bitMask) {
+      // Stage 10, bit mask: decode the set bits of this chunk back to pairs through the mapping function.
+      for (std::uint64_t w = k0 >> 6; w < (k1 + 63) >> 6; ++w) {
+        std::uint64_t bits = m_bits[w];
+        while (bits) {
+          const std::uint64_t k = (w << 6) + std::uint64_t(__builtin_ctzll(bits));
+          bits &= bits - 1;
+          std::size_t r = 0;
+          gpucol_u64 a = 0, b = 0;
+          locate(k, r, a, b);
+          const std::uint32_t* slots = m_sorted.data() + m_runStart[r];
+          out.push_back((std::uint64_t(slots[a]) << 32) | slots[b]);
+        }
+      }
+    }
+  });
+}
+
+void CpuPairFinder::testHuge(const ProxyArrays& p) {
+  // Stage 3: every huge box against every other active box (huge pairs once, by the lower slot).
+  const std::size_t h = m_huge.size();
+  if (h == 0) return;
+  const std::size_t n = m_active.size();
+  m_stats.candidates += std::uint64_t(h) * n;
+  const std::size_t firstChunk = takeChunks(h);
+  tbb::parallel_for(std::size_t(0), h, [&](std::size_t hi) {
+    const std::uint32_t sh = m_huge[hi];
+    auto& out = m_chunkPairs[firstChunk + hi];
+    out.clear();
+    for (std::uint32_t s : m_active) {
+      if (s == sh) continue;
+      const bool otherHuge = std::binary_search(m_huge.begin(), m_huge.end(), s);
+      if (otherHuge && s < sh) continue;  // that pair belongs to the other huge box's row
+      if (aabbOverlap(p, sh, s) && passesFilter(p, sh, s)) out.push_back(makePairKey(sh, s));
+    }
+  });
+}
+
+void CpuPairFinder::gather(std::vector<std::uint64_t>& pairs) {
+  std::vector<std::size_t> offset(m_chunksUsed + 1, 0);
+  for (std::size_t c = 0; c < m_chunksUsed; ++c) offset[c + 1] = offset[c] + m_chunkPairs[c].size();
+  pairs.resize(offset.back());
+  tbb::parallel_for(std::size_t(0), m_chunksUsed, [&](std::size_t c) {
+    std::copy(m_chunkPairs[c].begin(), m_chunkPairs[c].end(), pairs.begin() + std::ptrdiff_t(offset[c]));
+  });
+}
+
+void CpuPairFinder::grid(const ProxyArrays& p, const PairFinderOptions& options, std::vector<std::uint64_t>& pairs) {
+  m_stats.usedGrid = true;
+  const Grid g = chooseGrid(p, options);
+  m_stats.cellSize = g.cell;
+  for (int a = 0; a < 3; ++a) m_stats.dims[a] = g.dims[a];
+  if (!m_binned.empty()) {
+    binSorted(p, g);
+    testRuns(p, options, g);
+  }
+  testHuge(p);
+  gather(pairs);
+  // Stage 10: one order whatever the chunking, threads or device.
+  tbb::parallel_sort(pairs.begin(), pairs.end());
+}
+
+std::size_t CpuPairFinder::scratchBytes() const {
+  std::size_t bytes = 0;
+  bytes += m_active.capacity() * 4 + m_binned.capacity() * 4 + m_huge.capacity() * 4 + m_extent.capacity() * 4;
+  bytes += m_cellStart.capacity() * 4 + m_keys.capacity() * 8 + m_sorted.capacity() * 4;
+  bytes += m_runCell.capacity() * 4 + m_runStart.capacity() * 4 + m_runLength.capacity() * 4;
+  bytes += m_runPrefix.capacity() * 8 + m_bits.capacity() * 8;
+  for (const auto& c : m_chunkPairs) bytes += c.capacity() * 8;
+  return bytes;
+}
+
+PairFinderFactory& openClFactory() {
+  static PairFinderFactory factory;
+  return factory;
+}
+
+}  // namespace
+
+std::unique_ptr<PairFinder> makeCpuPairFinder() { return std::make_unique<CpuPairFinder>(); }
+
+void registerOpenClPairFinder(PairFinderFactory factory) { openClFactory() = std::move(factory); }
+
+std::unique_ptr<PairFinder> makeOpenClPairFinder(const Config& config) {
+  if (!openClFactory()) return nullptr;
+  return openClFactory()(config);
+}
+
+std::vector<std::uint64_t> findPairsBruteForce(const ProxyArrays& p) {
+  // Deliberately naive and independent of the grid code: double comparisons, nested loops.
+  std::vector<std::uint64_t> pairs;
+  for (std::uint32_t a = 0; a < p.count; ++a) {
+    if (!(p.flags[a] & kProxyActive)) continue;
+    for (std::uint32_t b = a + 1; b < p.count; ++b) {
+      if (!(p.flags[b] & kProxyActive)) continue;
+      const bool overlap = double(p.minX[a]) <= double(p.maxX[b]) && double(p.minX[b]) <= double(p.maxX[a]) &&
+                           double(p.minY[a]) <= double(p.maxY[b]) && double(p.minY[b]) <= double(p.maxY[a]) &&
+                           double(p.minZ[a]) <= double(p.maxZ[b]) && double(p.minZ[b]) <= double(p.maxZ[a]);
+      const bool filter = (p.group[a] & p.mask[b]) && (p.group[b] & p.mask[a]);
+      const bool bothStatic = (p.flags[a] & kProxyStatic) && (p.flags[b] & kProxyStatic);
+      if (overlap && filter && !bothStatic) pairs.push_back((std::uint64_t(a) << 32) | b);
+    }
+  }
+  return pairs;
+}
+
+}  // namespace gpucol

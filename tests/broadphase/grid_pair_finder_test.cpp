@@ -1,0 +1,210 @@
+// The CPU grid pair finder against the brute-force reference on the scenes of issue 4: uniform,
+// clustered, mixed sizes with a few huge boxes, a plane, hundreds of identical boxes at one spot, far
+// from the origin, negative coordinates, holes left by removed proxies; every option combination.
+#include <gtest/gtest.h>
+
+#include <tbb/global_control.h>
+
+#include <cstdint>
+#include <functional>
+#include <random>
+#include <string>
+#include <vector>
+
+#include "broadphase/grid_pair_finder.h"
+
+namespace {
+
+/// Owns the SoA arrays behind a ProxyArrays view.
+struct Scene {
+  std::vector<float> minX, minY, minZ, maxX, maxY, maxZ;
+  std::vector<std::int32_t> group, mask;
+  std::vector<std::uint8_t> flags;
+
+  void add(float cx, float cy, float cz, float hx, float hy, float hz, std::uint8_t flag = gpucol::kProxyActive,
+           std::int32_t g = 1, std::int32_t m = -1) {
+    minX.push_back(cx - hx), minY.push_back(cy - hy), minZ.push_back(cz - hz);
+    maxX.push_back(cx + hx), maxY.push_back(cy + hy), maxZ.push_back(cz + hz);
+    group.push_back(g), mask.push_back(m), flags.push_back(flag);
+  }
+  gpucol::ProxyArrays view() const {
+    gpucol::ProxyArrays v;
+    v.count = std::uint32_t(flags.size());
+    v.minX = minX.data(), v.minY = minY.data(), v.minZ = minZ.data();
+    v.maxX = maxX.data(), v.maxY = maxY.data(), v.maxZ = maxZ.data();
+    v.group = group.data(), v.mask = mask.data(), v.flags = flags.data();
+    return v;
+  }
+};
+
+Scene uniformCloud(int n, float side, float halfSize, std::uint32_t seed) {
+  std::mt19937 rng(seed);
+  std::uniform_real_distribution<float> pos(-side, side), size(0.2f * halfSize, halfSize);
+  Scene s;
+  for (int i = 0; i < n; ++i) s.add(pos(rng), pos(rng), pos(rng), size(rng), size(rng), size(rng));
+  return s;
+}
+
+/// Checks the finder against brute force with every combination of options, grid forced and not.
+void expectMatchesBruteForce(const Scene& scene, const std::string& what, std::uint64_t minPairs = 1) {
+  const gpucol::ProxyArrays view = scene.view();
+  const std::vector<std::uint64_t> reference = gpucol::findPairsBruteForce(view);
+  ASSERT_GE(reference.size(), minPairs) << what << ": the scene should have overlaps to test";
+  auto finder = gpucol::makeCpuPairFinder();
+  for (std::uint32_t below : {0u, 1000000u})
+    for (auto rule : {gpucol::CellSizeRule::Size, gpucol::CellSizeRule::Density})
+      for (auto output : {gpucol::PairOutput::Compacted, gpucol::PairOutput::BitMask})
+        for (auto sqrtMode : {gpucol::MappingSqrt::Double, gpucol::MappingSqrt::Newton}) {
+          gpucol::PairFinderOptions o;
+          o.bruteForceBelow = below;
+          o.cellSizeRule = rule;
+          o.output = output;
+          o.mappingSqrt = sqrtMode;
+          std::vector<std::uint64_t> pairs;
+          finder->findPairs(view, o, pairs);
+          ASSERT_EQ(pairs, reference) << what << " below=" << below << " rule=" << int(rule)
+                                      << " output=" << int(output) << " sqrt=" << int(sqrtMode)
+                                      << " grid=" << finder->stats().usedGrid;
+          EXPECT_EQ(finder->stats().usedGrid, below == 0) << what;
+        }
+}
+
+TEST(GridPairFinder, UniformCloud) { expectMatchesBruteForce(uniformCloud(4000, 20.0f, 0.8f, 1), "uniform"); }
+
+TEST(GridPairFinder, Clustered) {
+  std::mt19937 rng(2);
+  std::normal_distribution<float> around(0.0f, 1.5f);
+  std::uniform_real_distribution<float> centre(-200.0f, 200.0f), size(0.1f, 0.6f);
+  Scene s;
+  for (int c = 0; c < 8; ++c) {
+    const float cx = centre(rng), cy = centre(rng), cz = centre(rng);
+    for (int i = 0; i < 400; ++i)
+      s.add(cx + around(rng), cy + around(rng), cz + around(rng), size(rng), size(rng), size(rng));
+  }
+  expectMatchesBruteForce(s, "clustered");
+}
+
+TEST(GridPairFinder, MixedSizesWithHugeBoxes) {
+  Scene s = uniformCloud(3000, 30.0f, 0.5f, 3);
+  std::mt19937 rng(3);
+  std::uniform_real_distribution<float> pos(-30.0f, 30.0f), big(2.0f, 6.0f);
+  for (int i = 0; i < 200; ++i) s.add(pos(rng), pos(rng), pos(rng), big(rng), big(rng), big(rng));
+  s.add(0, -31, 0, 100, 1, 100);  // a ground slab larger than the scene
+  s.add(5, 0, 0, 2, 60, 2);       // a pillar through it
+  s.add(0, 0, 0, 40, 40, 40);     // a box holding everything
+  expectMatchesBruteForce(s, "mixed + huge");
+  auto finder = gpucol::makeCpuPairFinder();
+  std::vector<std::uint64_t> pairs;
+  gpucol::PairFinderOptions o;
+  o.bruteForceBelow = 0;
+  finder->findPairs(s.view(), o, pairs);
+  EXPECT_GE(finder->stats().hugeProxies, 3u) << "the slab, pillar and the enclosing box are kept out of the grid";
+}
+
+TEST(GridPairFinder, AllInOnePlane) {
+  std::mt19937 rng(4);
+  std::uniform_real_distribution<float> pos(-40.0f, 40.0f), size(0.2f, 1.0f);
+  Scene s;
+  for (int i = 0; i < 3000; ++i) s.add(pos(rng), 0.0f, pos(rng), size(rng), 0.0f, size(rng));  // zero thickness
+  expectMatchesBruteForce(s, "plane");
+}
+
+TEST(GridPairFinder, HundredsOfIdenticalBoxesAtOneSpot) {
+  Scene s = uniformCloud(1500, 25.0f, 0.5f, 5);
+  for (int i = 0; i < 600; ++i) s.add(1.0f, 2.0f, 3.0f, 0.5f, 0.5f, 0.5f);
+  expectMatchesBruteForce(s, "identical", 600 * 599 / 2);
+}
+
+TEST(GridPairFinder, FarFromTheOriginAndNegative) {
+  std::mt19937 rng(6);
+  std::uniform_real_distribution<float> pos(-30.0f, 30.0f), size(0.3f, 1.0f);
+  Scene far, negative;
+  for (int i = 0; i < 3000; ++i) {
+    far.add(1e6f + pos(rng), 1e6f + pos(rng), -1e6f + pos(rng), size(rng), size(rng), size(rng));
+    negative.add(-500.0f + pos(rng), -500.0f + pos(rng), -500.0f + pos(rng), size(rng), size(rng), size(rng));
+  }
+  expectMatchesBruteForce(far, "far 1e6");
+  expectMatchesBruteForce(negative, "negative");
+}
+
+TEST(GridPairFinder, TouchingBoxesCount) {
+  // A lattice of unit cubes that touch face to face exactly: every neighbour pair must be reported.
+  Scene s;
+  for (int x = 0; x < 12; ++x)
+    for (int y = 0; y < 12; ++y)
+      for (int z = 0; z < 12; ++z) s.add(float(x), float(y), float(z), 0.5f, 0.5f, 0.5f);
+  // 26-neighbourhood: touching faces, edges and corners.
+  expectMatchesBruteForce(s, "touching lattice", 3 * 11 * 144);
+}
+
+TEST(GridPairFinder, FiltersStaticAndHoles) {
+  Scene s = uniformCloud(3000, 15.0f, 0.8f, 7);
+  std::mt19937 rng(7);
+  for (std::size_t i = 0; i < s.flags.size(); ++i) {
+    const unsigned r = rng() % 10;
+    if (r == 0) s.flags[i] = 0;  // removed proxy: a hole
+    if (r == 1) s.flags[i] = gpucol::kProxyActive | gpucol::kProxyStatic;
+    s.group[i] = std::int32_t(1u << (rng() % 4));
+    s.mask[i] = std::int32_t(rng() % 16);
+  }
+  expectMatchesBruteForce(s, "filters + static + holes");
+}
+
+TEST(GridPairFinder, AddAndRemoveBetweenSearches) {
+  // One finder reused over steps while proxies come, go and move (scratch reuse must not leak state).
+  Scene s = uniformCloud(2500, 15.0f, 0.7f, 8);
+  std::mt19937 rng(8);
+  std::uniform_real_distribution<float> step(-0.3f, 0.3f);
+  auto finder = gpucol::makeCpuPairFinder();
+  gpucol::PairFinderOptions o;
+  o.bruteForceBelow = 0;
+  for (int t = 0; t < 6; ++t) {
+    for (std::size_t i = 0; i < s.flags.size(); ++i) {
+      if (rng() % 20 == 0) s.flags[i] ^= gpucol::kProxyActive;
+      const float dx = step(rng), dy = step(rng), dz = step(rng);
+      s.minX[i] += dx, s.maxX[i] += dx, s.minY[i] += dy, s.maxY[i] += dy, s.minZ[i] += dz, s.maxZ[i] += dz;
+    }
+    for (int i = 0; i < 50; ++i) s.add(step(rng) * 40, step(rng) * 40, step(rng) * 40, 0.5f, 0.5f, 0.5f);
+    std::vector<std::uint64_t> pairs;
+    finder->findPairs(s.view(), o, pairs);
+    ASSERT_EQ(pairs, gpucol::findPairsBruteForce(s.view())) << "step " << t;
+  }
+}
+
+TEST(GridPairFinder, SparseGridPath) {
+  // Two far-apart clusters make a grid with many more cells than keys: the explicit-key sort path.
+  Scene s = uniformCloud(1500, 5.0f, 0.5f, 9);
+  Scene t = uniformCloud(1500, 5.0f, 0.5f, 10);
+  for (std::size_t i = 0; i < t.flags.size(); ++i)
+    s.add(0.5f * (t.minX[i] + t.maxX[i]) + 5000.0f, 0.5f * (t.minY[i] + t.maxY[i]) + 5000.0f,
+          0.5f * (t.minZ[i] + t.maxZ[i]) + 5000.0f, 0.5f * (t.maxX[i] - t.minX[i]),
+          0.5f * (t.maxY[i] - t.minY[i]), 0.5f * (t.maxZ[i] - t.minZ[i]));
+  expectMatchesBruteForce(s, "sparse");
+}
+
+TEST(GridPairFinder, DeterministicWhateverTheThreadCount) {
+  const Scene s = uniformCloud(20000, 40.0f, 0.8f, 11);
+  gpucol::PairFinderOptions o;
+  o.bruteForceBelow = 0;
+  std::vector<std::uint64_t> many, one;
+  gpucol::makeCpuPairFinder()->findPairs(s.view(), o, many);
+  {
+    tbb::global_control single(tbb::global_control::max_allowed_parallelism, 1);
+    gpucol::makeCpuPairFinder()->findPairs(s.view(), o, one);
+  }
+  EXPECT_FALSE(many.empty());
+  EXPECT_EQ(many, one);
+}
+
+TEST(GridPairFinder, OpenClFactorySeam) {
+  // Without a registered factory there is no OpenCL finder; a registered one is what makeOpenCl returns.
+  gpucol::registerOpenClPairFinder(nullptr);
+  EXPECT_EQ(gpucol::makeOpenClPairFinder(gpucol::Config{}), nullptr);
+  gpucol::registerOpenClPairFinder([](const gpucol::Config&) { return gpucol::makeCpuPairFinder(); });
+  auto finder = gpucol::makeOpenClPairFinder(gpucol::Config{});
+  ASSERT_NE(finder, nullptr);
+  EXPECT_EQ(finder->name(), "cpu");
+  gpucol::registerOpenClPairFinder(nullptr);
+}
+
+}  // namespace
