@@ -9,7 +9,7 @@ packages=(
   libeigen3-dev
   libtbb-dev
   libassimp-dev
-  ocl-icd-opencl-dev opencl-headers pocl-opencl-icd clinfo
+  ocl-icd-opencl-dev opencl-headers opencl-clhpp-headers pocl-opencl-icd clinfo
   libgtest-dev libgmock-dev
   libcli11-dev
   python3-matplotlib

@@ -1,0 +1,114 @@
+#include "opencl/host/radix_sort.h"
+
+#include "gpucol_kernels/kernels.h"
+
+#include <algorithm>
+#include <stdexcept>
+#include <string>
+
+namespace gpucol::opencl {
+
+namespace {
+constexpr unsigned kRadixBits = 4;  // at most log2(RADIX) of radix_sort.cl
+constexpr unsigned kRadix = 1u << kRadixBits;
+constexpr std::size_t kMinChunk = 16;
+}  // namespace
+
+OpenClRadixSort::OpenClRadixSort(OpenClContext& context) : m_context(context), m_scan(context) {
+  translateClErrors("setting up the OpenCL radix sort", [&] {
+    cl::Program program = m_context.program("radix_sort", kernels::radix_sort);
+    m_count = cl::Kernel(program, "radix_count");
+    m_scatter = cl::Kernel(program, "radix_scatter");
+    m_groupSize = std::min(m_context.workGroupSize(m_count), m_context.workGroupSize(m_scatter));
+    // Enough chunks to fill the device a few times over; more would only lengthen the counts to scan.
+    const std::size_t units = m_context.device().getInfo<CL_DEVICE_MAX_COMPUTE_UNITS>();
+    m_targetChunks = std::max<std::size_t>(1, units * m_groupSize * (m_context.isGpu() ? 2 : 1));
+  });
+}
+
+void OpenClRadixSort::sort(const cl::Buffer& keys, const cl::Buffer& values, std::size_t n, unsigned keyBits) {
+  if (keyBits == 0 || keyBits > 64) {
+    throw std::invalid_argument("OpenClRadixSort: keyBits must be in 1..64, got " + std::to_string(keyBits));
+  }
+  if (n > 0xffffffffu) {
+    throw std::length_error("OpenClRadixSort: " + std::to_string(n) + " elements exceed the uint32 index range");
+  }
+  if (n <= 1) {
+    return;
+  }
+  translateClErrors("OpenCL radix sort", [&] {
+    cl::CommandQueue& queue = m_context.queue();
+    // Short chunks keep many items busy; kMinChunk bounds the counts array at 16 / kMinChunk per element.
+    const std::size_t chunkLength = std::max(kMinChunk, (n + m_targetChunks - 1) / m_targetChunks);
+    const std::size_t chunks = (n + chunkLength - 1) / chunkLength;
+    const std::size_t global = (chunks + m_groupSize - 1) / m_groupSize * m_groupSize;
+    if (m_countsCapacity < chunks * kRadix) {
+      m_counts = cl::Buffer(m_context.context(), CL_MEM_READ_WRITE, chunks * kRadix * sizeof(cl_uint));
+      m_countsCapacity = chunks * kRadix;
+    }
+    if (m_tempCapacity < n) {
+      m_keysTemp = cl::Buffer(m_context.context(), CL_MEM_READ_WRITE, n * sizeof(cl_ulong));
+      m_valuesTemp = cl::Buffer(m_context.context(), CL_MEM_READ_WRITE, n * sizeof(cl_uint));
+      m_tempCapacity = n;
+    }
+    cl::Buffer keysFrom = keys;
+    cl::Buffer valuesFrom = values;
+    cl::Buffer keysTo = m_keysTemp;
+    cl::Buffer valuesTo = m_valuesTemp;
+    unsigned passes = 0;
+    for (unsigned shift = 0; shift < keyBits; shift += kRadixBits, ++passes) {
+      // The last pass may look at fewer than 4 bits: bits past keyBits are never looked at.
+      const unsigned bits = std::min(kRadixBits, keyBits - shift);
+      const cl_uint digitMask = (1u << bits) - 1u;
+      const std::size_t digits = std::size_t(digitMask) + 1;
+      m_count.setArg(0, keysFrom);
+      m_count.setArg(1, static_cast<cl_uint>(n));
+      m_count.setArg(2, static_cast<cl_uint>(shift));
+      m_count.setArg(3, digitMask);
+      m_count.setArg(4, static_cast<cl_uint>(chunkLength));
+      m_count.setArg(5, static_cast<cl_uint>(chunks));
+      m_count.setArg(6, m_counts);
+      queue.enqueueNDRangeKernel(m_count, cl::NullRange, cl::NDRange(global), cl::NDRange(m_groupSize));
+      m_scan.exclusiveScan(m_counts, digits * chunks);
+      m_scatter.setArg(0, keysFrom);
+      m_scatter.setArg(1, valuesFrom);
+      m_scatter.setArg(2, keysTo);
+      m_scatter.setArg(3, valuesTo);
+      m_scatter.setArg(4, static_cast<cl_uint>(n));
+      m_scatter.setArg(5, static_cast<cl_uint>(shift));
+      m_scatter.setArg(6, digitMask);
+      m_scatter.setArg(7, static_cast<cl_uint>(chunkLength));
+      m_scatter.setArg(8, static_cast<cl_uint>(chunks));
+      m_scatter.setArg(9, m_counts);
+      queue.enqueueNDRangeKernel(m_scatter, cl::NullRange, cl::NDRange(global), cl::NDRange(m_groupSize));
+      std::swap(keysFrom, keysTo);
+      std::swap(valuesFrom, valuesTo);
+    }
+    if (passes % 2 == 1) {
+      queue.enqueueCopyBuffer(keysFrom, keys, 0, 0, n * sizeof(cl_ulong));
+      queue.enqueueCopyBuffer(valuesFrom, values, 0, 0, n * sizeof(cl_uint));
+    }
+  });
+}
+
+void OpenClRadixSort::sort(std::vector<std::uint64_t>& keys, std::vector<std::uint32_t>& values, unsigned keyBits) {
+  if (keys.size() != values.size()) {
+    throw std::invalid_argument("OpenClRadixSort: keys and values differ in length");
+  }
+  if (keys.size() <= 1) {
+    return;
+  }
+  translateClErrors("OpenCL radix sort of host vectors", [&] {
+    const std::size_t n = keys.size();
+    cl::Buffer k(m_context.context(), CL_MEM_READ_WRITE, n * sizeof(cl_ulong));
+    cl::Buffer v(m_context.context(), CL_MEM_READ_WRITE, n * sizeof(cl_uint));
+    cl::CommandQueue& queue = m_context.queue();
+    queue.enqueueWriteBuffer(k, CL_FALSE, 0, n * sizeof(cl_ulong), keys.data());
+    queue.enqueueWriteBuffer(v, CL_FALSE, 0, n * sizeof(cl_uint), values.data());
+    sort(k, v, n, keyBits);
+    queue.enqueueReadBuffer(k, CL_FALSE, 0, n * sizeof(cl_ulong), keys.data());
+    queue.enqueueReadBuffer(v, CL_TRUE, 0, n * sizeof(cl_uint), values.data());
+  });
+}
+
+}  // namespace gpucol::opencl

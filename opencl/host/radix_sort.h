@@ -1,0 +1,42 @@
+#pragma once
+
+#include "opencl/host/opencl_context.h"
+#include "opencl/host/scan.h"
+
+#include <cstddef>
+#include <cstdint>
+#include <vector>
+
+namespace gpucol::opencl {
+
+/// Stable radix sort of (uint64 key, uint32 value) pairs on an OpenCL device, 4 bits per pass, each
+/// work-item counting and scattering one chunk in order, digit offsets from OpenClScan. Keeps its scratch buffers between calls (grown, never shrunk); one object
+/// per thread.
+class OpenClRadixSort {
+ public:
+  /// Builds (or takes from the cache) the sort program of `context`.
+  explicit OpenClRadixSort(OpenClContext& context);
+
+  /// Sorts keys[0..n) (cl_ulong) ascending, carrying values[0..n) (cl_uint) along; equal keys keep their
+  /// order. Only the low `keyBits` bits of the keys are looked at (1..64): the caller passes the width it
+  /// knows its keys fit in, and passes are ceil(keyBits / 4). Results are left in `keys` and `values`.
+  void sort(const cl::Buffer& keys, const cl::Buffer& values, std::size_t n, unsigned keyBits = 64);
+
+  /// Convenience for tests: sorts host vectors through the device.
+  void sort(std::vector<std::uint64_t>& keys, std::vector<std::uint32_t>& values, unsigned keyBits = 64);
+
+ private:
+  OpenClContext& m_context;
+  OpenClScan m_scan;
+  cl::Kernel m_count;
+  cl::Kernel m_scatter;
+  std::size_t m_groupSize = 0;     // work-group size of both kernels (asked of the device)
+  std::size_t m_targetChunks = 0;  // chunks (work-items) per pass to aim for
+  cl::Buffer m_counts;
+  std::size_t m_countsCapacity = 0;
+  cl::Buffer m_keysTemp;
+  cl::Buffer m_valuesTemp;
+  std::size_t m_tempCapacity = 0;
+};
+
+}  // namespace gpucol::opencl

@@ -1,0 +1,41 @@
+#pragma once
+
+#include "opencl/host/opencl_context.h"
+
+#include <cstddef>
+#include <cstdint>
+#include <vector>
+
+namespace gpucol::opencl {
+
+/// Exclusive prefix sum of uint32 values of any length on an OpenCL device (thesis §5.4.2, Alg. 5.4),
+/// multi-pass: blocks of 2L values per work-group, then the block totals scanned recursively. Reused by
+/// the broad phase (per-cell pair counts, radix sort digit offsets) and the mesh pipeline. Keeps its
+/// scratch buffers between calls (grown, never shrunk); one object per thread.
+class OpenClScan {
+ public:
+  /// Builds (or takes from the cache) the scan program of `context`.
+  explicit OpenClScan(OpenClContext& context);
+
+  /// Replaces data[0..n) by its exclusive prefix sum, in place, and returns the total. Throws
+  /// std::overflow_error when the total exceeds 2^32 - 1 (the values are then unspecified), OpenClError
+  /// when a call fails. Enqueued on the context's queue; returns when the total is known.
+  std::uint32_t exclusiveScan(const cl::Buffer& data, std::size_t n);
+
+  /// Convenience for tests and small inputs: scans a host vector through the device.
+  std::uint32_t exclusiveScan(std::vector<std::uint32_t>& values);
+
+ private:
+  std::uint32_t scanLevel(const cl::Buffer& data, std::size_t n, std::size_t level);
+
+  OpenClContext& m_context;
+  cl::Kernel m_scanBlocks;
+  cl::Kernel m_addOffsets;
+  std::size_t m_blockItems = 0;  // L: items per work-group of scan_blocks
+  std::size_t m_addGroupSize = 0;
+  cl::Buffer m_overflow;
+  std::vector<cl::Buffer> m_levelSums;  // block totals of each recursion level
+  std::vector<std::size_t> m_levelCapacity;
+};
+
+}  // namespace gpucol::opencl
