@@ -1,0 +1,59 @@
+// diffSortedPairs against std::set arithmetic on random sorted lists.
+#include <gtest/gtest.h>
+
+#include <algorithm>
+#include <cstdint>
+#include <iterator>
+#include <random>
+#include <vector>
+
+#include "broadphase/pair_diff.h"
+
+namespace {
+
+std::vector<std::uint64_t> randomSorted(std::mt19937_64& rng, std::size_t n, std::uint64_t range) {
+  std::vector<std::uint64_t> v(n);
+  for (auto& x : v) x = rng() % range;
+  std::sort(v.begin(), v.end());
+  v.erase(std::unique(v.begin(), v.end()), v.end());
+  return v;
+}
+
+TEST(PairDiff, MatchesSetDifferencesAndKeepsOrder) {
+  std::mt19937_64 rng(42);
+  for (int t = 0; t < 200; ++t) {
+    const auto before = randomSorted(rng, rng() % 300, 500);
+    const auto now = randomSorted(rng, rng() % 300, 500);
+    std::vector<std::uint64_t> added, removed, kept, expectAdded, expectRemoved, expectKept;
+    gpucol::diffSortedPairs(
+        before, now, [&](std::uint64_t k) { added.push_back(k); }, [&](std::uint64_t k) { removed.push_back(k); },
+        [&](std::uint64_t k) { kept.push_back(k); });
+    std::set_difference(now.begin(), now.end(), before.begin(), before.end(), std::back_inserter(expectAdded));
+    std::set_difference(before.begin(), before.end(), now.begin(), now.end(), std::back_inserter(expectRemoved));
+    std::set_intersection(before.begin(), before.end(), now.begin(), now.end(), std::back_inserter(expectKept));
+    ASSERT_EQ(added, expectAdded);
+    ASSERT_EQ(removed, expectRemoved);
+    ASSERT_EQ(kept, expectKept);
+  }
+}
+
+TEST(PairDiff, EmptySides) {
+  const std::vector<std::uint64_t> some{1, 5, 9}, none;
+  int added = 0, removed = 0, kept = 0;
+  auto count = [&](const auto& a, const auto& b) {
+    added = removed = kept = 0;
+    gpucol::diffSortedPairs(
+        a, b, [&](std::uint64_t) { ++added; }, [&](std::uint64_t) { ++removed; }, [&](std::uint64_t) { ++kept; });
+  };
+  count(none, some);
+  EXPECT_EQ(added, 3);
+  EXPECT_EQ(removed + kept, 0);
+  count(some, none);
+  EXPECT_EQ(removed, 3);
+  EXPECT_EQ(added + kept, 0);
+  count(some, some);
+  EXPECT_EQ(kept, 3);
+  EXPECT_EQ(added + removed, 0);
+}
+
+}  // namespace
