@@ -1,0 +1,231 @@
+#include "bvh/tree_traversal.h"
+
+#include <gtest/gtest.h>
+
+#include <algorithm>
+#include <cmath>
+#include <random>
+#include <vector>
+
+#include "bvh/bvh_test_util.h"
+#include "support/test_paths.h"
+
+namespace gpucol {
+namespace {
+
+using test::Soup;
+
+struct BoxD {
+  Eigen::Vector3d min;
+  Eigen::Vector3d max;
+};
+
+bool overlapsD(const BoxD& l, const BoxD& r) {
+  return (l.min.array() <= r.max.array()).all() && (r.min.array() <= l.max.array()).all();
+}
+
+BoxD triangleBoxD(const Soup& soup, std::size_t t) {
+  BoxD box{soup.vertex(t, 0), soup.vertex(t, 0)};
+  for (int k = 1; k < 3; ++k) {
+    box.min = box.min.cwiseMin(soup.vertex(t, k));
+    box.max = box.max.cwiseMax(soup.vertex(t, k));
+  }
+  return box;
+}
+
+/// The brute-force references of one query, every triangle pair tested in double.
+struct Reference {
+  std::vector<TrianglePair> carriedExact;     ///< Leaf (= triangle) boxes of B carried in double, no widening.
+  std::vector<TrianglePair> carriedWidened;   ///< The same, widened by twice the traversal's documented epsilon.
+  std::vector<TrianglePair> tightTriangles;   ///< B's triangle moved into A's frame in double, then boxed.
+};
+
+Reference bruteForce(const Soup& a, const Soup& b, const AabbTree& treeB, const AffineMap& map) {
+  const Eigen::Matrix3d m = map.linear.cast<double>();
+  const Eigen::Vector3d t = map.translation.cast<double>();
+  const Eigen::Vector3d widen = 2.0 * carriedBoxInflation(treeB, map).cast<double>();
+  std::vector<BoxD> boxesA(a.triangleCount());
+  for (std::size_t i = 0; i < a.triangleCount(); ++i) boxesA[i] = triangleBoxD(a, i);
+  std::vector<BoxD> carried(b.triangleCount()), widened(b.triangleCount()), tight(b.triangleCount());
+  for (std::size_t j = 0; j < b.triangleCount(); ++j) {
+    const BoxD box = triangleBoxD(b, j);
+    const Eigen::Vector3d c = m * (0.5 * (box.min + box.max)) + t;
+    const Eigen::Vector3d e = m.cwiseAbs() * (0.5 * (box.max - box.min));
+    carried[j] = {c - e, c + e};
+    widened[j] = {c - e - widen, c + e + widen};
+    const Eigen::Vector3d p = m * b.vertex(j, 0) + t;
+    tight[j] = {p, p};
+    for (int k = 1; k < 3; ++k) {
+      const Eigen::Vector3d q = m * b.vertex(j, k) + t;
+      tight[j].min = tight[j].min.cwiseMin(q);
+      tight[j].max = tight[j].max.cwiseMax(q);
+    }
+  }
+  Reference ref;
+  for (std::size_t i = 0; i < a.triangleCount(); ++i) {
+    for (std::size_t j = 0; j < b.triangleCount(); ++j) {
+      const TrianglePair pair{static_cast<std::uint32_t>(i), static_cast<std::uint32_t>(j)};
+      if (overlapsD(boxesA[i], carried[j])) ref.carriedExact.push_back(pair);
+      if (overlapsD(boxesA[i], widened[j])) ref.carriedWidened.push_back(pair);
+      if (overlapsD(boxesA[i], tight[j])) ref.tightTriangles.push_back(pair);
+    }
+  }
+  return ref;
+}
+
+bool isSortedUnique(const std::vector<TrianglePair>& pairs) {
+  return std::adjacent_find(pairs.begin(), pairs.end(),
+                            [](const TrianglePair& l, const TrianglePair& r) { return !(l < r); }) == pairs.end();
+}
+
+/// Runs every check of one query; returns the number of candidates so callers can make sure some poses hit.
+std::size_t checkQuery(const Soup& a, const Soup& b, const AffineMap& map) {
+  const AabbTree treeA = AabbTree::build(a.xyz, a.indices);
+  const AabbTree treeB = AabbTree::build(b.xyz, b.indices);
+  const Reference ref = bruteForce(a, b, treeB, map);
+
+  std::vector<TrianglePair> parallel, serial;
+  TraversalStats parallelStats, serialStats;
+  findCandidatePairs(treeA, treeB, map, parallel, &parallelStats, true);
+  findCandidatePairs(treeA, treeB, map, serial, &serialStats, false);
+  EXPECT_TRUE(isSortedUnique(parallel));
+  EXPECT_EQ(parallel, serial) << "parallel and serial traversals must give the same list";
+  EXPECT_EQ(parallelStats.nodeTests, serialStats.nodeTests) << "each node pair is tested once, whatever the order";
+
+  // (a) Exactly the leaf-box overlaps, up to the conservative widening only.
+  EXPECT_TRUE(std::includes(parallel.begin(), parallel.end(), ref.carriedExact.begin(), ref.carriedExact.end()))
+      << "a pair whose carried leaf boxes overlap was missed";
+  EXPECT_TRUE(std::includes(ref.carriedWidened.begin(), ref.carriedWidened.end(), parallel.begin(), parallel.end()))
+      << "a pair beyond the documented widening was reported";
+  // (b) Never loses a pair whose tight triangle boxes overlap in A's frame.
+  EXPECT_TRUE(std::includes(parallel.begin(), parallel.end(), ref.tightTriangles.begin(), ref.tightTriangles.end()))
+      << "a pair whose moved triangles' boxes overlap was missed";
+
+  // Leaf size is a memory/speed option only: the candidates are the same.
+  for (int perLeaf : {2, 4}) {
+    const AabbTree leafyA = AabbTree::build(a.xyz, a.indices, perLeaf);
+    const AabbTree leafyB = AabbTree::build(b.xyz, b.indices, perLeaf);
+    std::vector<TrianglePair> leafy;
+    findCandidatePairs(leafyA, leafyB, map, leafy, nullptr, true);
+    EXPECT_EQ(leafy, parallel) << perLeaf << " triangles per leaf";
+  }
+  return parallel.size();
+}
+
+/// A random pose of B against A: rotation times non-uniform scale, B's box centre placed within `spread` times
+/// A's size of A's box centre, so that the meshes interpenetrate partly.
+AffineMap randomPose(const Soup& a, const Soup& b, std::mt19937& rng, bool scale, double spread) {
+  std::uniform_real_distribution<double> unit(-1.0, 1.0);
+  std::uniform_real_distribution<double> scaleFactor(0.5, 2.0);
+  auto bounds = [](const Soup& s, Eigen::Vector3d& lo, Eigen::Vector3d& hi) {
+    lo = Eigen::Vector3d::Constant(1e300);
+    hi = -lo;
+    for (std::size_t v = 0; v < s.xyz.size() / 3; ++v) {
+      const Eigen::Vector3d p(s.xyz[3 * v], s.xyz[3 * v + 1], s.xyz[3 * v + 2]);
+      lo = lo.cwiseMin(p);
+      hi = hi.cwiseMax(p);
+    }
+  };
+  Eigen::Vector3d loA, hiA, loB, hiB;
+  bounds(a, loA, hiA);
+  bounds(b, loB, hiB);
+  // Scale B so its size is comparable with A's, whatever units the two files use.
+  const double unitsB = (hiA - loA).norm() / (hiB - loB).norm();
+  Eigen::Matrix3d linear = test::randomRotation(rng) * unitsB;
+  if (scale) linear = linear * Eigen::Vector3d(scaleFactor(rng), scaleFactor(rng), scaleFactor(rng)).asDiagonal();
+  const Eigen::Vector3d target =
+      0.5 * (loA + hiA) + spread * (hiA - loA).cwiseProduct(Eigen::Vector3d(unit(rng), unit(rng), unit(rng)));
+  AffineMap map;
+  map.linear = linear.cast<float>();
+  map.translation = (target - linear * (0.5 * (loB + hiB))).cast<float>();
+  return map;
+}
+
+TEST(TreeTraversal, RandomSoupsMatchBruteForce) {
+  std::mt19937 rng(11);
+  std::size_t hits = 0;
+  for (int round = 0; round < 6; ++round) {
+    const Soup a = test::randomSoup(700, 1.0f, 0.15f, 100 + round);
+    const Soup b = test::randomSoup(500, 1.0f, 0.2f, 200 + round);
+    hits += checkQuery(a, b, randomPose(a, b, rng, round % 2 == 1, 0.3)) > 0 ? 1 : 0;
+  }
+  EXPECT_GE(hits, 5u) << "the poses must actually overlap for the comparison to mean anything";
+}
+
+TEST(TreeTraversal, RealMeshesInRandomPosesMatchBruteForce) {
+  GPUCOL_REQUIRE_MESH(armadilloPath, "armadillo-2766.ply");
+  GPUCOL_REQUIRE_MESH(bunnyPath, "bunny-948.ply");
+  GPUCOL_REQUIRE_MESH(torusPath, "torus-1152.ply");
+  const Soup armadillo = test::soupOf(loadMesh(armadilloPath));
+  const Soup bunny = test::soupOf(loadMesh(bunnyPath));
+  const Soup torus = test::soupOf(loadMesh(torusPath));
+  std::mt19937 rng(2011);
+  std::size_t hits = 0, poses = 0;
+  const std::pair<const Soup*, const Soup*> cases[] = {{&armadillo, &bunny}, {&bunny, &torus}, {&torus, &armadillo}};
+  for (const auto& [a, b] : cases) {
+    for (int round = 0; round < 4; ++round) {
+      SCOPED_TRACE(::testing::Message() << "pose " << round);
+      hits += checkQuery(*a, *b, randomPose(*a, *b, rng, round >= 2, 0.25)) > 0 ? 1 : 0;
+      ++poses;
+    }
+  }
+  EXPECT_GE(hits, poses - 2) << "most poses must overlap for the comparison to mean anything";
+}
+
+TEST(TreeTraversal, SameMeshSamePoseFindsAtLeastEveryTriangleWithItself) {
+  GPUCOL_REQUIRE_MESH(path, "bunny-948.ply");
+  const TriangleMesh mesh = loadMesh(path);
+  const AabbTree tree = AabbTree::build(mesh);
+  std::vector<TrianglePair> out;
+  findCandidatePairs(tree, tree, AffineMap(), out);
+  for (std::uint32_t t = 0; t < mesh.triangleCount(); ++t) {
+    ASSERT_TRUE(std::binary_search(out.begin(), out.end(), TrianglePair{t, t})) << "triangle " << t;
+  }
+}
+
+TEST(TreeTraversal, TouchingBoxesCount) {
+  // Two unit right triangles in the z = 0 plane; B moved by exactly 1 along x, so the boxes share the face x = 1.
+  Soup a;
+  a.xyz = {0, 0, 0, 1, 0, 0, 0, 1, 0};
+  a.indices = {0, 1, 2};
+  const AabbTree tree = AabbTree::build(a.xyz, a.indices);
+  AffineMap map;
+  map.translation = Eigen::Vector3f(1, 0, 0);
+  std::vector<TrianglePair> out;
+  findCandidatePairs(tree, tree, map, out);
+  ASSERT_EQ(out.size(), 1u);
+  // A triangle collapsed onto B's origin with an identity map: the widening is exactly zero (R_B = 0, t = 0), so
+  // this checks the comparison itself: a box that is one point on A's corner touches it.
+  Soup point;
+  point.xyz = {0, 0, 0, 0, 0, 0, 0, 0, 0};
+  point.indices = {0, 1, 2};
+  const AabbTree pointTree = AabbTree::build(point.xyz, point.indices);
+  ASSERT_EQ(carriedBoxInflation(pointTree, AffineMap()), Eigen::Vector3f::Zero());
+  findCandidatePairs(tree, pointTree, AffineMap(), out);
+  ASSERT_EQ(out.size(), 1u);
+  // Far apart: the root test fails and is the only test.
+  map.translation = Eigen::Vector3f(1.01f, 0, 0);
+  TraversalStats stats;
+  findCandidatePairs(tree, tree, map, out, &stats);
+  EXPECT_TRUE(out.empty());
+  EXPECT_EQ(stats.nodeTests, 1u);
+}
+
+TEST(TreeTraversal, FarFromTheOriginStillNeverMissesAPair) {
+  // B's triangles carried by a large translation into A, which sits far from A's own origin: float rounding of
+  // the carried boxes is then large in absolute terms and only the widening keeps the touching pairs.
+  std::mt19937 rng(5);
+  Soup a = test::randomSoup(400, 1.0f, 0.2f, 31);
+  const float offset = 3.0e4f;
+  for (std::size_t i = 0; i < a.xyz.size(); i += 3) a.xyz[i] += offset;
+  const Soup b = test::randomSoup(400, 1.0f, 0.2f, 32);
+  for (int round = 0; round < 4; ++round) {
+    AffineMap map;
+    map.linear = test::randomRotation(rng).cast<float>();
+    map.translation = Eigen::Vector3f(offset, 0, 0);
+    EXPECT_GT(checkQuery(a, b, map), 0u);
+  }
+}
+
+}  // namespace
+}  // namespace gpucol
