@@ -7,35 +7,35 @@ namespace {
 
 /// Accumulates the corners of the overlap polygon; only the sum and count are needed for its mean.
 struct CornerSum {
-  Eigen::Vector3f sum = Eigen::Vector3f::Zero();
+  Eigen::Vector3d sum = Eigen::Vector3d::Zero();
   int count = 0;
-  void add(const Eigen::Vector3f& p) {
+  void add(const Eigen::Vector3d& p) {
     sum += p;
     ++count;
   }
 };
 
 /// True when the signed values x and y are zero or of opposite signs (the segment between them reaches 0).
-inline bool straddles(float x, float y) { return (x <= 0.0f && y >= 0.0f) || (x >= 0.0f && y <= 0.0f); }
+inline bool straddles(double x, double y) { return (x <= 0.0 && y >= 0.0) || (x >= 0.0 && y <= 0.0); }
 
 /// Point-in-triangle for a 2-D triangle of either winding; the boundary counts as inside.
-inline bool insideOrOn(const float tx[3], const float ty[3], float px, float py) {
-  const float o0 = orient2d(tx[0], ty[0], tx[1], ty[1], px, py);
-  const float o1 = orient2d(tx[1], ty[1], tx[2], ty[2], px, py);
-  const float o2 = orient2d(tx[2], ty[2], tx[0], ty[0], px, py);
-  return (o0 >= 0.0f && o1 >= 0.0f && o2 >= 0.0f) || (o0 <= 0.0f && o1 <= 0.0f && o2 <= 0.0f);
+inline bool insideOrOn(const double tx[3], const double ty[3], double px, double py) {
+  const double o0 = orient2d(tx[0], ty[0], tx[1], ty[1], px, py);
+  const double o1 = orient2d(tx[1], ty[1], tx[2], ty[2], px, py);
+  const double o2 = orient2d(tx[2], ty[2], tx[0], ty[0], px, py);
+  return (o0 >= 0.0 && o1 >= 0.0 && o2 >= 0.0) || (o0 <= 0.0 && o1 <= 0.0 && o2 <= 0.0);
 }
 
 }  // namespace
 
-bool coplanarTrianglesOverlap(const Eigen::Vector3f* const a[3], const Eigen::Vector3f* const b[3], int dropAxis,
-                              Eigen::Vector3f* point) {
+bool coplanarTrianglesOverlap(const Eigen::Vector3d* const a[3], const Eigen::Vector3d* const b[3], int dropAxis,
+                              Eigen::Vector3d* point) {
   const int u = dropAxis == 0 ? 1 : 0;
   const int v = dropAxis == 2 ? 1 : 2;
-  const float ax[3] = {(*a[0])[u], (*a[1])[u], (*a[2])[u]};
-  const float ay[3] = {(*a[0])[v], (*a[1])[v], (*a[2])[v]};
-  const float bx[3] = {(*b[0])[u], (*b[1])[u], (*b[2])[u]};
-  const float by[3] = {(*b[0])[v], (*b[1])[v], (*b[2])[v]};
+  const double ax[3] = {(*a[0])[u], (*a[1])[u], (*a[2])[u]};
+  const double ay[3] = {(*a[0])[v], (*a[1])[v], (*a[2])[v]};
+  const double bx[3] = {(*b[0])[u], (*b[1])[u], (*b[2])[u]};
+  const double by[3] = {(*b[0])[v], (*b[1])[v], (*b[2])[v]};
   const bool wantPoint = point != nullptr;
   CornerSum corners;
 
@@ -46,15 +46,15 @@ bool coplanarTrianglesOverlap(const Eigen::Vector3f* const a[3], const Eigen::Ve
     const int i1 = i == 2 ? 0 : i + 1;
     for (int j = 0; j < 3; ++j) {
       const int j1 = j == 2 ? 0 : j + 1;
-      const float o1 = orient2d(ax[i], ay[i], ax[i1], ay[i1], bx[j], by[j]);
-      const float o2 = orient2d(ax[i], ay[i], ax[i1], ay[i1], bx[j1], by[j1]);
-      if (!straddles(o1, o2) || (o1 == 0.0f && o2 == 0.0f)) continue;
-      const float o3 = orient2d(bx[j], by[j], bx[j1], by[j1], ax[i], ay[i]);
-      const float o4 = orient2d(bx[j], by[j], bx[j1], by[j1], ax[i1], ay[i1]);
+      const double o1 = orient2d(ax[i], ay[i], ax[i1], ay[i1], bx[j], by[j]);
+      const double o2 = orient2d(ax[i], ay[i], ax[i1], ay[i1], bx[j1], by[j1]);
+      if (!straddles(o1, o2) || (o1 == 0.0 && o2 == 0.0)) continue;
+      const double o3 = orient2d(bx[j], by[j], bx[j1], by[j1], ax[i], ay[i]);
+      const double o4 = orient2d(bx[j], by[j], bx[j1], by[j1], ax[i1], ay[i1]);
       if (!straddles(o3, o4)) continue;
       if (!wantPoint) return true;
       // o3 - o4 != 0 here: o3 == o4 would need both zero (they straddle), i.e. collinear edges.
-      const float t = o3 / (o3 - o4);
+      const double t = o3 / (o3 - o4);
       corners.add(*a[i] + (*a[i1] - *a[i]) * t);
     }
   }
@@ -69,7 +69,7 @@ bool coplanarTrianglesOverlap(const Eigen::Vector3f* const a[3], const Eigen::Ve
     }
   }
   if (corners.count == 0) return false;
-  *point = corners.sum / static_cast<float>(corners.count);
+  *point = corners.sum / static_cast<double>(corners.count);
   return true;
 }
 

@@ -5,24 +5,28 @@
 
 namespace gpucol {
 
-bool trianglesIntersect(const Eigen::Vector3f& a0, const Eigen::Vector3f& a1, const Eigen::Vector3f& a2,
-                        const Eigen::Vector3f& b0, const Eigen::Vector3f& b1, const Eigen::Vector3f& b2) {
+bool trianglesIntersect(const Eigen::Vector3f& a0f, const Eigen::Vector3f& a1f, const Eigen::Vector3f& a2f,
+                        const Eigen::Vector3f& b0f, const Eigen::Vector3f& b1f, const Eigen::Vector3f& b2f) {
+  // Double arithmetic on the float input: see triangle_plane.h for why.
+  const Eigen::Vector3d a0 = a0f.cast<double>(), a1 = a1f.cast<double>(), a2 = a2f.cast<double>();
+  const Eigen::Vector3d b0 = b0f.cast<double>(), b1 = b1f.cast<double>(), b2 = b2f.cast<double>();
+
   // Möller 1997, step 1: B's vertices against A's plane; all strictly on one side rejects.
   const detail::TrianglePlane planeA = detail::makePlane(a0, a1, a2);
   const detail::TrianglePlane planeB = detail::makePlane(b0, b1, b2);
   if (planeA.degenerate || planeB.degenerate) return false;
-  float dB[3];
+  double dB[3];
   detail::signedDistances(planeA, b0, b1, b2, dB);
   if (detail::allOnOneSide(dB)) return false;
 
-  const Eigen::Vector3f* const a[3] = {&a0, &a1, &a2};
-  const Eigen::Vector3f* const b[3] = {&b0, &b1, &b2};
+  const Eigen::Vector3d* const a[3] = {&a0, &a1, &a2};
+  const Eigen::Vector3d* const b[3] = {&b0, &b1, &b2};
   if (detail::allInPlane(dB)) {
     return detail::coplanarTrianglesOverlap(a, b, detail::dominantAxis(planeA.normal), nullptr);
   }
 
   // Step 2: A's vertices against B's plane.
-  float dA[3];
+  double dA[3];
   detail::signedDistances(planeB, a0, a1, a2, dA);
   if (detail::allOnOneSide(dA)) return false;
   if (detail::allInPlane(dA)) {
@@ -33,9 +37,9 @@ bool trianglesIntersect(const Eigen::Vector3f& a0, const Eigen::Vector3f& a1, co
   // on L overlap. Möller's simplification: the coordinate along L's dominant axis orders points on L
   // like the true line parameter, so no dot products are needed.
   const int axis = detail::dominantAxis(planeA.normal.cross(planeB.normal));
-  const float pA[3] = {a0[axis], a1[axis], a2[axis]};
-  const float pB[3] = {b0[axis], b1[axis], b2[axis]};
-  float loA, hiA, loB, hiB;
+  const double pA[3] = {a0[axis], a1[axis], a2[axis]};
+  const double pB[3] = {b0[axis], b1[axis], b2[axis]};
+  double loA, hiA, loB, hiB;
   detail::lineInterval(pA, dA, loA, hiA);
   detail::lineInterval(pB, dB, loB, hiB);
   return loA <= hiB && loB <= hiA;

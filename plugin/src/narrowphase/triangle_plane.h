@@ -4,6 +4,13 @@
 // the signed distances of another triangle's vertices to it (with Möller's snapping of near-zero
 // distances), the interval of a triangle on the planes' intersection line, and the 2-D tests of the
 // coplanar case. Everything is inline and allocation-free: it is the inner loop of the near phase.
+//
+// Precision: the inputs are float, the arithmetic is double. A product of two floats is exact in
+// double and a difference of two nearby floats too, so the normal e1 x e2 and the signed distances
+// carry about 1e-16 relative error instead of float's 1e-7. That matters for nearly parallel planes:
+// an error delta in a distance moves the intersection line sideways by delta / sin(angle), and in
+// float a pair of faces 2e-6 rad apart was reported intersecting while 11% of its size apart (found by
+// the random near-coplanar tests). On a CPU double costs the same as float for this scalar code.
 
 #include <Eigen/Core>
 #include <Eigen/Geometry>
@@ -13,34 +20,36 @@
 namespace gpucol::detail {
 
 /// A triangle is degenerate when sin^2 of the angle between its edges v1-v0 and v2-v0 is below this.
-/// 1e-12 is an angle of 1e-6 rad, below float's resolution of a direction (2^-23 ~ 1.2e-7 per component
-/// is already the noise of a unit normal), so such a triangle has no meaningful plane. Needles and slivers
-/// above it keep working. The test is written as !(a > b) so that NaN input is also called degenerate.
-inline constexpr float kDegenerateSin2 = 1e-12f;
+/// 1e-12 is an angle of 1e-6 rad: moving one vertex by a float ulp (1.2e-7 relative) would tilt such a
+/// triangle's plane by a tenth of a radian, so its plane means nothing. Needles and slivers above it
+/// keep working. The test is written as !(a > b) so that NaN input is also called degenerate.
+inline constexpr double kDegenerateSin2 = 1e-12;
 
 /// Relative tolerance under which a signed distance is snapped to exactly zero (Möller 1997 uses an
-/// absolute EPSILON; ours is relative, so it does not depend on the units of the mesh). The float error of
-/// d = n.(q - p0), with n = e1 x e2 rounded per component, is a few ulps of |e1||e2||q - p0|; 2^-20
-/// (~9.5e-7, eight ulps) covers it. Snapping makes "on the plane" exact: a shared vertex, or a vertex
-/// lying on the other face up to rounding, is touching (which counts as intersecting) rather than a coin
-/// toss, and a pair whose every vertex is that close to the other plane goes to the 2-D coplanar test,
-/// where the line of intersection would be ill-conditioned.
-inline constexpr float kSnapRelative = 9.5367431640625e-7f;
+/// absolute EPSILON; ours is relative, so it does not depend on the units of the mesh). The double error
+/// of d = n.(q - p0) is a few units of 1e-16 of |e1||e2||q - p0|; 1e-12 covers it with a wide margin and
+/// stays far below float's resolution (1.2e-7), so only configurations that are exact in the float input
+/// (a shared vertex, a vertex on the other plane, coplanar faces) are snapped. Snapping makes those exact:
+/// touching counts as intersecting instead of a coin toss, and a pair whose every vertex is in the other
+/// plane goes to the 2-D coplanar test. The side effect, the intersection line moving sideways by
+/// 1e-12 / sin(angle), stays below 1e-6 of the pair's size at every angle once the coplanar case is
+/// taken out (it is at most min(angle, 1e-12 / angle)).
+inline constexpr double kSnapRelative = 1e-12;
 
 /// The plane of a triangle: a point on it, the unnormalised normal e1 x e2 (counter-clockwise seen from
 /// outside means it points outwards), and the product of the edges' largest components, the scale of
 /// the normal's rounding error.
 struct TrianglePlane {
-  Eigen::Vector3f origin;  ///< v0.
-  Eigen::Vector3f normal;  ///< (v1 - v0) x (v2 - v0), not normalised.
-  float errorScale;        ///< max|e1| * max|e2| (infinity norms): bounds |normal|'s rounding error.
+  Eigen::Vector3d origin;  ///< v0.
+  Eigen::Vector3d normal;  ///< (v1 - v0) x (v2 - v0), not normalised.
+  double errorScale;        ///< max|e1| * max|e2| (infinity norms): bounds |normal|'s rounding error.
   bool degenerate;         ///< Zero area (or NaN): no plane.
 };
 
 /// The plane of triangle (v0, v1, v2).
-inline TrianglePlane makePlane(const Eigen::Vector3f& v0, const Eigen::Vector3f& v1, const Eigen::Vector3f& v2) {
-  const Eigen::Vector3f e1 = v1 - v0;
-  const Eigen::Vector3f e2 = v2 - v0;
+inline TrianglePlane makePlane(const Eigen::Vector3d& v0, const Eigen::Vector3d& v1, const Eigen::Vector3d& v2) {
+  const Eigen::Vector3d e1 = v1 - v0;
+  const Eigen::Vector3d e2 = v2 - v0;
   TrianglePlane plane;
   plane.origin = v0;
   plane.normal = e1.cross(e2);
@@ -51,56 +60,56 @@ inline TrianglePlane makePlane(const Eigen::Vector3f& v0, const Eigen::Vector3f&
 
 /// Signed distances (times |normal|) of q0, q1, q2 to `plane`, those within the rounding tolerance
 /// snapped to exactly 0. Positive is on the outer side.
-inline void signedDistances(const TrianglePlane& plane, const Eigen::Vector3f& q0, const Eigen::Vector3f& q1,
-                            const Eigen::Vector3f& q2, float d[3]) {
-  const Eigen::Vector3f r0 = q0 - plane.origin;
-  const Eigen::Vector3f r1 = q1 - plane.origin;
-  const Eigen::Vector3f r2 = q2 - plane.origin;
+inline void signedDistances(const TrianglePlane& plane, const Eigen::Vector3d& q0, const Eigen::Vector3d& q1,
+                            const Eigen::Vector3d& q2, double d[3]) {
+  const Eigen::Vector3d r0 = q0 - plane.origin;
+  const Eigen::Vector3d r1 = q1 - plane.origin;
+  const Eigen::Vector3d r2 = q2 - plane.origin;
   d[0] = plane.normal.dot(r0);
   d[1] = plane.normal.dot(r1);
   d[2] = plane.normal.dot(r2);
-  const float extent = std::max({r0.cwiseAbs().maxCoeff(), r1.cwiseAbs().maxCoeff(), r2.cwiseAbs().maxCoeff()});
-  const float tolerance = kSnapRelative * plane.errorScale * extent;
-  for (int i = 0; i < 3; ++i) d[i] = std::fabs(d[i]) <= tolerance ? 0.0f : d[i];
+  const double extent = std::max({r0.cwiseAbs().maxCoeff(), r1.cwiseAbs().maxCoeff(), r2.cwiseAbs().maxCoeff()});
+  const double tolerance = kSnapRelative * plane.errorScale * extent;
+  for (int i = 0; i < 3; ++i) d[i] = std::fabs(d[i]) <= tolerance ? 0.0 : d[i];
 }
 
 /// True when x and y are both strictly positive or both strictly negative. Compared by sign rather than by
 /// x * y > 0, which underflows to 0 for tiny meshes (the distances scale with length cubed).
-inline bool sameStrictSign(float x, float y) { return (x > 0.0f && y > 0.0f) || (x < 0.0f && y < 0.0f); }
+inline bool sameStrictSign(double x, double y) { return (x > 0.0 && y > 0.0) || (x < 0.0 && y < 0.0); }
 
 /// True when all three distances are non-zero with one sign: the triangle misses the plane (Möller's
 /// early rejection).
-inline bool allOnOneSide(const float d[3]) { return sameStrictSign(d[0], d[1]) && sameStrictSign(d[0], d[2]); }
+inline bool allOnOneSide(const double d[3]) { return sameStrictSign(d[0], d[1]) && sameStrictSign(d[0], d[2]); }
 
 /// True when all three distances are zero: the triangle lies in the plane.
-inline bool allInPlane(const float d[3]) { return d[0] == 0.0f && d[1] == 0.0f && d[2] == 0.0f; }
+inline bool allInPlane(const double d[3]) { return d[0] == 0.0 && d[1] == 0.0 && d[2] == 0.0; }
 
 /// The vertex on its own side of the other plane (Möller 1997, "compute intervals"), for distances that
 /// are neither all on one side nor all zero. The two edges from it cross the plane; when the lone vertex
 /// lies in the plane both crossings are that vertex, and the formula below never divides by zero.
-inline int loneVertex(const float d[3]) {
+inline int loneVertex(const double d[3]) {
   if (sameStrictSign(d[0], d[1])) return 2;
   if (sameStrictSign(d[0], d[2])) return 1;
-  if (sameStrictSign(d[1], d[2]) || d[0] != 0.0f) return 0;
-  if (d[1] != 0.0f) return 1;
+  if (sameStrictSign(d[1], d[2]) || d[0] != 0.0) return 0;
+  if (d[1] != 0.0) return 1;
   return 2;
 }
 
 /// Interval [lo, hi] of a triangle on the intersection line, from the vertices' coordinates `p` along
 /// the line's dominant axis and their distances `d` to the other plane.
-inline void lineInterval(const float p[3], const float d[3], float& lo, float& hi) {
+inline void lineInterval(const double p[3], const double d[3], double& lo, double& hi) {
   const int a = loneVertex(d);
   const int b = a == 2 ? 0 : a + 1;
   const int c = b == 2 ? 0 : b + 1;
-  const float t0 = p[a] + (p[b] - p[a]) * (d[a] / (d[a] - d[b]));
-  const float t1 = p[a] + (p[c] - p[a]) * (d[a] / (d[a] - d[c]));
+  const double t0 = p[a] + (p[b] - p[a]) * (d[a] / (d[a] - d[b]));
+  const double t1 = p[a] + (p[c] - p[a]) * (d[a] / (d[a] - d[c]));
   lo = std::min(t0, t1);
   hi = std::max(t0, t1);
 }
 
 /// The same crossing points in 3-D: the segment where triangle v meets the other plane.
-inline void planeCrossing(const Eigen::Vector3f* const v[3], const float d[3], Eigen::Vector3f& s0,
-                          Eigen::Vector3f& s1) {
+inline void planeCrossing(const Eigen::Vector3d* const v[3], const double d[3], Eigen::Vector3d& s0,
+                          Eigen::Vector3d& s1) {
   const int a = loneVertex(d);
   const int b = a == 2 ? 0 : a + 1;
   const int c = b == 2 ? 0 : b + 1;
@@ -109,13 +118,13 @@ inline void planeCrossing(const Eigen::Vector3f* const v[3], const float d[3], E
 }
 
 /// Index of the largest absolute component.
-inline int dominantAxis(const Eigen::Vector3f& v) {
-  const float x = std::fabs(v.x()), y = std::fabs(v.y()), z = std::fabs(v.z());
+inline int dominantAxis(const Eigen::Vector3d& v) {
+  const double x = std::fabs(v.x()), y = std::fabs(v.y()), z = std::fabs(v.z());
   return x >= y ? (x >= z ? 0 : 2) : (y >= z ? 1 : 2);
 }
 
 /// Twice the signed area of the 2-D triangle (a, b, c): positive when counter-clockwise.
-inline float orient2d(float ax, float ay, float bx, float by, float cx, float cy) {
+inline double orient2d(double ax, double ay, double bx, double by, double cx, double cy) {
   return (bx - ax) * (cy - ay) - (by - ay) * (cx - ax);
 }
 
