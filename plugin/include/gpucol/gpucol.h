@@ -3,6 +3,7 @@
 /// Everything of gpucol's public API.
 #include "gpucol/collide_meshes.h"
 #include "gpucol/config.h"
+#include "gpucol/grid_broadphase.h"
 #include "gpucol/mass_properties.h"
 #include "gpucol/mesh_error.h"
 #include "gpucol/mesh_report.h"

@@ -1,0 +1,100 @@
+#pragma once
+
+#include <BulletCollision/BroadphaseCollision/btBroadphaseInterface.h>
+#include <BulletCollision/BroadphaseCollision/btOverlappingPairCache.h>
+
+#include <cstddef>
+#include <cstdint>
+#include <memory>
+
+#include "gpucol/config.h"
+
+namespace gpucol {
+
+/// Measured alternatives of the grid broad phase, for benchmarks and experiments; defaults are the winners.
+struct GridBroadphaseTuning {
+  /// Cell size from the density rule of Avril et al. §4.1 instead of the objects' median size.
+  bool densityCellSize = false;
+  /// Write candidate results to the §3.4 bit mask instead of compacted per-chunk lists.
+  bool bitMaskOutput = false;
+  /// Use the Newton/"magic constant" square root (§3.3) for the mapping function's first guess.
+  bool newtonSqrt = false;
+  /// A box covering more cells than this is tested against all instead of being put in the grid.
+  std::uint32_t hugeCellLimit = 64;
+};
+
+/// What the last calculateOverlappingPairs did.
+struct GridBroadphaseStats {
+  /// Live proxies.
+  std::uint32_t proxies = 0;
+  /// Pairs found overlapping (before the pair cache's own filter callback).
+  std::uint64_t overlappingPairs = 0;
+  /// Pairs added to the pair cache by the last step.
+  std::uint64_t added = 0;
+  /// Pairs removed from the pair cache by the last step.
+  std::uint64_t removed = 0;
+  /// True when the search ran at all (false when no proxy moved, appeared or vanished).
+  bool searched = false;
+  /// True when the grid was used (false: brute force through the mapping function).
+  bool usedGrid = false;
+  /// True when the OpenCL pair finder ran.
+  bool usedOpenCl = false;
+  /// Edge of the grid's cubic cells (0 without grid).
+  float cellSize = 0.0f;
+  /// Bytes held by the broad phase (proxies, arrays, pair lists, scratch), excluding the pair cache.
+  std::size_t memoryBytes = 0;
+};
+
+/// A btBroadphaseInterface that finds exactly the pairs whose AABBs overlap (touching counts) with a uniform
+/// grid and the pair-index mapping function of Avril et al. 2012, on the CPU (oneTBB) or through OpenCL,
+/// and keeps the pair cache in sync incrementally. Put it where btDbvtBroadphase was.
+class GridBroadphase : public btBroadphaseInterface {
+ public:
+  /// A broad phase with `config`'s backend and thresholds; `pairCache` is used if given (not owned),
+  /// else a btHashedOverlappingPairCache is created and owned.
+  explicit GridBroadphase(const Config& config = Config{}, btOverlappingPairCache* pairCache = nullptr);
+  /// Destroys the broad phase (and the pair cache when it owns it).
+  ~GridBroadphase() override;
+  GridBroadphase(const GridBroadphase&) = delete;
+  GridBroadphase& operator=(const GridBroadphase&) = delete;
+
+  /// Creates a proxy owned by the broad phase (its address stays valid until destroyProxy).
+  btBroadphaseProxy* createProxy(const btVector3& aabbMin, const btVector3& aabbMax, int shapeType, void* userPtr,
+                                 int collisionFilterGroup, int collisionFilterMask, btDispatcher* dispatcher) override;
+  /// Removes the proxy's pairs from the pair cache (through `dispatcher`) and frees the proxy.
+  void destroyProxy(btBroadphaseProxy* proxy, btDispatcher* dispatcher) override;
+  /// Stores the proxy's new AABB; pairs follow at the next calculateOverlappingPairs.
+  void setAabb(btBroadphaseProxy* proxy, const btVector3& aabbMin, const btVector3& aabbMax,
+               btDispatcher* dispatcher) override;
+  /// The AABB last given to createProxy or setAabb.
+  void getAabb(btBroadphaseProxy* proxy, btVector3& aabbMin, btVector3& aabbMax) const override;
+  /// Reports every proxy whose AABB (grown by -aabbMax/-aabbMin, as btDbvtBroadphase does) the ray hits
+  /// within [0, rayCallback.m_lambda_max], with Bullet's btRayAabb2 test.
+  void rayTest(const btVector3& rayFrom, const btVector3& rayTo, btBroadphaseRayCallback& rayCallback,
+               const btVector3& aabbMin = btVector3(0, 0, 0), const btVector3& aabbMax = btVector3(0, 0, 0)) override;
+  /// Reports every proxy whose AABB overlaps [aabbMin, aabbMax] (touching counts).
+  void aabbTest(const btVector3& aabbMin, const btVector3& aabbMax, btBroadphaseAabbCallback& callback) override;
+  /// Finds the overlapping pairs and adds/removes the difference to the last step in the pair cache.
+  void calculateOverlappingPairs(btDispatcher* dispatcher) override;
+  /// The pair cache (owned or user-supplied).
+  btOverlappingPairCache* getOverlappingPairCache() override;
+  /// The pair cache (owned or user-supplied).
+  const btOverlappingPairCache* getOverlappingPairCache() const override;
+  /// The union of all proxies' AABBs (a zero box when there is none), as btDbvtBroadphase reports it.
+  void getBroadphaseAabb(btVector3& aabbMin, btVector3& aabbMax) const override;
+  /// Releases the internal storage when no proxy is left (ensures reproducible runs, like btDbvtBroadphase).
+  void resetPool(btDispatcher* dispatcher) override;
+  /// Prints proxy and pair counts and the last step's path to stdout.
+  void printStats() override;
+
+  /// Chooses among the measured alternatives (takes effect at the next calculateOverlappingPairs).
+  void setTuning(const GridBroadphaseTuning& tuning);
+  /// Statistics of the last calculateOverlappingPairs.
+  const GridBroadphaseStats& stats() const;
+
+ private:
+  struct Impl;
+  std::unique_ptr<Impl> m_impl;
+};
+
+}  // namespace gpucol

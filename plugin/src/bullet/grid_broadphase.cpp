@@ -1,0 +1,363 @@
+// gpucol::GridBroadphase: Bullet's side of the grid broad phase. Proxies live in a deque (stable
+// addresses), their AABBs and filters in structure-of-arrays form for the pair finder
+// (broadphase/grid_pair_finder.h); each step's sorted pair list is diffed against the last one so the pair
+// cache only sees additions and removals (DESIGN.md, data flow).
+#include "gpucol/grid_broadphase.h"
+
+#include <LinearMath/btAabbUtil2.h>
+
+#include <algorithm>
+#include <cstdio>
+#include <deque>
+#include <iostream>
+#include <stdexcept>
+#include <string>
+#include <vector>
+
+#include "broadphase/grid_pair_finder.h"
+#include "broadphase/pair_diff.h"
+
+namespace gpucol {
+namespace {
+
+/// Auto backend: at and above this many proxies the OpenCL finder is tried (when one is registered and a
+/// device works). A placeholder until the OpenCL path is measured beside the CPU one (issue 4 benchmark).
+constexpr std::uint32_t kAutoOpenClFrom = 100000;
+
+/// A proxy with its slot in the structure-of-arrays storage.
+struct GridProxy : btBroadphaseProxy {
+  std::uint32_t slot = 0;
+};
+
+}  // namespace
+
+struct GridBroadphase::Impl {
+  Config config;
+  GridBroadphaseTuning tuning;
+  GridBroadphaseStats stats;
+  btOverlappingPairCache* pairCache = nullptr;
+  std::unique_ptr<btHashedOverlappingPairCache> ownedCache;
+
+  std::deque<GridProxy> proxies;  // index = slot; a deque never moves its elements when it grows
+  std::vector<float> minX, minY, minZ, maxX, maxY, maxZ;
+  std::vector<std::int32_t> group, mask;
+  std::vector<std::uint8_t> flags;
+  std::vector<std::uint32_t> freeSlots;     // reusable now
+  std::vector<std::uint32_t> pendingFree;   // freed since the last search: reused only after it
+  std::vector<std::uint8_t> freedSinceSearch;  // per slot: its old pairs are already gone from the cache
+  std::uint32_t liveCount = 0;
+  int nextUniqueId = 0;
+  bool dirty = true;
+
+  std::unique_ptr<PairFinder> cpuFinder = makeCpuPairFinder();
+  std::unique_ptr<PairFinder> openClFinder;
+  bool openClTried = false;
+  std::vector<std::uint64_t> accepted;  // sorted keys of the pairs in the cache after the last step
+  std::vector<std::uint64_t> found;
+  std::vector<std::uint64_t> next;
+  std::vector<std::uint64_t> removedKeys;  // vanished pairs of a cache with deferred removal (sorted)
+
+  ProxyArrays view() const {
+    ProxyArrays v;
+    v.count = std::uint32_t(flags.size());
+    v.minX = minX.data(), v.minY = minY.data(), v.minZ = minZ.data();
+    v.maxX = maxX.data(), v.maxY = maxY.data(), v.maxZ = maxZ.data();
+    v.group = group.data(), v.mask = mask.data(), v.flags = flags.data();
+    return v;
+  }
+
+  static std::uint8_t flagsOf(int filterGroup) {
+    // Bullet gives static and kinematic objects the StaticFilter group (btCollisionWorld::addCollisionObject);
+    // those pairs are never generated.
+    return std::uint8_t(kProxyActive | ((filterGroup & btBroadphaseProxy::StaticFilter) ? kProxyStatic : 0));
+  }
+
+  void store(std::uint32_t s, const btVector3& lo, const btVector3& hi) {
+    minX[s] = lo.x(), minY[s] = lo.y(), minZ[s] = lo.z();
+    maxX[s] = hi.x(), maxY[s] = hi.y(), maxZ[s] = hi.z();
+  }
+
+  PairFinder& chooseFinder(GridBroadphaseStats& st) {
+    const Backend b = config.broadphaseBackend;
+    const bool wantOpenCl = b == Backend::OpenCL || (b == Backend::Auto && liveCount >= kAutoOpenClFrom);
+    if (wantOpenCl && !openClTried) {
+      openClTried = true;
+      openClFinder = makeOpenClPairFinder(config);
+      if (!openClFinder && b == Backend::OpenCL)
+        std::cerr << "gpucol::GridBroadphase: no OpenCL pair finder available; using the CPU path\n";
+    }
+    if (wantOpenCl && openClFinder) {
+      st.usedOpenCl = true;
+      return *openClFinder;
+    }
+    return *cpuFinder;
+  }
+
+  PairFinderOptions options() const {
+    PairFinderOptions o;
+    o.bruteForceBelow = config.bruteForceBelow < 0 ? 0u : std::uint32_t(config.bruteForceBelow);
+    o.cellSizeRule = tuning.densityCellSize ? CellSizeRule::Density : CellSizeRule::Size;
+    o.output = tuning.bitMaskOutput ? PairOutput::BitMask : PairOutput::Compacted;
+    o.mappingSqrt = tuning.newtonSqrt ? MappingSqrt::Newton : MappingSqrt::Double;
+    o.hugeCellLimit = tuning.hugeCellLimit;
+    return o;
+  }
+
+  void removeDeferred(btDispatcher* dispatcher);
+
+  std::size_t memoryBytes(const PairFinder& finder) const {
+    return proxies.size() * sizeof(GridProxy) + flags.capacity() * (6 * sizeof(float) + 2 * sizeof(std::int32_t) + 2) +
+           (freeSlots.capacity() + pendingFree.capacity()) * 4 +
+           (accepted.capacity() + found.capacity() + next.capacity()) * 8 + finder.stats().scratchBytes;
+  }
+};
+
+GridBroadphase::GridBroadphase(const Config& config, btOverlappingPairCache* pairCache) : m_impl(new Impl) {
+  m_impl->config = config;
+  if (config.bruteForceBelow < 0)
+    throw std::invalid_argument("gpucol::GridBroadphase: Config::bruteForceBelow must be >= 0, got " +
+                                std::to_string(config.bruteForceBelow));
+  if (pairCache) {
+    m_impl->pairCache = pairCache;
+  } else {
+    m_impl->ownedCache.reset(new btHashedOverlappingPairCache());
+    m_impl->pairCache = m_impl->ownedCache.get();
+  }
+}
+
+GridBroadphase::~GridBroadphase() = default;
+
+btBroadphaseProxy* GridBroadphase::createProxy(const btVector3& aabbMin, const btVector3& aabbMax, int shapeType,
+                                               void* userPtr, int collisionFilterGroup, int collisionFilterMask,
+                                               btDispatcher* /*dispatcher*/) {
+  Impl& d = *m_impl;
+  std::uint32_t slot;
+  if (!d.freeSlots.empty()) {
+    slot = d.freeSlots.back();
+    d.freeSlots.pop_back();
+  } else {
+    if (d.proxies.size() >= std::size_t(0xffffffffu))
+      throw std::length_error("gpucol::GridBroadphase: more than 2^32 - 1 proxies");
+    slot = std::uint32_t(d.proxies.size());
+    d.proxies.emplace_back();
+    for (auto* v : {&d.minX, &d.minY, &d.minZ, &d.maxX, &d.maxY, &d.maxZ}) v->push_back(0.0f);
+    d.group.push_back(0), d.mask.push_back(0), d.flags.push_back(0), d.freedSinceSearch.push_back(0);
+  }
+  GridProxy& p = d.proxies[slot];
+  static_cast<btBroadphaseProxy&>(p) =
+      btBroadphaseProxy(aabbMin, aabbMax, userPtr, collisionFilterGroup, collisionFilterMask);
+  (void)shapeType;  // Bullet 3 proxies no longer store the shape type
+  p.m_uniqueId = ++d.nextUniqueId;
+  p.slot = slot;
+  d.store(slot, aabbMin, aabbMax);
+  d.group[slot] = collisionFilterGroup;
+  d.mask[slot] = collisionFilterMask;
+  d.flags[slot] = Impl::flagsOf(collisionFilterGroup);
+  ++d.liveCount;
+  d.dirty = true;
+  return &p;
+}
+
+void GridBroadphase::destroyProxy(btBroadphaseProxy* proxy, btDispatcher* dispatcher) {
+  Impl& d = *m_impl;
+  GridProxy* p = static_cast<GridProxy*>(proxy);
+  const std::uint32_t slot = p->slot;
+  if (slot >= d.proxies.size() || &d.proxies[slot] != p || !(d.flags[slot] & kProxyActive))
+    throw std::invalid_argument("gpucol::GridBroadphase::destroyProxy: proxy does not belong to this broad phase");
+  // Its pairs leave the cache now (algorithms and manifolds freed through the dispatcher); the keys in
+  // `accepted` are dropped at the next search, and the slot is reused only after that search.
+  d.pairCache->removeOverlappingPairsContainingProxy(proxy, dispatcher);
+  d.flags[slot] = 0;
+  d.freedSinceSearch[slot] = 1;
+  d.pendingFree.push_back(slot);
+  --d.liveCount;
+  d.dirty = true;
+}
+
+void GridBroadphase::setAabb(btBroadphaseProxy* proxy, const btVector3& aabbMin, const btVector3& aabbMax,
+                             btDispatcher* /*dispatcher*/) {
+  Impl& d = *m_impl;
+  const std::uint32_t s = static_cast<GridProxy*>(proxy)->slot;
+  proxy->m_aabbMin = aabbMin;
+  proxy->m_aabbMax = aabbMax;
+  // Unchanged boxes (Bullet re-sends every AABB by default, m_forceUpdateAllAabbs) leave the step clean,
+  // so a scene at rest costs no search.
+  if (d.minX[s] != aabbMin.x() || d.minY[s] != aabbMin.y() || d.minZ[s] != aabbMin.z() || d.maxX[s] != aabbMax.x() ||
+      d.maxY[s] != aabbMax.y() || d.maxZ[s] != aabbMax.z()) {
+    d.store(s, aabbMin, aabbMax);
+    d.dirty = true;
+  }
+}
+
+void GridBroadphase::getAabb(btBroadphaseProxy* proxy, btVector3& aabbMin, btVector3& aabbMax) const {
+  aabbMin = proxy->m_aabbMin;
+  aabbMax = proxy->m_aabbMax;
+}
+
+void GridBroadphase::rayTest(const btVector3& rayFrom, const btVector3& /*rayTo*/, btBroadphaseRayCallback& rayCallback,
+                             const btVector3& aabbMin, const btVector3& aabbMax) {
+  Impl& d = *m_impl;
+  // btDbvtBroadphase reads m_lambda_max once, before its traversal, and tests boxes grown by the ray's own
+  // box (bounds = [min - aabbMax, max - aabbMin]) with btRayAabb2 from t = 0; so do we, in slot order.
+  const btScalar lambdaMax = rayCallback.m_lambda_max;
+  for (std::uint32_t s = 0; s < d.flags.size(); ++s) {
+    if (!(d.flags[s] & kProxyActive)) continue;
+    GridProxy& p = d.proxies[s];
+    const btVector3 bounds[2] = {p.m_aabbMin - aabbMax, p.m_aabbMax - aabbMin};
+    btScalar tmin = 0;
+    if (btRayAabb2(rayFrom, rayCallback.m_rayDirectionInverse, rayCallback.m_signs, bounds, tmin, 0, lambdaMax))
+      rayCallback.process(&p);
+  }
+}
+
+void GridBroadphase::aabbTest(const btVector3& aabbMin, const btVector3& aabbMax, btBroadphaseAabbCallback& callback) {
+  Impl& d = *m_impl;
+  for (std::uint32_t s = 0; s < d.flags.size(); ++s) {
+    if (!(d.flags[s] & kProxyActive)) continue;
+    // Touching counts, as in btDbvtAabbMm's Intersect.
+    if (d.minX[s] <= aabbMax.x() && d.maxX[s] >= aabbMin.x() && d.minY[s] <= aabbMax.y() && d.maxY[s] >= aabbMin.y() &&
+        d.minZ[s] <= aabbMax.z() && d.maxZ[s] >= aabbMin.z())
+      callback.process(&d.proxies[s]);
+  }
+}
+
+void GridBroadphase::calculateOverlappingPairs(btDispatcher* dispatcher) {
+  Impl& d = *m_impl;
+  GridBroadphaseStats st;
+  st.proxies = d.liveCount;
+  // Filters may be edited on the proxy after creation (Bullet code does so); take them from there.
+  for (std::uint32_t s = 0; s < d.flags.size(); ++s) {
+    if (!(d.flags[s] & kProxyActive)) continue;
+    const GridProxy& p = d.proxies[s];
+    if (d.group[s] != p.m_collisionFilterGroup || d.mask[s] != p.m_collisionFilterMask) {
+      d.group[s] = p.m_collisionFilterGroup;
+      d.mask[s] = p.m_collisionFilterMask;
+      d.flags[s] = Impl::flagsOf(p.m_collisionFilterGroup);
+      d.dirty = true;
+    }
+  }
+  if (!d.dirty) {
+    st.overlappingPairs = d.stats.overlappingPairs;
+    st.memoryBytes = d.stats.memoryBytes;
+    d.stats = st;
+    return;
+  }
+  st.searched = true;
+  PairFinder& finder = d.chooseFinder(st);
+  finder.findPairs(d.view(), d.options(), d.found);
+  st.usedGrid = finder.stats().usedGrid;
+  st.cellSize = finder.stats().cellSize;
+  st.overlappingPairs = d.found.size();
+
+  d.next.clear();
+  d.removedKeys.clear();
+  auto proxy0 = [&](std::uint64_t key) { return &d.proxies[std::uint32_t(key >> 32)]; };
+  auto proxy1 = [&](std::uint64_t key) { return &d.proxies[std::uint32_t(key)]; };
+  btOverlappingPairCache* cache = d.pairCache;
+  diffSortedPairs(
+      d.accepted, d.found,
+      [&](std::uint64_t key) {
+        // The cache's own filter (overlap filter callback) has the last word; a rejected pair is asked
+        // again next step while it still overlaps, since the callback may change its mind.
+        if (!cache->needsBroadphaseCollision(proxy0(key), proxy1(key))) return;
+        cache->addOverlappingPair(proxy0(key), proxy1(key));
+        d.next.push_back(key);
+        ++st.added;
+      },
+      [&](std::uint64_t key) {
+        // Pairs of destroyed proxies were removed by destroyProxy already.
+        if (d.freedSinceSearch[std::uint32_t(key >> 32)] || d.freedSinceSearch[std::uint32_t(key)]) return;
+        ++st.removed;
+        if (cache->hasDeferredRemoval())
+          d.removedKeys.push_back(key);  // handled below, in one pass over the cache
+        else
+          cache->removeOverlappingPair(proxy0(key), proxy1(key), dispatcher);
+      },
+      [&](std::uint64_t key) { d.next.push_back(key); });
+  d.accepted.swap(d.next);
+  if (!d.removedKeys.empty()) d.removeDeferred(dispatcher);
+  for (std::uint32_t s : d.pendingFree) {
+    d.freedSinceSearch[s] = 0;
+    d.freeSlots.push_back(s);
+  }
+  d.pendingFree.clear();
+  d.dirty = false;
+  st.memoryBytes = d.memoryBytes(finder);
+  d.stats = st;
+}
+
+/// Caches with deferred removal (btSortedOverlappingPairCache by default) ignore removeOverlappingPair and
+/// expect the broad phase to drop pairs itself, as btDbvtBroadphase and btAxisSweep3 do: clean the pair
+/// (frees its algorithm through the dispatcher), null its proxies, sort the nulls to the end and shrink.
+void GridBroadphase::Impl::removeDeferred(btDispatcher* dispatcher) {
+  Impl& d = *this;
+  btOverlappingPairCache* cache = d.pairCache;
+  btBroadphasePairArray& pairs = cache->getOverlappingPairArray();
+  int invalid = 0;
+  for (int i = 0; i < pairs.size(); ++i) {
+    btBroadphasePair& pair = pairs[i];
+    if (!pair.m_pProxy0 || !pair.m_pProxy1) continue;
+    const std::uint64_t key = makePairKey(static_cast<GridProxy*>(pair.m_pProxy0)->slot,
+                                          static_cast<GridProxy*>(pair.m_pProxy1)->slot);
+    if (std::binary_search(d.removedKeys.begin(), d.removedKeys.end(), key)) {
+      cache->cleanOverlappingPair(pair, dispatcher);
+      pair.m_pProxy0 = nullptr;
+      pair.m_pProxy1 = nullptr;
+      ++invalid;
+    }
+  }
+  pairs.quickSort(btBroadphasePairSortPredicate());
+  pairs.resize(pairs.size() - invalid);
+}
+
+btOverlappingPairCache* GridBroadphase::getOverlappingPairCache() { return m_impl->pairCache; }
+
+const btOverlappingPairCache* GridBroadphase::getOverlappingPairCache() const { return m_impl->pairCache; }
+
+void GridBroadphase::getBroadphaseAabb(btVector3& aabbMin, btVector3& aabbMax) const {
+  const Impl& d = *m_impl;
+  bool any = false;
+  for (std::uint32_t s = 0; s < d.flags.size(); ++s) {
+    if (!(d.flags[s] & kProxyActive)) continue;
+    const btVector3 lo(d.minX[s], d.minY[s], d.minZ[s]), hi(d.maxX[s], d.maxY[s], d.maxZ[s]);
+    if (!any) {
+      aabbMin = lo, aabbMax = hi, any = true;
+    } else {
+      aabbMin.setMin(lo);
+      aabbMax.setMax(hi);
+    }
+  }
+  if (!any) aabbMin = aabbMax = btVector3(0, 0, 0);
+}
+
+void GridBroadphase::resetPool(btDispatcher* /*dispatcher*/) {
+  Impl& d = *m_impl;
+  if (d.liveCount != 0) return;
+  d.proxies.clear();
+  for (auto* v : {&d.minX, &d.minY, &d.minZ, &d.maxX, &d.maxY, &d.maxZ}) std::vector<float>().swap(*v);
+  std::vector<std::int32_t>().swap(d.group);
+  std::vector<std::int32_t>().swap(d.mask);
+  std::vector<std::uint8_t>().swap(d.flags);
+  std::vector<std::uint8_t>().swap(d.freedSinceSearch);
+  d.freeSlots.clear(), d.pendingFree.clear(), d.accepted.clear();
+  d.nextUniqueId = 0;
+  d.dirty = true;
+}
+
+void GridBroadphase::printStats() {
+  const GridBroadphaseStats& st = m_impl->stats;
+  std::printf("gpucol::GridBroadphase: %u proxies, %llu overlapping pairs (+%llu -%llu), %s%s, cell %g, %zu bytes\n",
+              st.proxies, static_cast<unsigned long long>(st.overlappingPairs),
+              static_cast<unsigned long long>(st.added), static_cast<unsigned long long>(st.removed),
+              st.usedGrid ? "grid" : "brute force", st.usedOpenCl ? " (OpenCL)" : "", double(st.cellSize),
+              st.memoryBytes);
+}
+
+void GridBroadphase::setTuning(const GridBroadphaseTuning& tuning) {
+  m_impl->tuning = tuning;
+  m_impl->dirty = true;
+}
+
+const GridBroadphaseStats& GridBroadphase::stats() const { return m_impl->stats; }
+
+}  // namespace gpucol
