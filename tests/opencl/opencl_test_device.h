@@ -10,4 +10,4 @@
   ::gpucol::opencl::OpenClContext* context_var##_pointer = ::gpucol::opencl::OpenClContext::tryGet(); \
   if (context_var##_pointer == nullptr)                                                             \
     GTEST_SKIP() << "no usable OpenCL device (install pocl-opencl-icd, or check GPUCOL_OPENCL_DEVICE)"; \
-  ::gpucol::opencl::OpenClContext& context_var = *context_var##_pointer
+  [[maybe_unused]] ::gpucol::opencl::OpenClContext& context_var = *context_var##_pointer

@@ -1,0 +1,21 @@
+#pragma once
+
+#include "broadphase/grid_pair_finder.h"
+#include "gpucol/config.h"
+
+#include <memory>
+
+namespace gpucol::opencl {
+
+/// The grid pair finder of plugin/src/broadphase/grid_pair_finder.h on an OpenCL device: the host
+/// chooses the grid (stages 0–3), kernels do the rest (grid_find_pairs.cl, scan.cl, radix_sort.cl).
+/// Same pairs as the CPU finder, in the same (sorted) order. Returns nullptr when OpenCL is not usable
+/// (said once on stderr by OpenClContext::tryGet); throws OpenClError when setup fails on a usable device.
+std::unique_ptr<PairFinder> makePairFinder(const Config& config);
+
+/// Installs makePairFinder as the factory behind gpucol::makeOpenClPairFinder. Also done at static
+/// initialisation; calling it from code that is linked in anyway (GridBroadphase) keeps the linker from
+/// dropping this object file out of a static library.
+void registerOpenClPairFinder();
+
+}  // namespace gpucol::opencl

@@ -1,0 +1,214 @@
+// The grid pair search of Avril et al. 2012 (§3–§4) in kernels; stage numbers are those of
+// plugin/src/broadphase/grid_pair_finder.h, whose CPU implementation this must match pair for pair. The
+// host (opencl/host/opencl_pair_finder.cpp) chooses the grid (stages 0–3) and chains these kernels with the
+// scan (scan.cl) and the radix sort (radix_sort.cl).
+#include "opencl/shared/grid_params.h"
+#ifdef cl_khr_fp64
+#pragma OPENCL EXTENSION cl_khr_fp64 : enable
+#endif
+// pair_mapping.h names a local variable `half`, a reserved type name in OpenCL C: rename it while included.
+#define half gpucol_mapping_half
+#include "plugin/src/broadphase/pair_mapping.h"
+#undef half
+
+// Binning and the dedupe rule must compute the same cell for the same float: no contraction, no fast math.
+#pragma OPENCL FP_CONTRACT OFF
+
+#define PROXY_PARAMS                                                                                      \
+  __global const float *minX, __global const float *minY, __global const float *minZ,                      \
+      __global const float *maxX, __global const float *maxY, __global const float *maxZ,                  \
+      __global const int *group, __global const int *mask, __global const uchar *flags
+#define PROXY_ARGS minX, minY, minZ, maxX, maxY, maxZ, group, mask, flags
+
+// Stage 8: overlap on all three axes, touching counts; Bullet's group/mask rule; never static–static.
+bool accept_pair(PROXY_PARAMS, const uint a, const uint b) {
+  return minX[a] <= maxX[b] && minX[b] <= maxX[a] && minY[a] <= maxY[b] && minY[b] <= maxY[a] &&
+         minZ[a] <= maxZ[b] && minZ[b] <= maxZ[a] && (group[a] & mask[b]) != 0 && (group[b] & mask[a]) != 0 &&
+         (flags[a] & flags[b] & GPUCOL_PROXY_STATIC) == 0u;
+}
+
+// Stage 4: the cell coordinate, monotone in x (see grid_pair_finder.h).
+uint cell_of(const float x, const float origin, const float invCell, const uint dim) {
+  const float t = (x - origin) * invCell;
+  if (!(t > 0.0f)) {
+    return 0u;
+  }
+  if (t >= (float)(dim - 1u)) {
+    return dim - 1u;
+  }
+  return min((uint)t, dim - 1u);
+}
+
+// Stage 7: candidate k of n objects -> (a, b); exact whatever square root (pair_mapping.h).
+void map_pair(const ulong n, const ulong k, ulong* a, ulong* b) {
+#if defined(GPUCOL_MAPPING_NEWTON) || !defined(cl_khr_fp64)
+  gpucol_pair_from_index_newton(n, k, a, b);
+#else
+  gpucol_pair_from_index(n, k, a, b);
+#endif
+}
+
+// Appends a pair (a < b) as the compressed key (a << slotBits) | b; the host sorts and expands them. When
+// the output is full the pair is counted but not written, and the host grows the buffer and runs again.
+void append_pair(const uint a, const uint b, const uint slotBits, __global ulong* pairs, const uint capacity,
+                 volatile __global uint* pairCount) {
+  const uint at = atomic_inc(pairCount);
+  if (at < capacity) {
+    pairs[at] = ((ulong)a << slotBits) | (ulong)b;
+  }
+}
+
+// Stage 4, count: cells covered by each binned box.
+__kernel void grid_count_cells(PROXY_PARAMS, __global const GpucolGridParams* grid, __global const uint* binned,
+                               const uint binnedCount, __global uint* cellCounts, __global uint* overflow) {
+  const uint i = get_global_id(0);
+  if (i >= binnedCount) {
+    return;
+  }
+  const uint s = binned[i];
+  const GpucolGridParams g = *grid;
+  const ulong cx = cell_of(maxX[s], g.originX, g.invCell, g.dimX) - cell_of(minX[s], g.originX, g.invCell, g.dimX) + 1u;
+  const ulong cy = cell_of(maxY[s], g.originY, g.invCell, g.dimY) - cell_of(minY[s], g.originY, g.invCell, g.dimY) + 1u;
+  const ulong cz = cell_of(maxZ[s], g.originZ, g.invCell, g.dimZ) - cell_of(minZ[s], g.originZ, g.invCell, g.dimZ) + 1u;
+  const ulong count = cx * cy * cz;
+  if (count > 0xffffffffUL) {
+    *overflow = 1u;
+  }
+  cellCounts[i] = count > 0xffffffffUL ? 0u : (uint)count;
+}
+
+// Stage 4, fill: one (cell, slot) entry per covered cell, at the box's scanned offset. Boxes are in
+// ascending slot order, so a stable sort by cell leaves each cell's slots ascending.
+__kernel void grid_write_keys(PROXY_PARAMS, __global const GpucolGridParams* grid, __global const uint* binned,
+                              const uint binnedCount, __global const uint* keyOffsets, __global ulong* cellKeys,
+                              __global uint* keySlots) {
+  const uint i = get_global_id(0);
+  if (i >= binnedCount) {
+    return;
+  }
+  const uint s = binned[i];
+  const GpucolGridParams g = *grid;
+  const uint x0 = cell_of(minX[s], g.originX, g.invCell, g.dimX), x1 = cell_of(maxX[s], g.originX, g.invCell, g.dimX);
+  const uint y0 = cell_of(minY[s], g.originY, g.invCell, g.dimY), y1 = cell_of(maxY[s], g.originY, g.invCell, g.dimY);
+  const uint z0 = cell_of(minZ[s], g.originZ, g.invCell, g.dimZ), z1 = cell_of(maxZ[s], g.originZ, g.invCell, g.dimZ);
+  uint o = keyOffsets[i];
+  for (uint z = z0; z <= z1; ++z) {
+    for (uint y = y0; y <= y1; ++y) {
+      const ulong row = ((ulong)z * g.dimY + y) * g.dimX;
+      for (uint x = x0; x <= x1; ++x) {
+        cellKeys[o] = row + x;
+        keySlots[o] = s;
+        ++o;
+      }
+    }
+  }
+}
+
+// Stage 6: 1 where a run of equal cells starts in the sorted keys.
+__kernel void grid_mark_runs(__global const ulong* cellKeys, const uint keyCount, __global uint* runHeads) {
+  const uint i = get_global_id(0);
+  if (i < keyCount) {
+    runHeads[i] = (i == 0u || cellKeys[i] != cellKeys[i - 1u]) ? 1u : 0u;
+  }
+}
+
+// Stage 6: first entry and cell of every run (runIndex = scanned heads); runStart[runCount] = keyCount.
+__kernel void grid_write_runs(__global const ulong* cellKeys, const uint keyCount, __global const uint* runIndex,
+                              const uint runCount, __global uint* runStart, __global uint* runCell) {
+  const uint i = get_global_id(0);
+  if (i >= keyCount) {
+    return;
+  }
+  if (i == 0u || cellKeys[i] != cellKeys[i - 1u]) {
+    runStart[runIndex[i]] = i;
+    runCell[runIndex[i]] = (uint)cellKeys[i];
+  }
+  if (i == 0u) {
+    runStart[runCount] = keyCount;
+  }
+}
+
+// Stage 6: m(m-1)/2 candidates per run of m entries (the scan then numbers them globally).
+__kernel void grid_count_run_pairs(__global const uint* runStart, const uint runCount, __global uint* runPairs,
+                                   __global uint* overflow) {
+  const uint r = get_global_id(0);
+  if (r >= runCount) {
+    return;
+  }
+  const ulong pairs = gpucol_pair_count(runStart[r + 1u] - runStart[r]);
+  if (pairs > 0xffffffffUL) {
+    *overflow = 1u;
+  }
+  runPairs[r] = pairs > 0xffffffffUL ? 0u : (uint)pairs;
+}
+
+// Stages 7–9: candidate k -> run (binary search over the scanned counts) -> (i, j) by the mapping function
+// -> test, filter, and keep the pair only in the cell holding the min corner of the two boxes' overlap.
+__kernel void grid_test_candidates(PROXY_PARAMS, __global const GpucolGridParams* grid,
+                                   __global const uint* runStart, __global const uint* runCell,
+                                   __global const uint* runPrefix, const uint runCount, const uint total,
+                                   __global const uint* keySlots, const uint slotBits, __global ulong* pairs,
+                                   const uint capacity, volatile __global uint* pairCount) {
+  const GpucolGridParams g = *grid;
+  for (uint k = get_global_id(0); k < total; k += get_global_size(0)) {
+    // Largest r with runPrefix[r] <= k: that run has candidates and holds k (empty runs repeat a prefix).
+    uint lo = 0u, hi = runCount - 1u;
+    while (lo < hi) {
+      const uint mid = lo + (hi - lo + 1u) / 2u;
+      if (runPrefix[mid] <= k) {
+        lo = mid;
+      } else {
+        hi = mid - 1u;
+      }
+    }
+    const uint start = runStart[lo];
+    ulong i = 0, j = 0;
+    map_pair(runStart[lo + 1u] - start, k - runPrefix[lo], &i, &j);
+    const uint a = keySlots[start + (uint)i];
+    const uint b = keySlots[start + (uint)j];
+    if (!accept_pair(PROXY_ARGS, a, b)) {
+      continue;
+    }
+    const uint cx = cell_of(max(minX[a], minX[b]), g.originX, g.invCell, g.dimX);
+    const uint cy = cell_of(max(minY[a], minY[b]), g.originY, g.invCell, g.dimY);
+    const uint cz = cell_of(max(minZ[a], minZ[b]), g.originZ, g.invCell, g.dimZ);
+    if (((ulong)cz * g.dimY + cy) * g.dimX + cx == (ulong)runCell[lo]) {
+      append_pair(a, b, slotBits, pairs, capacity, pairCount);
+    }
+  }
+}
+
+// Stage 3: every huge box against every other active box; a pair of two huge boxes belongs to the row of
+// the lower slot. isHuge is per active index.
+__kernel void grid_test_huge(PROXY_PARAMS, __global const uint* huge, const uint hugeCount,
+                             __global const uint* active, const uint activeCount, __global const uchar* isHuge,
+                             const uint slotBits, __global ulong* pairs, const uint capacity,
+                             volatile __global uint* pairCount) {
+  const ulong total = (ulong)hugeCount * activeCount;
+  for (ulong t = get_global_id(0); t < total; t += get_global_size(0)) {
+    const uint sh = huge[t / activeCount];
+    const uint ai = (uint)(t % activeCount);
+    const uint s = active[ai];
+    if (s == sh || (isHuge[ai] && s < sh)) {
+      continue;
+    }
+    if (accept_pair(PROXY_ARGS, sh, s)) {
+      append_pair(min(sh, s), max(sh, s), slotBits, pairs, capacity, pairCount);
+    }
+  }
+}
+
+// Stage 1: below the grid threshold every pair of the active list, through the mapping function (§3.2).
+__kernel void brute_test_pairs(PROXY_PARAMS, __global const uint* active, const uint activeCount, const ulong total,
+                               const uint slotBits, __global ulong* pairs, const uint capacity,
+                               volatile __global uint* pairCount) {
+  for (ulong k = get_global_id(0); k < total; k += get_global_size(0)) {
+    ulong a = 0, b = 0;
+    map_pair(activeCount, k, &a, &b);
+    const uint sa = active[a];
+    const uint sb = active[b];
+    if (accept_pair(PROXY_ARGS, sa, sb)) {
+      append_pair(sa, sb, slotBits, pairs, capacity, pairCount);
+    }
+  }
+}

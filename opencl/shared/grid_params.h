@@ -1,0 +1,31 @@
+/* The grid of one pair search, shared by the host (opencl/host/opencl_pair_finder.cpp) and the kernels
+   (opencl/kernels/grid_find_pairs.cl): the host fills it, uploads it as a one-element buffer, and checks
+   its layout with static_assert. Plain C that compiles as C++ and as OpenCL C. */
+#ifndef GPUCOL_OPENCL_SHARED_GRID_PARAMS_H
+#define GPUCOL_OPENCL_SHARED_GRID_PARAMS_H
+
+#ifdef __OPENCL_VERSION__
+typedef uint gpucol_grid_uint;
+#else
+#include <stdint.h>
+typedef uint32_t gpucol_grid_uint;
+#endif
+
+/* Flag bits of a proxy slot; the host checks them against gpucol::kProxyActive / kProxyStatic. */
+#define GPUCOL_PROXY_ACTIVE 1u
+#define GPUCOL_PROXY_STATIC 2u
+
+/* Uniform grid (paper §4.1–4.2): cell coordinate of x on an axis is
+   clamp(floor((x - origin) * invCell), 0, dim - 1); cell index cx + dimX * (cy + dimY * cz) < 2^32. */
+typedef struct GpucolGridParams {
+  float originX;
+  float originY;
+  float originZ;
+  float invCell;
+  gpucol_grid_uint dimX;
+  gpucol_grid_uint dimY;
+  gpucol_grid_uint dimZ;
+  gpucol_grid_uint unused;
+} GpucolGridParams;
+
+#endif /* GPUCOL_OPENCL_SHARED_GRID_PARAMS_H */
