@@ -1,0 +1,219 @@
+#include "narrowphase/triangle_contact.h"
+
+#include <gtest/gtest.h>
+
+#include <Eigen/Geometry>
+#include <algorithm>
+#include <cmath>
+#include <iostream>
+#include <optional>
+#include <random>
+
+#include "narrowphase/triangle_intersection.h"
+#include "random_triangles.h"
+#include "reference_triangles.h"
+
+namespace gpucol {
+namespace {
+
+using test::PairFamily;
+using test::TriangleD;
+using test::TriangleF;
+
+std::optional<TriangleContact> contactOf(const TriangleF& a, const TriangleF& b) {
+  const Eigen::Vector3f pa[3] = {a[0], a[1], a[2]};
+  const Eigen::Vector3f pb[3] = {b[0], b[1], b[2]};
+  return generateContact(pa, pb);
+}
+
+/// The §5.3.4 contact computed again in double, straight from its definition, for non-coplanar
+/// intersecting pairs: how far each triangle must move along the other's normal, the slide along the
+/// intersection line, and the common segment found by clipping each triangle's edges with the other plane.
+struct ReferenceContact {
+  double moveA = 0, moveB = 0, slide = 0;
+  Eigen::Vector3d normalOnB, point;
+  double depth = 0;
+  double segmentLength = 0;
+};
+
+ReferenceContact referenceContact(const TriangleD& a, const TriangleD& b) {
+  const Eigen::Vector3d nA = (a[1] - a[0]).cross(a[2] - a[0]).normalized();
+  const Eigen::Vector3d nB = (b[1] - b[0]).cross(b[2] - b[0]).normalized();
+  ReferenceContact r;
+  for (int i = 0; i < 3; ++i) {
+    r.moveA = std::max(r.moveA, -nB.dot(a[i] - b[0]));
+    r.moveB = std::max(r.moveB, -nA.dot(b[i] - a[0]));
+  }
+  r.normalOnB = r.moveA <= r.moveB ? nB : Eigen::Vector3d(-nA);
+  r.depth = -std::min(r.moveA, r.moveB);
+  const Eigen::Vector3d u = nA.cross(nB).normalized();
+  double loA = 1e300, hiA = -1e300, loB = 1e300, hiB = -1e300;
+  for (int i = 0; i < 3; ++i) {
+    loA = std::min(loA, u.dot(a[i])), hiA = std::max(hiA, u.dot(a[i]));
+    loB = std::min(loB, u.dot(b[i])), hiB = std::max(hiB, u.dot(b[i]));
+  }
+  r.slide = std::min(hiA - loB, hiB - loA);
+  // Each triangle's crossing of the other plane: the points where its edges change side.
+  auto crossing = [&u](const TriangleD& t, const Eigen::Vector3d& n, const Eigen::Vector3d& p, double& lo,
+                       double& hi) {
+    lo = 1e300, hi = -1e300;
+    for (int i = 0; i < 3; ++i) {
+      const Eigen::Vector3d& s = t[i];
+      const Eigen::Vector3d& e = t[(i + 1) % 3];
+      const double ds = n.dot(s - p), de = n.dot(e - p);
+      if ((ds <= 0 && de >= 0) || (ds >= 0 && de <= 0)) {
+        const Eigen::Vector3d x = ds == de ? s : Eigen::Vector3d(s + (e - s) * (ds / (ds - de)));
+        lo = std::min(lo, u.dot(x)), hi = std::max(hi, u.dot(x));
+      }
+    }
+  };
+  double loSA, hiSA, loSB, hiSB;
+  crossing(a, nB, b[0], loSA, hiSA);
+  crossing(b, nA, a[0], loSB, hiSB);
+  const double lo = std::max(loSA, loSB), hi = std::min(hiSA, hiSB);
+  r.segmentLength = hi - lo;
+  // The line itself: the point of both planes closest to a[0], then along u.
+  const double cA = nA.dot(a[0]), cB = nB.dot(b[0]);
+  const double k = nA.dot(nB);
+  const double alpha = (cA - k * cB) / (1 - k * k), beta = (cB - k * cA) / (1 - k * k);
+  const Eigen::Vector3d onLine = alpha * nA + beta * nB;
+  r.point = onLine + u * (0.5 * (lo + hi) - u.dot(onLine));
+  return r;
+}
+
+/// A triangle of a box's top face (z = 0, outward +z) pierced from above by a tilted triangle whose lowest
+/// vertex is d below the face: depth -d along the face normal; swapping A and B flips the normal.
+TEST(TriangleContact, BoxTopFacePenetratedByDepthD) {
+  const Eigen::Vector3f face[3] = {{0, 0, 0}, {2, 0, 0}, {0, 2, 0}};
+  for (float d : {0.0f, 0.001f, 0.05f, 0.1f, 0.2f}) {
+    const Eigen::Vector3f pusher[3] = {{0.5f, 0.5f, -d}, {0.5f, 1.5f, 1}, {1.5f, 0.5f, 1}};
+    ASSERT_TRUE(trianglesIntersect(pusher[0], pusher[1], pusher[2], face[0], face[1], face[2]));
+    const std::optional<TriangleContact> c = generateContact(pusher, face);
+    ASSERT_TRUE(c.has_value()) << "d = " << d;
+    EXPECT_NEAR(c->depth, -d, 1e-6f);
+    EXPECT_NEAR((c->normalOnB - Eigen::Vector3f(0, 0, 1)).norm(), 0.0f, 1e-6f);
+    EXPECT_NEAR(c->point.z(), 0.0f, 1e-6f);  // on the face, and on the pusher (checked below)
+    test::TriangleD da = test::toDouble({pusher[0], pusher[1], pusher[2]});
+    test::TriangleD db = test::toDouble({face[0], face[1], face[2]});
+    EXPECT_LT(test::pointTriangleDistance(c->point.cast<double>(), da), 1e-6);
+    EXPECT_LT(test::pointTriangleDistance(c->point.cast<double>(), db), 1e-6);
+
+    const std::optional<TriangleContact> swapped = generateContact(face, pusher);
+    ASSERT_TRUE(swapped.has_value());
+    EXPECT_NEAR(swapped->depth, -d, 1e-6f);
+    EXPECT_NEAR((swapped->normalOnB - Eigen::Vector3f(0, 0, -1)).norm(), 0.0f, 1e-6f);
+    EXPECT_NEAR((swapped->point - c->point).norm(), 0.0f, 1e-6f);
+  }
+}
+
+/// Two faces resting on each other (coplanar, opposite normals): depth 0 along B's normal, the point in the
+/// overlap.
+TEST(TriangleContact, CoplanarRestingFaces) {
+  const Eigen::Vector3f top[3] = {{0, 0, 0}, {0, 2, 0}, {2, 0, 0}};  // outward -z: a body above
+  const Eigen::Vector3f face[3] = {{1, 1, 0}, {3, 1, 0}, {1, 3, 0}};  // outward +z: the body below
+  const std::optional<TriangleContact> c = generateContact(top, face);
+  ASSERT_TRUE(c.has_value());
+  EXPECT_EQ(c->depth, 0.0f);
+  EXPECT_NEAR((c->normalOnB - Eigen::Vector3f(0, 0, 1)).norm(), 0.0f, 1e-6f);
+  // The overlap is the single point (1, 1, 0) (a vertex of `face` on the hypotenuse of `top`).
+  EXPECT_NEAR((c->point - Eigen::Vector3f(1, 1, 0)).norm(), 0.0f, 1e-6f);
+  const Eigen::Vector3f apart[3] = {{1.5f, 1.5f, 0}, {3, 1.5f, 0}, {1.5f, 3, 0}};
+  EXPECT_FALSE(generateContact(top, apart).has_value());
+}
+
+/// A contact whose triangles slide apart along their intersection line more easily than along the normal
+/// is dropped (thesis §5.3.4).
+TEST(TriangleContact, DroppedWhenTheLineSlideIsShorter) {
+  const Eigen::Vector3f face[3] = {{0, 0, 0}, {2, 0, 0}, {0, 2, 0}};
+  // A thin vertical sliver (in the plane y = 0.5) through the face, 0.5 deep, 0.01 from the face's edge
+  // x = 0: sliding it off along the intersection line (x) takes 0.03, lifting it takes 0.5.
+  const Eigen::Vector3f sliver[3] = {{0.01f, 0.5f, -0.5f}, {0.03f, 0.5f, 1}, {0.01f, 0.5f, 1}};
+  EXPECT_TRUE(trianglesIntersect(sliver[0], sliver[1], sliver[2], face[0], face[1], face[2]));
+  EXPECT_FALSE(generateContact(sliver, face).has_value());
+  // The same sliver in the middle of the face would have to slide across it (0.52 > 0.5): kept.
+  const Eigen::Vector3f middle[3] = {{0.5f, 0.5f, -0.5f}, {0.52f, 0.5f, 1}, {0.5f, 0.5f, 1}};
+  const std::optional<TriangleContact> c = generateContact(middle, face);
+  ASSERT_TRUE(c.has_value());
+  EXPECT_NEAR(c->depth, -0.5f, 1e-6f);
+}
+
+/// Degenerate triangles give no contact.
+TEST(TriangleContact, DegenerateGivesNone) {
+  const Eigen::Vector3f face[3] = {{0, 0, 0}, {2, 0, 0}, {0, 2, 0}};
+  const Eigen::Vector3f segment[3] = {{0.5f, 0.5f, -1}, {0.5f, 0.5f, 1}, {0.5f, 0.5f, 0}};
+  EXPECT_FALSE(generateContact(segment, face).has_value());
+  EXPECT_FALSE(generateContact(face, segment).has_value());
+}
+
+/// Random pairs against the double reference: the contact exists exactly when the pair intersects and is
+/// not dropped, its normal and depth follow §5.3.4, its point lies on both triangles, and a random rigid
+/// motion of the pair moves the contact with it. Pairs within a small margin of a decision (move A vs
+/// move B, slide vs depth, touching) are skipped for the comparisons that decision affects.
+TEST(TriangleContact, MatchesDoubleReferenceAndIsInvariantUnderRigidMotion) {
+  std::mt19937_64 rng(7);
+  int compared = 0, kept = 0, dropped = 0, rotatedCompared = 0;
+  const PairFamily families[] = {PairFamily::General, PairFamily::VertexOnFace, PairFamily::EdgeOnEdge,
+                                 PairFamily::NearTouching};
+  for (int i = 0; i < 40000; ++i) {
+    TriangleF a, b;
+    test::randomPair(families[i % 4], rng, a, b);
+    const TriangleD da = test::toDouble(a), db = test::toDouble(b);
+    const std::optional<TriangleContact> c = contactOf(a, b);
+    const bool intersecting = trianglesIntersect(a[0], a[1], a[2], b[0], b[1], b[2]);
+    ASSERT_TRUE(!c || intersecting) << "contact for a pair the test calls separated, pair " << i;
+    if (!test::referenceIntersect(da, db)) continue;
+    const double scale = test::pairScale(da, db);
+    const double margin = 1e-5 * scale;
+    const double nAnB = std::fabs((da[1] - da[0]).cross(da[2] - da[0]).normalized().dot(
+        (db[1] - db[0]).cross(db[2] - db[0]).normalized()));
+    if (nAnB > 1 - 1e-6) continue;  // (nearly) parallel planes: no line, covered by the coplanar tests
+    const ReferenceContact r = referenceContact(da, db);
+    if (std::fabs(r.slide - std::min(r.moveA, r.moveB)) < margin) continue;
+    const bool expectKept = r.slide >= std::min(r.moveA, r.moveB);
+    if (-test::signedSeparation(da, db) < margin) continue;  // touching: the float input may miss it
+    ++compared;
+    ASSERT_EQ(c.has_value(), expectKept) << "pair " << i << " slide " << r.slide << " moves " << r.moveA << " "
+                                         << r.moveB;
+    if (!c) {
+      ++dropped;
+      continue;
+    }
+    ++kept;
+    EXPECT_NEAR(c->depth, r.depth, margin) << "pair " << i;
+    if (std::fabs(r.moveA - r.moveB) > margin) {
+      EXPECT_LT((c->normalOnB.cast<double>() - r.normalOnB).norm(), 1e-5) << "pair " << i;
+    }
+    EXPECT_LT(test::pointTriangleDistance(c->point.cast<double>(), da), margin) << "pair " << i;
+    EXPECT_LT(test::pointTriangleDistance(c->point.cast<double>(), db), margin) << "pair " << i;
+    EXPECT_LT((c->point.cast<double>() - r.point).norm(), margin + 1e-3 * r.segmentLength) << "pair " << i;
+
+    // The same pair after a random rigid motion (well-conditioned pairs only, the float rounding of
+    // the moved vertices is ~1e-7 of the scale).
+    const double coarse = 1e-3 * scale;
+    if (std::fabs(r.moveA - r.moveB) < coarse || std::fabs(r.slide + r.depth) < coarse ||
+        -test::signedSeparation(da, db) < coarse || nAnB > 0.999) {
+      continue;
+    }
+    const Eigen::Matrix3d rotation = test::randomRotation(rng);
+    const Eigen::Vector3d offset = Eigen::Vector3d::Random() * scale;
+    TriangleF ma, mb;
+    for (int k = 0; k < 3; ++k) {
+      ma[k] = (rotation * da[k] + offset).cast<float>();
+      mb[k] = (rotation * db[k] + offset).cast<float>();
+    }
+    const std::optional<TriangleContact> moved = contactOf(ma, mb);
+    ASSERT_TRUE(moved.has_value()) << "pair " << i;
+    ++rotatedCompared;
+    EXPECT_NEAR(moved->depth, c->depth, 1e-4 * scale) << "pair " << i;
+    EXPECT_LT((moved->normalOnB.cast<double>() - rotation * c->normalOnB.cast<double>()).norm(), 1e-4);
+    EXPECT_LT((moved->point.cast<double>() - (rotation * c->point.cast<double>() + offset)).norm(), 1e-4 * scale);
+  }
+  std::cout << "  compared " << compared << " intersecting pairs: " << kept << " contacts kept, " << dropped
+            << " dropped by the line slide; " << rotatedCompared << " also compared after a rigid motion\n";
+  EXPECT_GT(kept, 2000);
+  EXPECT_GT(dropped, 100);
+  EXPECT_GT(rotatedCompared, 1000);
+}
+
+}  // namespace
+}  // namespace gpucol
