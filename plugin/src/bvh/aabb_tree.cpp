@@ -1,5 +1,7 @@
 #include "bvh/aabb_tree.h"
 
+#include <tbb/parallel_invoke.h>
+
 #include <algorithm>
 #include <cmath>
 #include <limits>
@@ -29,7 +31,7 @@ struct BuildTask {
 
 /// Deepest level at which the mean split of thesis §5.3.2 is still used; below it every split is a median split.
 /// The mean split alone can cut one triangle off per level (exponentially spaced centroids), which makes the
-/// build O(n^2) and the tree n deep; real meshes stay far above this bound (armadillo-99976: depth 27 against
+/// build O(n^2) and the tree n deep; real meshes stay far below this bound (armadillo-99976: depth 20 against
 /// 16 + 2 * 17 = 50), so the thesis's tree is unchanged on them while the worst case stays O(n log n).
 int meanSplitDepthLimit(std::size_t leafCount) {
   int log2 = 0;
@@ -63,6 +65,115 @@ std::vector<BuildItem> makeItems(const float* xyz, std::size_t vertexCount, cons
   return items;
 }
 
+/// Writes the box of items [begin, end) into `node` (step 2a of thesis §5.3.2) and, when the range holds more
+/// than `perLeaf` items, partitions it and returns the split index (steps 2b-2d); returns `end` for a leaf.
+std::uint32_t boxAndSplit(std::vector<BuildItem>& items, std::uint32_t first, std::uint32_t last, int depth,
+                          int meanSplitLimit, std::size_t perLeaf, AabbNode& node) {
+  // One pass for the box and the centroid statistics. The sums are in double: in float, 10^5 centroids far
+  // from the origin lose the digits the variance is made of.
+  float lo[3], hi[3];
+  double sum[3] = {0, 0, 0}, sumSquares[3] = {0, 0, 0};
+  for (int axis = 0; axis < 3; ++axis) {
+    lo[axis] = std::numeric_limits<float>::infinity();
+    hi[axis] = -std::numeric_limits<float>::infinity();
+  }
+  for (std::uint32_t i = first; i < last; ++i) {
+    const BuildItem& item = items[i];
+    for (int axis = 0; axis < 3; ++axis) {
+      lo[axis] = std::min(lo[axis], item.min[axis]);
+      hi[axis] = std::max(hi[axis], item.max[axis]);
+      const double c = item.centroid[axis];
+      sum[axis] += c;
+      sumSquares[axis] += c * c;
+    }
+  }
+  for (int axis = 0; axis < 3; ++axis) {
+    node.min[axis] = lo[axis];
+    node.max[axis] = hi[axis];
+  }
+  const std::uint32_t count = last - first;
+  if (count <= perLeaf) return last;
+
+  // Split axis: greatest variance of the centroids; split position: their mean (thesis §5.3.2, 2b-2c).
+  const double n = count;
+  int axis = 0;
+  double mean[3], bestVariance = -1;
+  for (int a = 0; a < 3; ++a) {
+    mean[a] = sum[a] / n;
+    const double variance = sumSquares[a] / n - mean[a] * mean[a];
+    if (variance > bestVariance) {
+      bestVariance = variance;
+      axis = a;
+    }
+  }
+  BuildItem* const begin = items.data() + first;
+  BuildItem* const end = items.data() + last;
+  BuildItem* mid = end;
+  if (depth < meanSplitLimit) {
+    const double splitAt = mean[axis];
+    mid = std::partition(begin, end, [axis, splitAt](const BuildItem& item) { return item.centroid[axis] < splitAt; });
+  }
+  if (mid == begin || mid == end) {
+    // One side would be empty (all centroids equal along the axis, or past the depth limit): split at the
+    // median, which halves the range whatever the coordinates, so identical triangles still give log2(n) levels.
+    mid = begin + count / 2;
+    std::nth_element(begin, mid, end,
+                     [axis](const BuildItem& l, const BuildItem& r) { return l.centroid[axis] < r.centroid[axis]; });
+  }
+  return static_cast<std::uint32_t>(mid - items.data());
+}
+
+/// Ranges at least this large are split into two parallel tasks; below it one thread builds the whole subtree
+/// (a few thousand triangles take tens of microseconds, well above the cost of a task).
+constexpr std::uint32_t kParallelBuildGrain = 4096;
+
+/// Builder of a tree with one triangle per leaf, where a range [begin, end) starting at node i has its left child
+/// at i + 1 and its right child at i + 2 * (split - begin).
+struct NodeRangeBuilder {
+  std::vector<BuildItem>& items;
+  std::vector<AabbNode>& nodes;
+  int meanSplitLimit;
+
+  /// Builds the subtree of [begin, end) at `nodeIndex` and returns its deepest level. Recursion happens only for
+  /// ranges above kParallelBuildGrain, so its depth is bounded by the split depth limit, not by the input.
+  int buildParallel(std::uint32_t begin, std::uint32_t end, std::uint32_t nodeIndex, int depth) const {
+    if (end - begin < kParallelBuildGrain) return buildSerial(begin, end, nodeIndex, depth);
+    const std::uint32_t split = boxAndSplit(items, begin, end, depth, meanSplitLimit, 1, nodes[nodeIndex]);
+    const std::uint32_t right = nodeIndex + 2 * (split - begin);
+    nodes[nodeIndex].first = right;
+    int leftDepth = 0, rightDepth = 0;
+    tbb::parallel_invoke([&] { leftDepth = buildParallel(begin, split, nodeIndex + 1, depth + 1); },
+                         [&] { rightDepth = buildParallel(split, end, right, depth + 1); });
+    return std::max(leftDepth, rightDepth);
+  }
+
+  /// The same with an explicit stack, on one thread.
+  int buildSerial(std::uint32_t begin, std::uint32_t end, std::uint32_t nodeIndex, int depth) const {
+    struct Task {
+      std::uint32_t begin, end, node;
+      int depth;
+    };
+    std::vector<Task> stack{{begin, end, nodeIndex, depth}};
+    int deepest = depth;
+    while (!stack.empty()) {
+      const Task task = stack.back();
+      stack.pop_back();
+      deepest = std::max(deepest, task.depth);
+      AabbNode& node = nodes[task.node];
+      const std::uint32_t split = boxAndSplit(items, task.begin, task.end, task.depth, meanSplitLimit, 1, node);
+      if (split == task.end) {
+        node.count = 1;
+        node.first = items[task.begin].triangle;
+        continue;
+      }
+      node.first = task.node + 2 * (split - task.begin);
+      stack.push_back({split, task.end, node.first, task.depth + 1});
+      stack.push_back({task.begin, split, task.node + 1, task.depth + 1});
+    }
+    return deepest;
+  }
+};
+
 }  // namespace
 
 AabbTree AabbTree::build(const TriangleMesh& mesh, int trianglesPerLeaf) {
@@ -94,16 +205,24 @@ AabbTree AabbTree::build(const std::vector<float>& xyz, const std::vector<std::u
 
   std::vector<BuildItem> items = makeItems(xyz.data(), xyz.size() / 3, indices.data(), triangleCount);
   const std::size_t perLeaf = static_cast<std::size_t>(trianglesPerLeaf);
+  const int meanSplitLimit = meanSplitDepthLimit((triangleCount + perLeaf - 1) / perLeaf);
 
   AabbTree tree;
   tree.m_triangleCount = triangleCount;
   tree.m_trianglesPerLeaf = trianglesPerLeaf;
-  // A binary tree over at most n leaves has at most 2n - 1 nodes; one allocation, trimmed at the end.
-  tree.m_nodes.reserve(2 * triangleCount - 1);
+  if (perLeaf == 1) {
+    // Exactly 2n - 1 nodes, and a subtree over c triangles has 2c - 1, so every node's index is known before its
+    // subtree is built and the subtrees can be built in parallel into one array.
+    tree.m_nodes.resize(2 * triangleCount - 1);
+    const NodeRangeBuilder builder{items, tree.m_nodes, meanSplitLimit};
+    tree.m_depth = builder.buildParallel(0, static_cast<std::uint32_t>(triangleCount), 0, 1);
+    return tree;
+  }
 
-  const int meanSplitLimit = meanSplitDepthLimit((triangleCount + perLeaf - 1) / perLeaf);
-  // Explicit stack, depth first: the left child is pushed last, so it is popped next and lands right after
-  // its parent in the array; the right child writes its index into the parent when its turn comes.
+  // Several triangles per leaf: the node count depends on the splits, so the build is serial and depth first.
+  // The left child is pushed last, so it is popped next and lands right after its parent in the array; the right
+  // child writes its index into the parent when its turn comes.
+  tree.m_nodes.reserve(2 * triangleCount - 1);
   std::vector<BuildTask> stack;
   stack.push_back({0, static_cast<std::uint32_t>(triangleCount), 0, false, 1});
   while (!stack.empty()) {
@@ -113,81 +232,25 @@ AabbTree AabbTree::build(const std::vector<float>& xyz, const std::vector<std::u
     tree.m_nodes.emplace_back();
     if (task.isRight) tree.m_nodes[task.parent].first = nodeIndex;
     tree.m_depth = std::max(tree.m_depth, task.depth);
-
-    // One pass for the node's box (step 2a of §5.3.2) and the centroid statistics (step 2b). The sums are in
-    // double: in float, 10^5 centroids far from the origin lose the digits the variance is made of.
-    float lo[3], hi[3];
-    double sum[3] = {0, 0, 0}, sumSquares[3] = {0, 0, 0};
-    for (int axis = 0; axis < 3; ++axis) {
-      lo[axis] = std::numeric_limits<float>::infinity();
-      hi[axis] = -std::numeric_limits<float>::infinity();
-    }
-    for (std::uint32_t i = task.begin; i < task.end; ++i) {
-      const BuildItem& item = items[i];
-      for (int axis = 0; axis < 3; ++axis) {
-        lo[axis] = std::min(lo[axis], item.min[axis]);
-        hi[axis] = std::max(hi[axis], item.max[axis]);
-        const double c = item.centroid[axis];
-        sum[axis] += c;
-        sumSquares[axis] += c * c;
-      }
-    }
-    {
-      AabbNode& node = tree.m_nodes[nodeIndex];
-      for (int axis = 0; axis < 3; ++axis) {
-        node.min[axis] = lo[axis];
-        node.max[axis] = hi[axis];
-      }
-    }
-
-    const std::uint32_t count = task.end - task.begin;
-    if (count <= perLeaf) {
-      AabbNode& node = tree.m_nodes[nodeIndex];
-      node.count = count;
-      if (count == 1) {
-        node.first = items[task.begin].triangle;
-      } else {
-        node.first = static_cast<std::uint32_t>(tree.m_leafEntries.size());
-        for (std::uint32_t i = task.begin; i < task.end; ++i) {
-          const BuildItem& item = items[i];
-          tree.m_leafEntries.push_back({{item.min[0], item.min[1], item.min[2]},
-                                        {item.max[0], item.max[1], item.max[2]},
-                                        item.triangle});
-        }
-      }
+    const std::uint32_t split =
+        boxAndSplit(items, task.begin, task.end, task.depth, meanSplitLimit, perLeaf, tree.m_nodes[nodeIndex]);
+    if (split != task.end) {
+      stack.push_back({split, task.end, nodeIndex, true, task.depth + 1});
+      stack.push_back({task.begin, split, nodeIndex, false, task.depth + 1});
       continue;
     }
-
-    // Split axis: greatest variance of the centroids; split position: their mean (thesis §5.3.2, 2b-2c).
-    const double n = count;
-    int axis = 0;
-    double mean[3], bestVariance = -1;
-    for (int a = 0; a < 3; ++a) {
-      mean[a] = sum[a] / n;
-      const double variance = sumSquares[a] / n - mean[a] * mean[a];
-      if (variance > bestVariance) {
-        bestVariance = variance;
-        axis = a;
-      }
+    AabbNode& node = tree.m_nodes[nodeIndex];
+    node.count = task.end - task.begin;
+    if (node.count == 1) {
+      node.first = items[task.begin].triangle;
+      continue;
     }
-    BuildItem* const begin = items.data() + task.begin;
-    BuildItem* const end = items.data() + task.end;
-    BuildItem* mid = end;
-    if (task.depth < meanSplitLimit) {
-      const double splitAt = mean[axis];
-      mid = std::partition(begin, end, [axis, splitAt](const BuildItem& item) { return item.centroid[axis] < splitAt; });
+    node.first = static_cast<std::uint32_t>(tree.m_leafEntries.size());
+    for (std::uint32_t i = task.begin; i < task.end; ++i) {
+      const BuildItem& item = items[i];
+      tree.m_leafEntries.push_back(
+          {{item.min[0], item.min[1], item.min[2]}, {item.max[0], item.max[1], item.max[2]}, item.triangle});
     }
-    if (mid == begin || mid == end) {
-      // One side would be empty (all centroids equal along the axis, or past the depth limit): split at the
-      // median, which halves the range whatever the coordinates, so identical triangles still give log2(n) levels.
-      mid = begin + count / 2;
-      std::nth_element(begin, mid, end, [axis](const BuildItem& l, const BuildItem& r) {
-        return l.centroid[axis] < r.centroid[axis];
-      });
-    }
-    const std::uint32_t split = static_cast<std::uint32_t>(mid - items.data());
-    stack.push_back({split, task.end, nodeIndex, true, task.depth + 1});
-    stack.push_back({task.begin, split, nodeIndex, false, task.depth + 1});
   }
 
   tree.m_nodes.shrink_to_fit();
