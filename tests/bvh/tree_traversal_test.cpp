@@ -1,6 +1,7 @@
 #include "bvh/tree_traversal.h"
 
 #include <gtest/gtest.h>
+#include <tbb/task_arena.h>
 
 #include <algorithm>
 #include <cmath>
@@ -180,6 +181,30 @@ TEST(TreeTraversal, SameMeshSamePoseFindsAtLeastEveryTriangleWithItself) {
   findCandidatePairs(tree, tree, AffineMap(), out);
   for (std::uint32_t t = 0; t < mesh.triangleCount(); ++t) {
     ASSERT_TRUE(std::binary_search(out.begin(), out.end(), TrianglePair{t, t})) << "triangle " << t;
+  }
+}
+
+TEST(TreeTraversal, ThreadCountDoesNotChangeTheOutput) {
+  // A mesh against itself turned slightly: tens of thousands of candidates, so the breadth-first front grows past
+  // its parallel threshold and the parallel_for path really runs, with 1, 3 and 8 workers.
+  GPUCOL_REQUIRE_MESH(path, "bunny-3851.ply");
+  const TriangleMesh mesh = loadMesh(path);
+  const AabbTree tree = AabbTree::build(mesh);
+  AffineMap map;
+  map.linear = Eigen::AngleAxisf(0.2f, Eigen::Vector3f(1, 2, 3).normalized()).toRotationMatrix();
+  const Eigen::Vector3f centre = 0.5f * (tree.rootMin() + tree.rootMax());
+  map.translation = centre - map.linear * centre;  // turn about the mesh's centre, not the file's origin
+  std::vector<TrianglePair> serial;
+  TraversalStats serialStats;
+  findCandidatePairs(tree, tree, map, serial, &serialStats, false);
+  ASSERT_GT(serial.size(), 3 * mesh.triangleCount());
+  for (int threads : {1, 3, 8}) {
+    tbb::task_arena arena(threads);
+    std::vector<TrianglePair> out;
+    TraversalStats stats;
+    arena.execute([&] { findCandidatePairs(tree, tree, map, out, &stats, true); });
+    EXPECT_EQ(out, serial) << threads << " threads";
+    EXPECT_EQ(stats.nodeTests, serialStats.nodeTests) << threads << " threads";
   }
 }
 
