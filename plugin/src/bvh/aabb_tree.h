@@ -43,7 +43,7 @@ class AabbTree {
   static AabbTree build(const TriangleMesh& mesh, int trianglesPerLeaf = 1);
 
   /// Builds the tree of raw arrays: `xyz` holds 3 floats per vertex, `indices` 3 vertex indices per triangle.
-  /// The caller guarantees finite coordinates; indices are checked and a bad one throws std::invalid_argument.
+  /// A non-finite coordinate, an index out of range or a partial triple throws std::invalid_argument naming it.
   static AabbTree build(const std::vector<float>& xyz, const std::vector<std::uint32_t>& indices,
                         int trianglesPerLeaf = 1);
 
