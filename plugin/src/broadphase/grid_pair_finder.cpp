@@ -69,15 +69,28 @@ struct CellRange {
   }
 };
 
-inline CellRange cellRange(const ProxyArrays& p, std::uint32_t s, const Grid& g) {
+/// A binned box copied next to its grid neighbours (ordered by the cell of its min corner), so the
+/// candidate tests read nearby memory instead of six scattered SoA arrays per proxy.
+struct LocalBox {
+  float lo[3];
+  float hi[3];
+  std::uint32_t slot;
+};
+
+inline CellRange cellRange(const LocalBox& b, const Grid& g) {
   CellRange r;
-  r.lo[0] = cellOf(p.minX[s], g.origin[0], g.invCell, g.dims[0]);
-  r.lo[1] = cellOf(p.minY[s], g.origin[1], g.invCell, g.dims[1]);
-  r.lo[2] = cellOf(p.minZ[s], g.origin[2], g.invCell, g.dims[2]);
-  r.hi[0] = cellOf(p.maxX[s], g.origin[0], g.invCell, g.dims[0]);
-  r.hi[1] = cellOf(p.maxY[s], g.origin[1], g.invCell, g.dims[1]);
-  r.hi[2] = cellOf(p.maxZ[s], g.origin[2], g.invCell, g.dims[2]);
+  for (int a = 0; a < 3; ++a) {
+    r.lo[a] = cellOf(b.lo[a], g.origin[a], g.invCell, g.dims[a]);
+    r.hi[a] = cellOf(b.hi[a], g.origin[a], g.invCell, g.dims[a]);
+  }
   return r;
+}
+
+inline std::uint32_t homeCell(const ProxyArrays& p, std::uint32_t s, const Grid& g) {
+  const std::uint32_t x = cellOf(p.minX[s], g.origin[0], g.invCell, g.dims[0]);
+  const std::uint32_t y = cellOf(p.minY[s], g.origin[1], g.invCell, g.dims[1]);
+  const std::uint32_t z = cellOf(p.minZ[s], g.origin[2], g.invCell, g.dims[2]);
+  return std::uint32_t((std::uint64_t(z) * g.dims[1] + y) * g.dims[0] + x);
 }
 
 template <typename F>
@@ -119,7 +132,9 @@ class CpuPairFinder final : public PairFinder {
   std::vector<float> m_extent;           // scratch for the median extent
   std::vector<std::uint32_t> m_cellStart;  // dense counting sort: first entry per cell (+1 sentinel)
   std::vector<std::uint64_t> m_keys;     // sparse path: (cell << 32) | slot
-  std::vector<std::uint32_t> m_sorted;   // slots sorted by (cell, slot)
+  std::vector<LocalBox> m_box;           // binned boxes ordered by (home cell, slot)
+  std::vector<std::uint64_t> m_homeKeys; // scratch for that order on a sparse grid
+  std::vector<std::uint32_t> m_sorted;   // m_box indices sorted by (cell, index)
   std::vector<std::uint32_t> m_runCell;  // runs of >= 2 entries: cell index
   std::vector<std::uint32_t> m_runStart; // first entry in m_sorted
   std::vector<std::uint32_t> m_runLength;
@@ -263,10 +278,36 @@ Grid CpuPairFinder::chooseGrid(const ProxyArrays& p, const PairFinderOptions& op
 
 void CpuPairFinder::binSorted(const ProxyArrays& p, const Grid& g) {
   const std::size_t n = m_binned.size();
+  const std::uint64_t cells = g.cells();
+  const bool dense = cells <= 8 * std::uint64_t(n) + 1024;
+  // Locality: order the binned boxes by the cell of their min corner (then slot), and copy them into one
+  // array in that order; cell neighbours are then memory neighbours for the candidate tests (stage 8).
+  if (dense) {
+    m_cellStart.assign(cells + 1, 0);
+    for (std::uint32_t s : m_binned) ++m_cellStart[homeCell(p, s, g) + 1];
+    for (std::uint64_t c = 0; c < cells; ++c) m_cellStart[c + 1] += m_cellStart[c];
+    m_sorted.resize(n);
+    for (std::uint32_t s : m_binned) m_sorted[m_cellStart[homeCell(p, s, g)]++] = s;
+    m_binned.swap(m_sorted);
+  } else {
+    m_homeKeys.resize(n);
+    tbb::parallel_for(std::size_t(0), n, [&](std::size_t i) {
+      m_homeKeys[i] = (std::uint64_t(homeCell(p, m_binned[i], g)) << 32) | m_binned[i];
+    });
+    tbb::parallel_sort(m_homeKeys.begin(), m_homeKeys.end());
+    for (std::size_t i = 0; i < n; ++i) m_binned[i] = std::uint32_t(m_homeKeys[i]);
+  }
+  m_box.resize(n);
+  tbb::parallel_for(tbb::blocked_range<std::size_t>(0, n, 4096), [&](const tbb::blocked_range<std::size_t>& r) {
+    for (std::size_t i = r.begin(); i != r.end(); ++i) {
+      const std::uint32_t s = m_binned[i];
+      m_box[i] = LocalBox{{p.minX[s], p.minY[s], p.minZ[s]}, {p.maxX[s], p.maxY[s], p.maxZ[s]}, s};
+    }
+  });
   // Stage 4: count cells per box, then an exclusive prefix sum gives each box's first key.
   std::vector<std::uint64_t> offsets(n + 1);
   tbb::parallel_for(tbb::blocked_range<std::size_t>(0, n, 4096), [&](const tbb::blocked_range<std::size_t>& r) {
-    for (std::size_t i = r.begin(); i != r.end(); ++i) offsets[i + 1] = cellRange(p, m_binned[i], g).count();
+    for (std::size_t i = r.begin(); i != r.end(); ++i) offsets[i + 1] = cellRange(m_box[i], g).count();
   });
   offsets[0] = 0;
   for (std::size_t i = 0; i < n; ++i) offsets[i + 1] += offsets[i];
@@ -276,16 +317,16 @@ void CpuPairFinder::binSorted(const ProxyArrays& p, const Grid& g) {
     throw std::runtime_error("gpucol::GridBroadphase: " + std::to_string(keys) +
                              " (cell, proxy) entries exceed the 2^32 entry limit of one grid");
   m_sorted.resize(keys);
-  const std::uint64_t cells = g.cells();
-  if (cells <= 2 * keys + 1024) {
+  if (dense) {
     // Stage 5, dense grid: counting sort by cell. Filling in ascending slot order keeps each cell's
     // slots ascending, which is the (cell, slot) order without a comparison sort and without keys.
     m_cellStart.assign(cells + 1, 0);
-    for (std::uint32_t s : m_binned) forEachCell(cellRange(p, s, g), g, [&](std::uint32_t c) { ++m_cellStart[c + 1]; });
+    for (std::size_t i = 0; i < n; ++i) forEachCell(cellRange(m_box[i], g), g, [&](std::uint32_t c) { ++m_cellStart[c + 1]; });
     for (std::uint64_t c = 0; c < cells; ++c) m_cellStart[c + 1] += m_cellStart[c];
     std::vector<std::uint32_t>& cursor = m_runStart;  // reused as scratch; rebuilt below
     cursor.assign(m_cellStart.begin(), m_cellStart.end() - 1);
-    for (std::uint32_t s : m_binned) forEachCell(cellRange(p, s, g), g, [&](std::uint32_t c) { m_sorted[cursor[c]++] = s; });
+    for (std::size_t i = 0; i < n; ++i)
+      forEachCell(cellRange(m_box[i], g), g, [&](std::uint32_t c) { m_sorted[cursor[c]++] = std::uint32_t(i); });
     // Stage 6: runs of two or more proxies.
     m_runCell.clear();
     m_runStart.clear();
@@ -305,8 +346,7 @@ void CpuPairFinder::binSorted(const ProxyArrays& p, const Grid& g) {
     tbb::parallel_for(tbb::blocked_range<std::size_t>(0, n, 4096), [&](const tbb::blocked_range<std::size_t>& r) {
       for (std::size_t i = r.begin(); i != r.end(); ++i) {
         std::uint64_t o = offsets[i];
-        const std::uint32_t s = m_binned[i];
-        forEachCell(cellRange(p, s, g), g, [&](std::uint32_t c) { m_keys[o++] = (std::uint64_t(c) << 32) | s; });
+        forEachCell(cellRange(m_box[i], g), g, [&](std::uint32_t c) { m_keys[o++] = (std::uint64_t(c) << 32) | i; });
       }
     });
     tbb::parallel_sort(m_keys.begin(), m_keys.end());
@@ -353,12 +393,15 @@ void CpuPairFinder::testRuns(const ProxyArrays& p, const PairFinderOptions& opti
       gpucol_pair_from_index(m_runLength[run], local, &i, &j);
   };
   // Stages 8–9 for one candidate.
-  auto accept = [&](std::size_t run, std::uint32_t sa, std::uint32_t sb) {
-    if (!aabbOverlap(p, sa, sb) || !passesFilter(p, sa, sb)) return false;
-    const std::uint32_t cx = cellOf(std::max(p.minX[sa], p.minX[sb]), g.origin[0], g.invCell, g.dims[0]);
-    const std::uint32_t cy = cellOf(std::max(p.minY[sa], p.minY[sb]), g.origin[1], g.invCell, g.dims[1]);
-    const std::uint32_t cz = cellOf(std::max(p.minZ[sa], p.minZ[sb]), g.origin[2], g.invCell, g.dims[2]);
-    return (std::uint64_t(cz) * g.dims[1] + cy) * g.dims[0] + cx == m_runCell[run];
+  auto accept = [&](std::size_t run, const LocalBox& a, const LocalBox& b) {
+    // Same touching-counts test as aabbOverlap, on the local copies.
+    if (a.lo[0] > b.hi[0] || b.lo[0] > a.hi[0] || a.lo[1] > b.hi[1] || b.lo[1] > a.hi[1] || a.lo[2] > b.hi[2] ||
+        b.lo[2] > a.hi[2])
+      return false;
+    const std::uint32_t cx = cellOf(std::max(a.lo[0], b.lo[0]), g.origin[0], g.invCell, g.dims[0]);
+    const std::uint32_t cy = cellOf(std::max(a.lo[1], b.lo[1]), g.origin[1], g.invCell, g.dims[1]);
+    const std::uint32_t cz = cellOf(std::max(a.lo[2], b.lo[2]), g.origin[2], g.invCell, g.dims[2]);
+    return (std::uint64_t(cz) * g.dims[1] + cy) * g.dims[0] + cx == m_runCell[run] && passesFilter(p, a.slot, b.slot);
   };
 
   tbb::parallel_for(std::uint64_t(0), chunks, [&](std::uint64_t c) {
@@ -370,13 +413,14 @@ void CpuPairFinder::testRuns(const ProxyArrays& p, const PairFinderOptions& opti
     auto& out = m_chunkPairs[firstChunk + c];
     out.clear();
     for (std::uint64_t k = k0; k < k1; ++k) {
-      const std::uint32_t* slots = m_sorted.data() + m_runStart[run];
-      const std::uint32_t sa = slots[i], sb = slots[j];
-      if (accept(run, sa, sb)) {
+      const std::uint32_t* local = m_sorted.data() + m_runStart[run];
+      const LocalBox& ba = m_box[local[i]];
+      const LocalBox& bb = m_box[local[j]];
+      if (accept(run, ba, bb)) {
         if (bitMask)
           m_bits[k >> 6] |= std::uint64_t(1) << (k & 63);  // chunks are 64-aligned: no word is shared
         else
-          out.push_back((std::uint64_t(sa) << 32) | sb);
+          out.push_back(makePairKey(ba.slot, bb.slot));
       }
       if (++j == m_runLength[run]) {
         if (++i + 1 == m_runLength[run]) {
@@ -396,8 +440,8 @@ void CpuPairFinder::testRuns(const ProxyArrays& p, const PairFinderOptions& opti
           std::size_t r = 0;
           gpucol_u64 a = 0, b = 0;
           locate(k, r, a, b);
-          const std::uint32_t* slots = m_sorted.data() + m_runStart[r];
-          out.push_back((std::uint64_t(slots[a]) << 32) | slots[b]);
+          const std::uint32_t* local = m_sorted.data() + m_runStart[r];
+          out.push_back(makePairKey(m_box[local[a]].slot, m_box[local[b]].slot));
         }
       }
     }
@@ -452,6 +496,7 @@ std::size_t CpuPairFinder::scratchBytes() const {
   std::size_t bytes = 0;
   bytes += m_active.capacity() * 4 + m_binned.capacity() * 4 + m_huge.capacity() * 4 + m_extent.capacity() * 4;
   bytes += m_cellStart.capacity() * 4 + m_keys.capacity() * 8 + m_sorted.capacity() * 4;
+  bytes += m_box.capacity() * sizeof(LocalBox) + m_homeKeys.capacity() * 8;
   bytes += m_runCell.capacity() * 4 + m_runStart.capacity() * 4 + m_runLength.capacity() * 4;
   bytes += m_runPrefix.capacity() * 8 + m_bits.capacity() * 8;
   for (const auto& c : m_chunkPairs) bytes += c.capacity() * 8;
