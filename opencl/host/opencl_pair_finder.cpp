@@ -438,3 +438,7 @@ const bool kRegistered = (registerOpenClPairFinder(), true);
 }  // namespace
 
 }  // namespace gpucol::opencl
+
+/// Anchor with a plain C name: libgpucol's consumers link with --undefined=gpucol_link_opencl_pair_finder
+/// (plugin/CMakeLists.txt), which pulls this object file, and so its registration, out of a static library.
+extern "C" void gpucol_link_opencl_pair_finder() { gpucol::opencl::registerOpenClPairFinder(); }
