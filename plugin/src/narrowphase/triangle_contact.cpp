@@ -16,11 +16,12 @@ std::optional<TriangleContact> generateContact(const Eigen::Vector3f (&af)[3], c
   // The intersection test first (thesis §5.3.4 runs Möller's test, §3.5, before generating contacts);
   // its signed distances are reused below.
   const detail::TrianglePlane planeA = detail::makePlane(a[0], a[1], a[2]);
-  const detail::TrianglePlane planeB = detail::makePlane(b[0], b[1], b[2]);
-  if (planeA.degenerate || planeB.degenerate) return std::nullopt;
+  if (planeA.degenerate) return std::nullopt;
   double dB[3];
   detail::signedDistances(planeA, b[0], b[1], b[2], dB);
   if (detail::allOnOneSide(dB)) return std::nullopt;
+  const detail::TrianglePlane planeB = detail::makePlane(b[0], b[1], b[2]);
+  if (planeB.degenerate) return std::nullopt;
   double dA[3];
   detail::signedDistances(planeB, a[0], a[1], a[2], dA);
   if (detail::allOnOneSide(dA)) return std::nullopt;

@@ -12,12 +12,14 @@ bool trianglesIntersect(const Eigen::Vector3f& a0f, const Eigen::Vector3f& a1f, 
   const Eigen::Vector3d b0 = b0f.cast<double>(), b1 = b1f.cast<double>(), b2 = b2f.cast<double>();
 
   // Möller 1997, step 1: B's vertices against A's plane; all strictly on one side rejects.
+  // B's plane is only built after this first early-out (a degenerate B is rejected either way).
   const detail::TrianglePlane planeA = detail::makePlane(a0, a1, a2);
-  const detail::TrianglePlane planeB = detail::makePlane(b0, b1, b2);
-  if (planeA.degenerate || planeB.degenerate) return false;
+  if (planeA.degenerate) return false;
   double dB[3];
   detail::signedDistances(planeA, b0, b1, b2, dB);
   if (detail::allOnOneSide(dB)) return false;
+  const detail::TrianglePlane planeB = detail::makePlane(b0, b1, b2);
+  if (planeB.degenerate) return false;
 
   const Eigen::Vector3d* const a[3] = {&a0, &a1, &a2};
   const Eigen::Vector3d* const b[3] = {&b0, &b1, &b2};
