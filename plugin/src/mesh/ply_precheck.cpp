@@ -1,0 +1,236 @@
+#include "mesh/ply_precheck.h"
+
+#include <cstdint>
+#include <cstdlib>
+#include <cstring>
+#include <sstream>
+#include <vector>
+
+#include "gpucol/mesh_error.h"
+
+namespace gpucol {
+
+namespace {
+
+/// One property of a PLY element: a scalar, or a list with a count type and an item type.
+struct PlyProperty {
+  std::string name;
+  int size = 0;       ///< Bytes of a scalar or of one list item in the binary formats.
+  int countSize = 0;  ///< Bytes of the list count; 0 for a scalar.
+  bool countSigned = false;
+};
+
+struct PlyElement {
+  std::string name;
+  std::uint64_t count = 0;
+  std::vector<PlyProperty> properties;
+};
+
+enum class PlyFormat { kAscii, kBinaryLittle, kBinaryBig };
+
+[[noreturn]] void fail(const std::string& path, const std::string& what) {
+  throw MeshError(path + ": malformed PLY file: " + what);
+}
+
+/// Byte size of a PLY scalar type name (PLY 1.0 names and their sized aliases), 0 if unknown.
+int typeSize(const std::string& type) {
+  if (type == "char" || type == "uchar" || type == "int8" || type == "uint8") return 1;
+  if (type == "short" || type == "ushort" || type == "int16" || type == "uint16") return 2;
+  if (type == "int" || type == "uint" || type == "int32" || type == "uint32" || type == "float" || type == "float32")
+    return 4;
+  if (type == "double" || type == "float64") return 8;
+  return 0;
+}
+
+/// Reads an unsigned or signed list count of `bytes` bytes in the file's byte order.
+std::int64_t readCount(const unsigned char* p, int bytes, bool isSigned, bool bigEndian) {
+  std::uint64_t value = 0;
+  for (int i = 0; i < bytes; ++i) value |= std::uint64_t(p[bigEndian ? i : bytes - 1 - i]) << (8 * (bytes - 1 - i));
+  if (isSigned && (value >> (8 * bytes - 1)) != 0) return std::int64_t(value) - (std::int64_t(1) << (8 * bytes));
+  return std::int64_t(value);
+}
+
+void checkBinary(const std::vector<PlyElement>& elements, const unsigned char* data, std::size_t size,
+                 std::size_t offset, bool bigEndian, const std::string& path) {
+  for (const PlyElement& element : elements) {
+    bool fixed = true;
+    std::uint64_t recordSize = 0;
+    for (const PlyProperty& p : element.properties) {
+      fixed = fixed && p.countSize == 0;
+      recordSize += std::uint64_t(p.size);
+    }
+    if (fixed) {
+      // Whole element at once; compare by division so a huge declared count cannot overflow.
+      const std::uint64_t left = size - offset;
+      if (recordSize != 0 && element.count > left / recordSize) {
+        std::ostringstream out;
+        out << "truncated: element '" << element.name << "' declares " << element.count << " records of "
+            << recordSize << " bytes, but only " << left << " bytes follow (file size " << size << ")";
+        fail(path, out.str());
+      }
+      offset += std::size_t(element.count * recordSize);
+      continue;
+    }
+    for (std::uint64_t i = 0; i < element.count; ++i) {
+      for (const PlyProperty& p : element.properties) {
+        std::uint64_t need = std::uint64_t(p.countSize == 0 ? p.size : p.countSize);
+        std::int64_t items = 0;
+        if (p.countSize != 0 && size - offset >= need) {
+          items = readCount(data + offset, p.countSize, p.countSigned, bigEndian);
+          if (items < 0) {
+            std::ostringstream out;
+            out << "element '" << element.name << "' record " << i << " property '" << p.name
+                << "' has a negative list length " << items;
+            fail(path, out.str());
+          }
+          need += std::uint64_t(items) * std::uint64_t(p.size);
+        }
+        if (size - offset < need) {
+          std::ostringstream out;
+          out << "truncated: element '" << element.name << "' record " << i << " of " << element.count
+              << " (property '" << p.name << "') needs " << need << " bytes at offset " << offset
+              << ", but the file ends at " << size;
+          fail(path, out.str());
+        }
+        offset += std::size_t(need);
+      }
+    }
+  }
+}
+
+void checkAscii(const std::vector<PlyElement>& elements, const char* data, std::size_t size, std::size_t offset,
+                const std::string& path) {
+  // assimp reads an ASCII record per line; a record must be one line holding exactly its numbers.
+  std::size_t line = 0;
+  const auto nextLine = [&](std::vector<std::string>& tokens) {
+    tokens.clear();
+    while (offset < size) {
+      std::size_t end = offset;
+      while (end < size && data[end] != '\n') ++end;
+      std::istringstream in(std::string(data + offset, end - offset));
+      offset = end < size ? end + 1 : end;
+      ++line;
+      for (std::string token; in >> token;) tokens.push_back(token);
+      if (!tokens.empty()) return true;
+    }
+    return false;
+  };
+  std::vector<std::string> tokens;
+  for (const PlyElement& element : elements) {
+    for (std::uint64_t i = 0; i < element.count; ++i) {
+      if (!nextLine(tokens)) {
+        std::ostringstream out;
+        out << "truncated: the file ends before element '" << element.name << "' record " << i << " of "
+            << element.count;
+        fail(path, out.str());
+      }
+      std::size_t expected = 0;
+      for (const PlyProperty& p : element.properties) {
+        if (p.countSize == 0) {
+          ++expected;
+          continue;
+        }
+        char* end = nullptr;
+        const long items = expected < tokens.size() ? std::strtol(tokens[expected].c_str(), &end, 10) : -1;
+        if (expected >= tokens.size() || *end != '\0' || items < 0) {
+          std::ostringstream out;
+          out << "element '" << element.name << "' record " << i << " (line " << line << " of the body): list '"
+              << p.name << "' has no valid length";
+          fail(path, out.str());
+        }
+        expected += 1 + std::size_t(items);
+      }
+      bool numeric = tokens.size() == expected;
+      for (const std::string& token : tokens) {
+        char* end = nullptr;
+        std::strtod(token.c_str(), &end);
+        numeric = numeric && *end == '\0';
+      }
+      if (!numeric) {
+        std::ostringstream out;
+        out << "element '" << element.name << "' record " << i << " (line " << line << " of the body) has "
+            << tokens.size() << " values where " << expected << " numbers are expected";
+        fail(path, out.str());
+      }
+    }
+  }
+}
+
+}  // namespace
+
+bool looksLikePly(const char* data, std::size_t size) {
+  return size >= 4 && std::memcmp(data, "ply", 3) == 0 && (data[3] == '\n' || data[3] == '\r');
+}
+
+void checkPlyStructure(const char* data, std::size_t size, const std::string& path) {
+  if (!looksLikePly(data, size)) fail(path, "it does not start with the line 'ply'");
+  std::size_t offset = 0;
+  bool formatSeen = false, ended = false;
+  PlyFormat format = PlyFormat::kAscii;
+  std::vector<PlyElement> elements;
+  while (!ended) {
+    std::size_t end = offset;
+    while (end < size && data[end] != '\n') ++end;
+    if (end == size) fail(path, "the header has no 'end_header' line");
+    std::string text(data + offset, end - offset);
+    if (!text.empty() && text.back() == '\r') text.pop_back();
+    offset = end + 1;
+    std::istringstream in(text);
+    std::string keyword;
+    in >> keyword;
+    if (keyword == "ply" || keyword == "comment" || keyword == "obj_info" || keyword.empty()) continue;
+    if (keyword == "end_header") {
+      ended = true;
+    } else if (keyword == "format") {
+      std::string name, version;
+      in >> name >> version;
+      if (name == "ascii") format = PlyFormat::kAscii;
+      else if (name == "binary_little_endian") format = PlyFormat::kBinaryLittle;
+      else if (name == "binary_big_endian") format = PlyFormat::kBinaryBig;
+      else fail(path, "unknown format '" + name + "'");
+      formatSeen = true;
+    } else if (keyword == "element") {
+      PlyElement element;
+      std::string count;
+      in >> element.name >> count;
+      char* endCount = nullptr;
+      element.count = std::strtoull(count.c_str(), &endCount, 10);
+      if (element.name.empty() || count.empty() || *endCount != '\0' || count[0] == '-')
+        fail(path, "bad element line '" + text + "'");
+      elements.push_back(element);
+    } else if (keyword == "property") {
+      if (elements.empty()) fail(path, "property before any element: '" + text + "'");
+      PlyProperty property;
+      std::string type;
+      in >> type;
+      if (type == "list") {
+        std::string countType, itemType;
+        in >> countType >> itemType >> property.name;
+        property.countSize = typeSize(countType);
+        property.size = typeSize(itemType);
+        property.countSigned = countType == "char" || countType == "short" || countType == "int" ||
+                               countType.rfind("int", 0) == 0;
+        if (property.countSize == 0 || property.size == 0 || countType == "float" || countType == "double" ||
+            countType.rfind("float", 0) == 0)
+          fail(path, "bad list property line '" + text + "'");
+      } else {
+        in >> property.name;
+        property.size = typeSize(type);
+        if (property.size == 0) fail(path, "unknown property type in '" + text + "'");
+      }
+      if (property.name.empty()) fail(path, "property without a name: '" + text + "'");
+      elements.back().properties.push_back(property);
+    } else {
+      fail(path, "unexpected header line '" + text + "'");
+    }
+  }
+  if (!formatSeen) fail(path, "the header has no 'format' line");
+  if (format == PlyFormat::kAscii) {
+    checkAscii(elements, data, size, offset, path);
+  } else {
+    checkBinary(elements, reinterpret_cast<const unsigned char*>(data), size, offset,
+                format == PlyFormat::kBinaryBig, path);
+  }
+}
+
+}  // namespace gpucol
