@@ -344,6 +344,12 @@ void OpenClPairFinder::findPairs(const ProxyArrays& p, const PairFinderOptions& 
       const cl::Buffer& out = m_pairs.ensure(c, std::size_t(capacity) * 8);
       if (useGrid) {
         if (candidates > 0) {
+          // A CPU device steps through chunks of candidates (see grid_test_candidates); a GPU takes one each.
+          const std::size_t local = m_context.workGroupSize(k.testCandidates);
+          const std::uint64_t units = m_context.device().getInfo<CL_DEVICE_MAX_COMPUTE_UNITS>();
+          const std::uint64_t targetItems = units * local * (m_context.isGpu() ? 64 : 1);
+          const std::uint64_t minChunk = m_context.isGpu() ? 1 : 16;
+          const std::uint64_t chunkLength = std::max(minChunk, (candidates + targetItems - 1) / targetItems);
           setProxyArgs(k.testCandidates);
           k.testCandidates.setArg(9, m_grid.buffer);
           k.testCandidates.setArg(10, m_runStart.buffer);
@@ -351,12 +357,13 @@ void OpenClPairFinder::findPairs(const ProxyArrays& p, const PairFinderOptions& 
           k.testCandidates.setArg(12, m_runPairs.buffer);
           k.testCandidates.setArg(13, runCount);
           k.testCandidates.setArg(14, candidates);
-          k.testCandidates.setArg(15, m_keySlots.buffer);
-          k.testCandidates.setArg(16, slotBits);
-          k.testCandidates.setArg(17, out);
-          k.testCandidates.setArg(18, capacity);
-          k.testCandidates.setArg(19, m_counter.buffer);
-          launchStrided(k.testCandidates, candidates);
+          k.testCandidates.setArg(15, cl_uint(chunkLength));
+          k.testCandidates.setArg(16, m_keySlots.buffer);
+          k.testCandidates.setArg(17, slotBits);
+          k.testCandidates.setArg(18, out);
+          k.testCandidates.setArg(19, capacity);
+          k.testCandidates.setArg(20, m_counter.buffer);
+          launch(k.testCandidates, (candidates + chunkLength - 1) / chunkLength);
         }
         if (!m_huge.empty()) {
           setProxyArgs(k.testHuge);

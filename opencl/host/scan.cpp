@@ -2,16 +2,28 @@
 
 #include "gpucol_kernels/kernels.h"
 
+#include <algorithm>
 #include <stdexcept>
 #include <string>
 
 namespace gpucol::opencl {
 
-OpenClScan::OpenClScan(OpenClContext& context) : m_context(context) {
+namespace {
+/// Chunks shorter than this make the recursive level as long as the work it saves.
+constexpr std::size_t kMinChunk = 32;
+}  // namespace
+
+OpenClScan::OpenClScan(OpenClContext& context, Method method) : m_context(context) {
   translateClErrors("setting up the OpenCL scan", [&] {
     cl::Program program = m_context.program("scan", kernels::scan);
     m_scanBlocks = cl::Kernel(program, "scan_blocks");
     m_addOffsets = cl::Kernel(program, "scan_add_block_offsets");
+    m_chunkTotals = cl::Kernel(program, "scan_chunk_totals");
+    m_scanChunks = cl::Kernel(program, "scan_chunks");
+    m_chunked = method == Method::Chunked || (method == Method::Auto && !m_context.isGpu());
+    m_chunkGroupSize = std::min(m_context.workGroupSize(m_chunkTotals), m_context.workGroupSize(m_scanChunks));
+    const std::size_t units = m_context.device().getInfo<CL_DEVICE_MAX_COMPUTE_UNITS>();
+    m_targetChunks = std::max<std::size_t>(1, units * m_chunkGroupSize);
     // Two values of local memory per work-item.
     m_blockItems = m_context.workGroupSize(m_scanBlocks, 2 * sizeof(cl_uint));
     m_addGroupSize = m_context.workGroupSize(m_addOffsets);
@@ -30,7 +42,7 @@ std::uint32_t OpenClScan::exclusiveScan(const cl::Buffer& data, std::size_t n) {
     cl::CommandQueue& queue = m_context.queue();
     const cl_uint zero = 0;
     queue.enqueueFillBuffer(m_overflow, zero, 0, sizeof(cl_uint));
-    const std::uint32_t total = scanLevel(data, n, 0);
+    const std::uint32_t total = m_chunked ? scanLevelChunked(data, n, 0) : scanLevel(data, n, 0);
     cl_uint overflow = 0;
     queue.enqueueReadBuffer(m_overflow, CL_TRUE, 0, sizeof(cl_uint), &overflow);
     if (overflow != 0) {
@@ -41,19 +53,52 @@ std::uint32_t OpenClScan::exclusiveScan(const cl::Buffer& data, std::size_t n) {
   });
 }
 
-std::uint32_t OpenClScan::scanLevel(const cl::Buffer& data, std::size_t n, std::size_t level) {
-  cl::CommandQueue& queue = m_context.queue();
-  const std::size_t blockLength = 2 * m_blockItems;
-  const std::size_t blocks = (n + blockLength - 1) / blockLength;
+const cl::Buffer& OpenClScan::levelBuffer(std::size_t level, std::size_t count) {
   if (m_levelSums.size() <= level) {
     m_levelSums.resize(level + 1);
     m_levelCapacity.resize(level + 1, 0);
   }
-  if (m_levelCapacity[level] < blocks) {
-    m_levelSums[level] = cl::Buffer(m_context.context(), CL_MEM_READ_WRITE, blocks * sizeof(cl_uint));
-    m_levelCapacity[level] = blocks;
+  if (m_levelCapacity[level] < count) {
+    m_levelSums[level] = cl::Buffer(m_context.context(), CL_MEM_READ_WRITE, count * sizeof(cl_uint));
+    m_levelCapacity[level] = count;
   }
-  const cl::Buffer sums = m_levelSums[level];
+  return m_levelSums[level];
+}
+
+std::uint32_t OpenClScan::scanLevelChunked(const cl::Buffer& data, std::size_t n, std::size_t level) {
+  cl::CommandQueue& queue = m_context.queue();
+  const std::size_t chunkLength = std::max(kMinChunk, (n + m_targetChunks - 1) / m_targetChunks);
+  const std::size_t chunks = (n + chunkLength - 1) / chunkLength;
+  const std::size_t global = (chunks + m_chunkGroupSize - 1) / m_chunkGroupSize * m_chunkGroupSize;
+  const cl::Buffer sums = levelBuffer(level, chunks);
+  m_chunkTotals.setArg(0, data);
+  m_chunkTotals.setArg(1, static_cast<cl_uint>(n));
+  m_chunkTotals.setArg(2, static_cast<cl_uint>(chunkLength));
+  m_chunkTotals.setArg(3, sums);
+  m_chunkTotals.setArg(4, m_overflow);
+  queue.enqueueNDRangeKernel(m_chunkTotals, cl::NullRange, cl::NDRange(global), cl::NDRange(m_chunkGroupSize));
+  std::uint32_t total = 0;
+  if (chunks == 1) {
+    // One chunk: its total is the answer and its offset is zero.
+    queue.enqueueReadBuffer(sums, CL_TRUE, 0, sizeof(cl_uint), &total);
+    const cl_uint zero = 0;
+    queue.enqueueFillBuffer(sums, zero, 0, sizeof(cl_uint));
+  } else {
+    total = scanLevelChunked(sums, chunks, level + 1);
+  }
+  m_scanChunks.setArg(0, data);
+  m_scanChunks.setArg(1, static_cast<cl_uint>(n));
+  m_scanChunks.setArg(2, static_cast<cl_uint>(chunkLength));
+  m_scanChunks.setArg(3, sums);
+  queue.enqueueNDRangeKernel(m_scanChunks, cl::NullRange, cl::NDRange(global), cl::NDRange(m_chunkGroupSize));
+  return total;
+}
+
+std::uint32_t OpenClScan::scanLevel(const cl::Buffer& data, std::size_t n, std::size_t level) {
+  cl::CommandQueue& queue = m_context.queue();
+  const std::size_t blockLength = 2 * m_blockItems;
+  const std::size_t blocks = (n + blockLength - 1) / blockLength;
+  const cl::Buffer sums = levelBuffer(level, blocks);
   m_scanBlocks.setArg(0, data);
   m_scanBlocks.setArg(1, static_cast<cl_uint>(n));
   m_scanBlocks.setArg(2, sums);

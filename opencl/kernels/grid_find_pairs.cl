@@ -142,38 +142,61 @@ __kernel void grid_count_run_pairs(__global const uint* runStart, const uint run
   runPairs[r] = pairs > 0xffffffffUL ? 0u : (uint)pairs;
 }
 
-// Stages 7–9: candidate k -> run (binary search over the scanned counts) -> (i, j) by the mapping function
-// -> test, filter, and keep the pair only in the cell holding the min corner of the two boxes' overlap.
+// Stages 7–9: each work-item takes `chunkLength` consecutive candidates. The first is placed by a binary
+// search over the scanned counts (its run) and the mapping function (its (i, j) in the run); the rest step
+// through the run's pairs in the same row-major order, as the CPU finder does, which on a CPU device is far
+// cheaper than a search and a square root per candidate (a GPU uses chunks of one). Each pair is tested,
+// filtered, and kept only in the cell holding the min corner of the two boxes' overlap.
 __kernel void grid_test_candidates(PROXY_PARAMS, __global const GpucolGridParams* grid,
                                    __global const uint* runStart, __global const uint* runCell,
                                    __global const uint* runPrefix, const uint runCount, const uint total,
-                                   __global const uint* keySlots, const uint slotBits, __global ulong* pairs,
-                                   const uint capacity, volatile __global uint* pairCount) {
+                                   const uint chunkLength, __global const uint* keySlots, const uint slotBits,
+                                   __global ulong* pairs, const uint capacity, volatile __global uint* pairCount) {
+  const ulong begin = (ulong)get_global_id(0) * chunkLength;
+  if (begin >= total) {
+    return;
+  }
+  const uint end = (uint)min((ulong)total, begin + chunkLength);
   const GpucolGridParams g = *grid;
-  for (uint k = get_global_id(0); k < total; k += get_global_size(0)) {
-    // Largest r with runPrefix[r] <= k: that run has candidates and holds k (empty runs repeat a prefix).
-    uint lo = 0u, hi = runCount - 1u;
-    while (lo < hi) {
-      const uint mid = lo + (hi - lo + 1u) / 2u;
-      if (runPrefix[mid] <= k) {
-        lo = mid;
-      } else {
-        hi = mid - 1u;
-      }
+  // Largest r with runPrefix[r] <= k: that run has candidates and holds k (empty runs repeat a prefix).
+  uint run = 0u, hi = runCount - 1u;
+  while (run < hi) {
+    const uint mid = run + (hi - run + 1u) / 2u;
+    if (runPrefix[mid] <= (uint)begin) {
+      run = mid;
+    } else {
+      hi = mid - 1u;
     }
-    const uint start = runStart[lo];
-    ulong i = 0, j = 0;
-    map_pair(runStart[lo + 1u] - start, k - runPrefix[lo], &i, &j);
+  }
+  uint start = runStart[run];
+  uint m = runStart[run + 1u] - start;
+  ulong i = 0, j = 0;
+  map_pair(m, begin - runPrefix[run], &i, &j);
+  for (uint k = (uint)begin; k < end; ++k) {
     const uint a = keySlots[start + (uint)i];
     const uint b = keySlots[start + (uint)j];
-    if (!accept_pair(PROXY_ARGS, a, b)) {
-      continue;
+    if (accept_pair(PROXY_ARGS, a, b)) {
+      const uint cx = cell_of(max(minX[a], minX[b]), g.originX, g.invCell, g.dimX);
+      const uint cy = cell_of(max(minY[a], minY[b]), g.originY, g.invCell, g.dimY);
+      const uint cz = cell_of(max(minZ[a], minZ[b]), g.originZ, g.invCell, g.dimZ);
+      if (((ulong)cz * g.dimY + cy) * g.dimX + cx == (ulong)runCell[run]) {
+        append_pair(a, b, slotBits, pairs, capacity, pairCount);
+      }
     }
-    const uint cx = cell_of(max(minX[a], minX[b]), g.originX, g.invCell, g.dimX);
-    const uint cy = cell_of(max(minY[a], minY[b]), g.originY, g.invCell, g.dimY);
-    const uint cz = cell_of(max(minZ[a], minZ[b]), g.originZ, g.invCell, g.dimZ);
-    if (((ulong)cz * g.dimY + cy) * g.dimX + cx == (ulong)runCell[lo]) {
-      append_pair(a, b, slotBits, pairs, capacity, pairCount);
+    // Next pair: along the row, then the next row, then the next run that has pairs.
+    if (++j == m) {
+      if (++i + 1u == m) {
+        do {
+          ++run;
+        } while (run + 1u < runCount && runStart[run + 1u] - runStart[run] < 2u);
+        if (run >= runCount) {
+          break;
+        }
+        start = runStart[run];
+        m = runStart[run + 1u] - start;
+        i = 0;
+      }
+      j = i + 1u;
     }
   }
 }

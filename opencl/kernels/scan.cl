@@ -61,3 +61,42 @@ __kernel void scan_add_block_offsets(__global uint* data, const uint n, __global
     data[i] += blockOffsets[i / blockLength];
   }
 }
+
+// The chunked variant, for CPU devices (PoCL): a work-group barrier there costs a pass over every item of
+// the group, so Blelloch's 2 log L barriers dominate. Instead each work-item owns `chunkLength`
+// consecutive values: scan_chunk_totals sums its chunk, the host scans the totals (recursively), and
+// scan_chunks rewrites its chunk as an exclusive scan starting at its scanned total. No barrier at all.
+__kernel void scan_chunk_totals(__global const uint* data, const uint n, const uint chunkLength,
+                                __global uint* totals, __global uint* overflow) {
+  const uint chunk = get_global_id(0);
+  const uint begin = chunk * chunkLength;
+  if (begin >= n) {
+    return;
+  }
+  const uint end = min(n, begin + chunkLength);
+  uint sum = 0u;
+  for (uint i = begin; i < end; ++i) {
+    const uint next = sum + data[i];
+    if (next < sum) {
+      *overflow = 1u;
+    }
+    sum = next;
+  }
+  totals[chunk] = sum;
+}
+
+__kernel void scan_chunks(__global uint* data, const uint n, const uint chunkLength,
+                          __global const uint* chunkOffsets) {
+  const uint chunk = get_global_id(0);
+  const uint begin = chunk * chunkLength;
+  if (begin >= n) {
+    return;
+  }
+  const uint end = min(n, begin + chunkLength);
+  uint sum = chunkOffsets[chunk];
+  for (uint i = begin; i < end; ++i) {
+    const uint value = data[i];
+    data[i] = sum;
+    sum += value;
+  }
+}

@@ -6,6 +6,7 @@
 #include <numeric>
 #include <random>
 #include <stdexcept>
+#include <string>
 #include <vector>
 
 namespace gpucol::opencl {
@@ -35,10 +36,13 @@ void expectScanMatchesStd(OpenClScan& scan, std::size_t n, std::uint32_t maxValu
   EXPECT_EQ(mismatches, 0u) << "n = " << n;
 }
 
-TEST(OpenClScan, MatchesStdExclusiveScanOnAwkwardLengths) {
+/// Both block methods run on every device, whichever one Auto would pick there.
+class OpenClScanMethods : public ::testing::TestWithParam<OpenClScan::Method> {};
+
+TEST_P(OpenClScanMethods, MatchesStdExclusiveScanOnAwkwardLengths) {
   GPUCOL_REQUIRE_OPENCL(context);
-  OpenClScan scan(context);
-  std::vector<std::size_t> lengths = {0, 1, 2, 3, 7, 31, 255, 256, 257, 511, 512, 513, 1023, 1024, 1025,
+  OpenClScan scan(context, GetParam());
+  std::vector<std::size_t> lengths = {0, 1, 2, 3, 7, 31, 32, 33, 255, 256, 257, 511, 512, 513, 1023, 1024, 1025,
                                       4095, 4096, 4097, 8191, 8192, 8193, 65535, 65536, 65537, 100003};
   std::uint32_t seed = 1;
   for (std::size_t n : lengths) {
@@ -46,17 +50,17 @@ TEST(OpenClScan, MatchesStdExclusiveScanOnAwkwardLengths) {
   }
 }
 
-TEST(OpenClScan, MatchesStdOnAMillionValuesOverSeveralLevels) {
+TEST_P(OpenClScanMethods, MatchesStdOnAMillionValuesOverSeveralLevels) {
   GPUCOL_REQUIRE_OPENCL(context);
-  OpenClScan scan(context);
+  OpenClScan scan(context, GetParam());
   expectScanMatchesStd(scan, 1000000, 4000, 42);
   // Lengths past (2L)^2 need a third level whatever L the device allows; 2^21 + 1 with L <= 512 does.
   expectScanMatchesStd(scan, (std::size_t{1} << 21) + 1, 3, 43);
 }
 
-TEST(OpenClScan, AllOnesGivesIndices) {
+TEST_P(OpenClScanMethods, AllOnesGivesIndices) {
   GPUCOL_REQUIRE_OPENCL(context);
-  OpenClScan scan(context);
+  OpenClScan scan(context, GetParam());
   std::vector<std::uint32_t> data(123457, 1u);
   EXPECT_EQ(scan.exclusiveScan(data), 123457u);
   for (std::size_t i = 0; i < data.size(); ++i) {
@@ -64,15 +68,25 @@ TEST(OpenClScan, AllOnesGivesIndices) {
   }
 }
 
-TEST(OpenClScan, TotalPastUint32IsAnError) {
+TEST_P(OpenClScanMethods, TotalPastUint32IsAnError) {
   GPUCOL_REQUIRE_OPENCL(context);
-  OpenClScan scan(context);
+  OpenClScan scan(context, GetParam());
   std::vector<std::uint32_t> data(5000, 0x00100000u);  // 5000 * 2^20 > 2^32
   EXPECT_THROW(scan.exclusiveScan(data), std::overflow_error);
   // The overflow flag is reset: a later good scan succeeds.
   std::vector<std::uint32_t> small(10, 2u);
   EXPECT_EQ(scan.exclusiveScan(small), 20u);
+  // A total of exactly 2^32 - 1 is still representable.
+  std::vector<std::uint32_t> edge = {0xfffffff0u, 0xfu};
+  EXPECT_EQ(scan.exclusiveScan(edge), 0xffffffffu);
 }
+
+INSTANTIATE_TEST_SUITE_P(BothMethods, OpenClScanMethods,
+                         ::testing::Values(OpenClScan::Method::Blelloch, OpenClScan::Method::Chunked),
+                         [](const ::testing::TestParamInfo<OpenClScan::Method>& info) {
+                           return info.param == OpenClScan::Method::Blelloch ? std::string("Blelloch")
+                                                                             : std::string("Chunked");
+                         });
 
 TEST(OpenClContext, ProgramsAreBuiltOncePerContext) {
   GPUCOL_REQUIRE_OPENCL(context);
