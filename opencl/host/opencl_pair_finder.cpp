@@ -58,8 +58,8 @@ unsigned bitsFor(std::uint64_t maxValue) {
 
 class OpenClPairFinder final : public PairFinder {
  public:
-  explicit OpenClPairFinder(OpenClContext& context)
-      : m_context(context), m_scan(context), m_sort(context) {}
+  OpenClPairFinder(OpenClContext& context, const OpenClPairFinderTuning& tuning)
+      : m_context(context), m_tuning(tuning), m_scan(context), m_sort(context) {}
 
   void findPairs(const ProxyArrays& proxies, const PairFinderOptions& options,
                  std::vector<std::uint64_t>& pairs) override;
@@ -79,6 +79,7 @@ class OpenClPairFinder final : public PairFinder {
   void launchStrided(cl::Kernel& kernel, std::uint64_t items);
 
   OpenClContext& m_context;
+  OpenClPairFinderTuning m_tuning;
   OpenClScan m_scan;
   OpenClRadixSort m_sort;
   Kernels m_kernels[2];
@@ -349,7 +350,9 @@ void OpenClPairFinder::findPairs(const ProxyArrays& p, const PairFinderOptions& 
           const std::uint64_t units = m_context.device().getInfo<CL_DEVICE_MAX_COMPUTE_UNITS>();
           const std::uint64_t targetItems = units * local * (m_context.isGpu() ? 64 : 1);
           const std::uint64_t minChunk = m_context.isGpu() ? 1 : 16;
-          const std::uint64_t chunkLength = std::max(minChunk, (candidates + targetItems - 1) / targetItems);
+          const std::uint64_t chunkLength = m_tuning.candidatesPerItem != 0
+                                                ? m_tuning.candidatesPerItem
+                                                : std::max(minChunk, (candidates + targetItems - 1) / targetItems);
           setProxyArgs(k.testCandidates);
           k.testCandidates.setArg(9, m_grid.buffer);
           k.testCandidates.setArg(10, m_runStart.buffer);
@@ -427,12 +430,12 @@ void OpenClPairFinder::findPairs(const ProxyArrays& p, const PairFinderOptions& 
 
 }  // namespace
 
-std::unique_ptr<PairFinder> makePairFinder(const Config& config) {
+std::unique_ptr<PairFinder> makePairFinder(const Config& config, const OpenClPairFinderTuning& tuning) {
   OpenClContext* context = OpenClContext::tryGet(config.openclDevice);
   if (context == nullptr) {
     return nullptr;
   }
-  return std::make_unique<OpenClPairFinder>(*context);
+  return std::make_unique<OpenClPairFinder>(*context, tuning);
 }
 
 void registerOpenClPairFinder() {

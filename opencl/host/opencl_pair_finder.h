@@ -3,15 +3,23 @@
 #include "broadphase/grid_pair_finder.h"
 #include "gpucol/config.h"
 
+#include <cstdint>
 #include <memory>
 
 namespace gpucol::opencl {
+
+/// Launch shapes of the OpenCL pair finder; the defaults are chosen from the device. Tests set them to
+/// run the GPU shapes on a CPU device and the other way round.
+struct OpenClPairFinderTuning {
+  /// Candidates each work-item of grid_test_candidates takes; 0: 1 on a GPU, a long run on a CPU device.
+  std::uint32_t candidatesPerItem = 0;
+};
 
 /// The grid pair finder of plugin/src/broadphase/grid_pair_finder.h on an OpenCL device: the host
 /// chooses the grid (stages 0–3), kernels do the rest (grid_find_pairs.cl, scan.cl, radix_sort.cl).
 /// Same pairs as the CPU finder, in the same (sorted) order. Returns nullptr when OpenCL is not usable
 /// (said once on stderr by OpenClContext::tryGet); throws OpenClError when setup fails on a usable device.
-std::unique_ptr<PairFinder> makePairFinder(const Config& config);
+std::unique_ptr<PairFinder> makePairFinder(const Config& config, const OpenClPairFinderTuning& tuning = {});
 
 /// Installs makePairFinder as the factory behind gpucol::makeOpenClPairFinder. Also done at static
 /// initialisation; calling it from code that is linked in anyway (GridBroadphase) keeps the linker from

@@ -44,31 +44,35 @@ Scene uniformScene(std::size_t n, float world, float half, std::uint32_t seed, f
   return s;
 }
 
-/// Runs the OpenCL finder (grid and brute-force paths, both square roots) and checks it against the CPU
+/// Runs the OpenCL finder (grid and brute-force paths, both square roots, three launch shapes) and checks it against the CPU
 /// finder (bit for bit, same order) and the double-precision brute force (same set).
 void expectMatchesReferences(const Scene& scene, const std::string& what, std::uint32_t bruteForceBelow = 1000) {
   OpenClContext* context = OpenClContext::tryGet();
   ASSERT_NE(context, nullptr);
-  static std::unique_ptr<PairFinder> gpu = makePairFinder(Config{});
-  ASSERT_NE(gpu, nullptr);
+  // The device's own launch shape, one candidate per item (a GPU's), and an odd chunk length.
+  static std::unique_ptr<PairFinder> finders[3] = {makePairFinder(Config{}), makePairFinder(Config{}, {1}),
+                                                   makePairFinder(Config{}, {7})};
   std::unique_ptr<PairFinder> cpu = makeCpuPairFinder();
   const ProxyArrays proxies = scene.view();
   const std::vector<std::uint64_t> expected = findPairsBruteForce(proxies);
-  for (MappingSqrt root : {MappingSqrt::Double, MappingSqrt::Newton}) {
-    for (std::uint32_t below : {std::uint32_t(0), bruteForceBelow}) {
-      PairFinderOptions options;
-      options.bruteForceBelow = below;
-      options.mappingSqrt = root;
-      std::vector<std::uint64_t> fromGpu, fromCpu;
-      gpu->findPairs(proxies, options, fromGpu);
-      cpu->findPairs(proxies, options, fromCpu);
-      if (below == 0 && proxies.count >= 2) {
-        EXPECT_TRUE(gpu->stats().usedGrid) << what << ": the grid path was not taken";
+  for (std::unique_ptr<PairFinder>& gpu : finders) {
+    ASSERT_NE(gpu, nullptr);
+    for (MappingSqrt root : {MappingSqrt::Double, MappingSqrt::Newton}) {
+      for (std::uint32_t below : {std::uint32_t(0), bruteForceBelow}) {
+        PairFinderOptions options;
+        options.bruteForceBelow = below;
+        options.mappingSqrt = root;
+        std::vector<std::uint64_t> fromGpu, fromCpu;
+        gpu->findPairs(proxies, options, fromGpu);
+        cpu->findPairs(proxies, options, fromCpu);
+        if (below == 0 && proxies.count >= 2) {
+          EXPECT_TRUE(gpu->stats().usedGrid) << what << ": the grid path was not taken";
+        }
+        EXPECT_EQ(fromGpu.size(), expected.size()) << what << ", bruteForceBelow " << below;
+        EXPECT_TRUE(fromGpu == expected) << what << ": OpenCL pairs differ from brute force, bruteForceBelow "
+                                         << below;
+        EXPECT_TRUE(fromGpu == fromCpu) << what << ": OpenCL pairs differ from the CPU finder";
       }
-      EXPECT_EQ(fromGpu.size(), expected.size()) << what << ", bruteForceBelow " << below;
-      EXPECT_TRUE(fromGpu == expected) << what << ": OpenCL pairs differ from brute force, bruteForceBelow "
-                                       << below;
-      EXPECT_TRUE(fromGpu == fromCpu) << what << ": OpenCL pairs differ from the CPU finder";
     }
   }
 }
