@@ -22,7 +22,8 @@ Eigen::Vector3f randomUnit(std::mt19937_64& rng) {
 std::vector<ReductionInput> randomContacts(std::mt19937_64& rng, int count) {
   std::uniform_real_distribution<float> u(-3.0f, 5.0f), depth(-0.1f, 0.0f);
   std::vector<ReductionInput> contacts(count);
-  for (ReductionInput& c : contacts) c = {Eigen::Vector3f(u(rng), u(rng), u(rng)), randomUnit(rng), depth(rng)};
+  for (ReductionInput& c : contacts)
+    c = {Eigen::Vector3f(u(rng), u(rng), u(rng)), randomUnit(rng), depth(rng)};
   return contacts;
 }
 
@@ -41,11 +42,13 @@ std::vector<std::uint32_t> referenceReduce(const std::vector<ReductionInput>& co
   for (std::uint32_t i = 0; i < contacts.size(); ++i) {
     std::array<int, 6> cell;
     for (int k = 0; k < 6; ++k) {
-      const double x = k < 3 ? (upper[k] > lower[k] ? (contacts[i].point[k] - lower[k]) / (upper[k] - lower[k]) : 0.0)
-                             : (contacts[i].normal[k - 3] + 1.0) / 2.0;
+      const double x =
+          k < 3 ? (upper[k] > lower[k] ? (contacts[i].point[k] - lower[k]) / (upper[k] - lower[k]) : 0.0)
+                : (contacts[i].normal[k - 3] + 1.0) / 2.0;
       const double scaled = x * resolution;
       const double fraction = scaled - std::floor(scaled);
-      if (scaled > 1e-9 && scaled < resolution - 1e-9 && (fraction < 1e-4 || fraction > 1 - 1e-4)) nearBoundary = true;
+      if (scaled > 1e-9 && scaled < resolution - 1e-9 && (fraction < 1e-4 || fraction > 1 - 1e-4))
+        nearBoundary = true;
       cell[k] = std::clamp(static_cast<int>(std::floor(scaled)), 0, resolution - 1);
     }
     auto [it, inserted] = best.try_emplace(cell, i);
@@ -92,7 +95,8 @@ TEST(ContactReduction, NearDuplicatesCollapseToTheDeepest) {
     for (int i = 0; i < 50; ++i) {
       const Eigen::Vector3f centre = Eigen::Vector3f::Constant(cluster == 0 ? 0.0f : 1.0f);
       const Eigen::Vector3f j(jitter(rng), jitter(rng), jitter(rng));
-      contacts.push_back({centre + j, (normal + j).normalized(), -0.01f * static_cast<float>((i * 7 + cluster) % 50)});
+      contacts.push_back(
+          {centre + j, (normal + j).normalized(), -0.01f * static_cast<float>((i * 7 + cluster) % 50)});
     }
   }
   const std::vector<std::uint32_t> kept = reduceContacts(contacts, 5);
@@ -120,7 +124,8 @@ TEST(ContactReduction, DistinctBinsAreAllKept) {
     if (resolution < 3) continue;
     std::vector<ReductionInput> normals;
     for (int axis = 0; axis < 3; ++axis) {
-      for (float sign : {-1.0f, 1.0f}) normals.push_back({Eigen::Vector3f::Zero(), sign * Eigen::Vector3f::Unit(axis), 0.0f});
+      for (float sign : {-1.0f, 1.0f})
+        normals.push_back({Eigen::Vector3f::Zero(), sign * Eigen::Vector3f::Unit(axis), 0.0f});
     }
     EXPECT_EQ(reduceContacts(normals, resolution).size(), 6u);
   }

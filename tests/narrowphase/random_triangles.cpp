@@ -12,7 +12,8 @@ Eigen::Vector3d uniformInCube(std::mt19937_64& rng, double half) {
 
 std::array<Eigen::Vector3d, 3> randomTriangleD(std::mt19937_64& rng) {
   while (true) {
-    std::array<Eigen::Vector3d, 3> t = {uniformInCube(rng, 1.0), uniformInCube(rng, 1.0), uniformInCube(rng, 1.0)};
+    std::array<Eigen::Vector3d, 3> t = {uniformInCube(rng, 1.0), uniformInCube(rng, 1.0),
+                                        uniformInCube(rng, 1.0)};
     TriangleF f = {t[0].cast<float>(), t[1].cast<float>(), t[2].cast<float>()};
     if (wellShaped(f)) return t;
   }
@@ -46,14 +47,22 @@ std::array<Eigen::Vector3d, 3> triangleAt(std::mt19937_64& rng, const Eigen::Vec
 
 std::string familyName(PairFamily family) {
   switch (family) {
-    case PairFamily::General: return "general";
-    case PairFamily::NearCoplanar: return "near-coplanar";
-    case PairFamily::ExactCoplanar: return "exactly coplanar";
-    case PairFamily::SharedVertex: return "shared vertex";
-    case PairFamily::VertexOnFace: return "vertex on face";
-    case PairFamily::EdgeOnEdge: return "edge on edge";
-    case PairFamily::NearTouching: return "slightly separated / penetrating";
-    case PairFamily::Count: break;
+    case PairFamily::General:
+      return "general";
+    case PairFamily::NearCoplanar:
+      return "near-coplanar";
+    case PairFamily::ExactCoplanar:
+      return "exactly coplanar";
+    case PairFamily::SharedVertex:
+      return "shared vertex";
+    case PairFamily::VertexOnFace:
+      return "vertex on face";
+    case PairFamily::EdgeOnEdge:
+      return "edge on edge";
+    case PairFamily::NearTouching:
+      return "slightly separated / penetrating";
+    case PairFamily::Count:
+      break;
   }
   return "?";
 }
@@ -99,7 +108,8 @@ void randomPair(PairFamily family, std::mt19937_64& rng, TriangleF& a, TriangleF
       }
       const double tilt = logUniform(rng, 1e-7, 1e-2) * (pick(rng) == 0 ? 0.0 : 1.0);
       const double lift = logUniform(rng, 1e-7, 1e-2) * (pick(rng) == 0 ? -1.0 : 1.0);
-      const Eigen::Matrix3d rot = Eigen::AngleAxisd(tilt, uniformInCube(rng, 1.0).normalized()).toRotationMatrix();
+      const Eigen::Matrix3d rot =
+          Eigen::AngleAxisd(tilt, uniformInCube(rng, 1.0).normalized()).toRotationMatrix();
       for (auto& v : tb) v = centre + rot * (v - centre) + lift * n;
       if (pick(rng) == 0) std::swap(tb[1], tb[2]);  // either facing
       break;
@@ -145,21 +155,24 @@ void randomPair(PairFamily family, std::mt19937_64& rng, TriangleF& a, TriangleF
       const Eigen::Vector3d direction = uniformInCube(rng, 1.0);
       const double s = u(rng);
       tb = {onA - s * direction, onA + (1.0 - s) * direction, onA + uniformInCube(rng, 1.0)};
-      if (!wellShaped({tb[0].cast<float>(), tb[1].cast<float>(), tb[2].cast<float>()})) tb = triangleAt(rng, onA);
+      if (!wellShaped({tb[0].cast<float>(), tb[1].cast<float>(), tb[2].cast<float>()}))
+        tb = triangleAt(rng, onA);
       break;
     }
     case PairFamily::NearTouching: {
-      const PairFamily touching[] = {PairFamily::SharedVertex, PairFamily::VertexOnFace, PairFamily::EdgeOnEdge};
+      const PairFamily touching[] = {PairFamily::SharedVertex, PairFamily::VertexOnFace,
+                                     PairFamily::EdgeOnEdge};
       TriangleF fa, fb;
       randomPair(touching[pick(rng)], rng, fa, fb);
-      const Eigen::Vector3d shift =
-          uniformInCube(rng, 1.0).normalized() * logUniform(rng, 1e-7, 1e-2) * pairScale(toDouble(fa), toDouble(fb));
+      const Eigen::Vector3d shift = uniformInCube(rng, 1.0).normalized() * logUniform(rng, 1e-7, 1e-2) *
+                                    pairScale(toDouble(fa), toDouble(fb));
       for (auto& v : fb) v = (v.cast<double>() + shift).cast<float>();
       a = fa;
       b = fb;
       return;
     }
-    case PairFamily::Count: break;
+    case PairFamily::Count:
+      break;
   }
   if (pick(rng) == 0) std::swap(ta, tb);
   if (!exact) {

@@ -88,7 +88,8 @@ Counts checkAllPairs(const std::vector<TriangleF>& meshA, const std::vector<Tria
       if (actual != expected) {
         ++counts.disagreements;
         const double separation = test::signedSeparation(da, db) / scale;
-        EXPECT_LE(std::fabs(separation), kBand) << "triangles " << i << ", " << j << ": reference " << expected;
+        EXPECT_LE(std::fabs(separation), kBand)
+            << "triangles " << i << ", " << j << ": reference " << expected;
       }
       const Eigen::Vector3f pa[3] = {a[0], a[1], a[2]};
       const Eigen::Vector3f pb[3] = {b[0], b[1], b[2]};
@@ -123,7 +124,8 @@ void checkMesh(const std::string& file, std::size_t limit) {
   const Eigen::Vector3d centre = (0.5f * (lower + upper)).cast<double>();
   std::mt19937_64 rng(11);
   const Eigen::Matrix3d rotation = test::randomRotation(rng);
-  const Eigen::Vector3d shift = 0.05 * (upper - lower).cast<double>().norm() * Eigen::Vector3d(0.3, -0.5, 0.8).normalized();
+  const Eigen::Vector3d shift =
+      0.05 * (upper - lower).cast<double>().norm() * Eigen::Vector3d(0.3, -0.5, 0.8).normalized();
   std::vector<TriangleF> moved = mesh;
   for (TriangleF& t : moved) {
     for (Eigen::Vector3f& v : t) v = (rotation * (v.cast<double>() - centre) + centre + shift).cast<float>();
@@ -131,10 +133,10 @@ void checkMesh(const std::string& file, std::size_t limit) {
   const Counts pair = checkAllPairs(mesh, moved);
   EXPECT_GT(pair.intersecting, 0);
   std::cout << "  " << file << " (" << mesh.size() << " triangles): self " << self.pairs << " box pairs, "
-            << self.intersecting << " intersecting, " << self.disagreements << " disagreements, " << self.contacts
-            << " contacts; moved copy " << pair.pairs << " box pairs, " << pair.intersecting << " intersecting, "
-            << pair.disagreements << " disagreements (all within 1e-6 of touching), " << pair.contacts
-            << " contacts\n";
+            << self.intersecting << " intersecting, " << self.disagreements << " disagreements, "
+            << self.contacts << " contacts; moved copy " << pair.pairs << " box pairs, " << pair.intersecting
+            << " intersecting, " << pair.disagreements << " disagreements (all within 1e-6 of touching), "
+            << pair.contacts << " contacts\n";
 }
 
 TEST(NearPhaseRealMeshes, Bunny) {

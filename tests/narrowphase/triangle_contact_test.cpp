@@ -109,7 +109,7 @@ TEST(TriangleContact, BoxTopFacePenetratedByDepthD) {
 /// Two faces resting on each other (coplanar, opposite normals): depth 0 along B's normal, the point in the
 /// overlap.
 TEST(TriangleContact, CoplanarRestingFaces) {
-  const Eigen::Vector3f top[3] = {{0, 0, 0}, {0, 2, 0}, {2, 0, 0}};  // outward -z: a body above
+  const Eigen::Vector3f top[3] = {{0, 0, 0}, {0, 2, 0}, {2, 0, 0}};   // outward -z: a body above
   const Eigen::Vector3f face[3] = {{1, 1, 0}, {3, 1, 0}, {1, 3, 0}};  // outward +z: the body below
   const std::optional<TriangleContact> c = generateContact(top, face);
   ASSERT_TRUE(c.has_value());
@@ -164,16 +164,18 @@ TEST(TriangleContact, MatchesDoubleReferenceAndIsInvariantUnderRigidMotion) {
     if (!test::referenceIntersect(da, db)) continue;
     const double scale = test::pairScale(da, db);
     const double margin = 1e-5 * scale;
-    const double nAnB = std::fabs((da[1] - da[0]).cross(da[2] - da[0]).normalized().dot(
-        (db[1] - db[0]).cross(db[2] - db[0]).normalized()));
+    const double nAnB = std::fabs((da[1] - da[0])
+                                      .cross(da[2] - da[0])
+                                      .normalized()
+                                      .dot((db[1] - db[0]).cross(db[2] - db[0]).normalized()));
     if (nAnB > 1 - 1e-6) continue;  // (nearly) parallel planes: no line, covered by the coplanar tests
     const ReferenceContact r = referenceContact(da, db);
     if (std::fabs(r.slide - std::min(r.moveA, r.moveB)) < margin) continue;
     const bool expectKept = r.slide >= std::min(r.moveA, r.moveB);
     if (-test::signedSeparation(da, db) < margin) continue;  // touching: the float input may miss it
     ++compared;
-    ASSERT_EQ(c.has_value(), expectKept) << "pair " << i << " slide " << r.slide << " moves " << r.moveA << " "
-                                         << r.moveB;
+    ASSERT_EQ(c.has_value(), expectKept)
+        << "pair " << i << " slide " << r.slide << " moves " << r.moveA << " " << r.moveB;
     if (!c) {
       ++dropped;
       continue;
@@ -206,7 +208,8 @@ TEST(TriangleContact, MatchesDoubleReferenceAndIsInvariantUnderRigidMotion) {
     ++rotatedCompared;
     EXPECT_NEAR(moved->depth, c->depth, 1e-4 * scale) << "pair " << i;
     EXPECT_LT((moved->normalOnB.cast<double>() - rotation * c->normalOnB.cast<double>()).norm(), 1e-4);
-    EXPECT_LT((moved->point.cast<double>() - (rotation * c->point.cast<double>() + offset)).norm(), 1e-4 * scale);
+    EXPECT_LT((moved->point.cast<double>() - (rotation * c->point.cast<double>() + offset)).norm(),
+              1e-4 * scale);
   }
   std::cout << "  compared " << compared << " intersecting pairs: " << kept << " contacts kept, " << dropped
             << " dropped by the line slide; " << rotatedCompared << " also compared after a rigid motion\n";

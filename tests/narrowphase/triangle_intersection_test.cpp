@@ -16,7 +16,9 @@ namespace {
 using test::PairFamily;
 using test::TriangleF;
 
-bool intersect(const TriangleF& a, const TriangleF& b) { return trianglesIntersect(a[0], a[1], a[2], b[0], b[1], b[2]); }
+bool intersect(const TriangleF& a, const TriangleF& b) {
+  return trianglesIntersect(a[0], a[1], a[2], b[0], b[1], b[2]);
+}
 
 /// Pairs closer to touching than this fraction of their size may be classified either way: the test
 /// snaps vertex-plane distances within 1e-12 of the triangle scales, which moves the intersection line of
@@ -31,7 +33,8 @@ TEST(TriangleIntersection, AgreesWithDoubleReferenceOnRandomFamilies) {
   long total = 0, intersecting = 0, disagreements = 0, outsideBand = 0;
   for (int f = 0; f < static_cast<int>(PairFamily::Count); ++f) {
     const auto family = static_cast<PairFamily>(f);
-    long familyDisagreements = 0, familyIntersecting = 0, familyFalsePositives = 0, familyOutsideBandPairs = 0;
+    long familyDisagreements = 0, familyIntersecting = 0, familyFalsePositives = 0,
+         familyOutsideBandPairs = 0;
     for (int i = 0; i < kPerFamily; ++i) {
       TriangleF a, b;
       test::randomPair(family, rng, a, b);
@@ -53,15 +56,17 @@ TEST(TriangleIntersection, AgreesWithDoubleReferenceOnRandomFamilies) {
                       << actual << " (swapped " << swapped << "), relative separation " << separation;
       }
     }
-    std::cout << "  " << test::familyName(family) << ": " << kPerFamily << " pairs (" << familyOutsideBandPairs
-              << " outside the band), " << familyIntersecting << " intersecting, " << familyDisagreements
-              << " disagreements in the band (" << familyFalsePositives << " float true / reference false)\n";
+    std::cout << "  " << test::familyName(family) << ": " << kPerFamily << " pairs ("
+              << familyOutsideBandPairs << " outside the band), " << familyIntersecting << " intersecting, "
+              << familyDisagreements << " disagreements in the band (" << familyFalsePositives
+              << " float true / reference false)\n";
     total += kPerFamily;
     intersecting += familyIntersecting;
     disagreements += familyDisagreements;
   }
   std::cout << "  total " << total << " pairs, " << intersecting << " intersecting, " << disagreements
-            << " disagreements within |separation| <= " << kBand << " x size, " << outsideBand << " outside\n";
+            << " disagreements within |separation| <= " << kBand << " x size, " << outsideBand
+            << " outside\n";
   EXPECT_EQ(outsideBand, 0);
   EXPECT_GE(total, 100000);
 }

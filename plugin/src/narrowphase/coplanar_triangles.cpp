@@ -16,7 +16,9 @@ struct CornerSum {
 };
 
 /// True when the signed values x and y are zero or of opposite signs (the segment between them reaches 0).
-inline bool straddles(double x, double y) { return (x <= 0.0 && y >= 0.0) || (x >= 0.0 && y <= 0.0); }
+inline bool straddles(double x, double y) {
+  return (x <= 0.0 && y >= 0.0) || (x >= 0.0 && y <= 0.0);
+}
 
 /// Point-in-triangle for a 2-D triangle of either winding; the boundary counts as inside.
 inline bool insideOrOn(const double tx[3], const double ty[3], double px, double py) {
@@ -28,8 +30,8 @@ inline bool insideOrOn(const double tx[3], const double ty[3], double px, double
 
 }  // namespace
 
-bool coplanarTrianglesOverlap(const Eigen::Vector3d* const a[3], const Eigen::Vector3d* const b[3], int dropAxis,
-                              Eigen::Vector3d* point) {
+bool coplanarTrianglesOverlap(const Eigen::Vector3d* const a[3], const Eigen::Vector3d* const b[3],
+                              int dropAxis, Eigen::Vector3d* point) {
   const int u = dropAxis == 0 ? 1 : 0;
   const int v = dropAxis == 2 ? 1 : 2;
   const double ax[3] = {(*a[0])[u], (*a[1])[u], (*a[2])[u]};

@@ -11,7 +11,7 @@ namespace gpucol::detail {
 /// When `point` is not null and they overlap, it receives a point of the overlap: the mean of the
 /// overlap polygon's corners (vertices of one inside the other and edge crossings), lifted back to 3-D
 /// on the edges of the triangles so it lies on both up to rounding.
-bool coplanarTrianglesOverlap(const Eigen::Vector3d* const a[3], const Eigen::Vector3d* const b[3], int dropAxis,
-                              Eigen::Vector3d* point);
+bool coplanarTrianglesOverlap(const Eigen::Vector3d* const a[3], const Eigen::Vector3d* const b[3],
+                              int dropAxis, Eigen::Vector3d* point);
 
 }  // namespace gpucol::detail

@@ -8,7 +8,8 @@
 
 namespace gpucol {
 
-std::optional<TriangleContact> generateContact(const Eigen::Vector3f (&af)[3], const Eigen::Vector3f (&bf)[3]) {
+std::optional<TriangleContact> generateContact(const Eigen::Vector3f (&af)[3],
+                                               const Eigen::Vector3f (&bf)[3]) {
   // Double arithmetic on the float input, as in trianglesIntersect (see triangle_plane.h).
   const Eigen::Vector3d a[3] = {af[0].cast<double>(), af[1].cast<double>(), af[2].cast<double>()};
   const Eigen::Vector3d b[3] = {bf[0].cast<double>(), bf[1].cast<double>(), bf[2].cast<double>()};

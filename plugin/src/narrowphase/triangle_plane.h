@@ -42,12 +42,13 @@ inline constexpr double kSnapRelative = 1e-12;
 struct TrianglePlane {
   Eigen::Vector3d origin;  ///< v0.
   Eigen::Vector3d normal;  ///< (v1 - v0) x (v2 - v0), not normalised.
-  double errorScale;        ///< max|e1| * max|e2| (infinity norms): bounds |normal|'s rounding error.
+  double errorScale;       ///< max|e1| * max|e2| (infinity norms): bounds |normal|'s rounding error.
   bool degenerate;         ///< Zero area (or NaN): no plane.
 };
 
 /// The plane of triangle (v0, v1, v2).
-inline TrianglePlane makePlane(const Eigen::Vector3d& v0, const Eigen::Vector3d& v1, const Eigen::Vector3d& v2) {
+inline TrianglePlane makePlane(const Eigen::Vector3d& v0, const Eigen::Vector3d& v1,
+                               const Eigen::Vector3d& v2) {
   const Eigen::Vector3d e1 = v1 - v0;
   const Eigen::Vector3d e2 = v2 - v0;
   TrianglePlane plane;
@@ -68,21 +69,28 @@ inline void signedDistances(const TrianglePlane& plane, const Eigen::Vector3d& q
   d[0] = plane.normal.dot(r0);
   d[1] = plane.normal.dot(r1);
   d[2] = plane.normal.dot(r2);
-  const double extent = std::max({r0.cwiseAbs().maxCoeff(), r1.cwiseAbs().maxCoeff(), r2.cwiseAbs().maxCoeff()});
+  const double extent =
+      std::max({r0.cwiseAbs().maxCoeff(), r1.cwiseAbs().maxCoeff(), r2.cwiseAbs().maxCoeff()});
   const double tolerance = kSnapRelative * plane.errorScale * extent;
   for (int i = 0; i < 3; ++i) d[i] = std::fabs(d[i]) <= tolerance ? 0.0 : d[i];
 }
 
 /// True when x and y are both strictly positive or both strictly negative. Compared by sign rather than by
 /// x * y > 0, which underflows to 0 for tiny meshes (the distances scale with length cubed).
-inline bool sameStrictSign(double x, double y) { return (x > 0.0 && y > 0.0) || (x < 0.0 && y < 0.0); }
+inline bool sameStrictSign(double x, double y) {
+  return (x > 0.0 && y > 0.0) || (x < 0.0 && y < 0.0);
+}
 
 /// True when all three distances are non-zero with one sign: the triangle misses the plane (Möller's
 /// early rejection).
-inline bool allOnOneSide(const double d[3]) { return sameStrictSign(d[0], d[1]) && sameStrictSign(d[0], d[2]); }
+inline bool allOnOneSide(const double d[3]) {
+  return sameStrictSign(d[0], d[1]) && sameStrictSign(d[0], d[2]);
+}
 
 /// True when all three distances are zero: the triangle lies in the plane.
-inline bool allInPlane(const double d[3]) { return d[0] == 0.0 && d[1] == 0.0 && d[2] == 0.0; }
+inline bool allInPlane(const double d[3]) {
+  return d[0] == 0.0 && d[1] == 0.0 && d[2] == 0.0;
+}
 
 /// The vertex on its own side of the other plane (Möller 1997, "compute intervals"), for distances that
 /// are neither all on one side nor all zero. The two edges from it cross the plane; when the lone vertex
