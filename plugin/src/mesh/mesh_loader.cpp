@@ -3,6 +3,7 @@
 
 #include <assimp/Importer.hpp>
 #include <cerrno>
+#include <cmath>
 #include <cstring>
 #include <filesystem>
 #include <fstream>
@@ -83,10 +84,19 @@ void appendMesh(const aiMesh& mesh, unsigned meshIndex, const aiMatrix4x4& trans
     }
   }
 
-  // Positions in double through the node transform, stored as float like the rest of gpucol.
+  // Positions in double through the node transform, stored as float like the rest of gpucol. A
+  // non-finite coordinate is named before the transform would smear it over x, y and z (0 * NaN).
+  const std::size_t base = xyz.size() / 3;
   std::vector<float> local(3 * std::size_t(mesh.mNumVertices));
   for (unsigned v = 0; v < mesh.mNumVertices; ++v) {
     const aiVector3D& p = mesh.mVertices[v];
+    for (int k = 0; k < 3; ++k) {
+      if (!std::isfinite(p[k])) {
+        std::ostringstream out;
+        out << path << ": vertex " << base + v << " has a non-finite coordinate " << "xyz"[k] << " = " << p[k];
+        throw MeshError(out.str());
+      }
+    }
     for (int r = 0; r < 3; ++r) {
       local[3 * std::size_t(v) + r] = float(double(transform[r][0]) * p.x + double(transform[r][1]) * p.y +
                                             double(transform[r][2]) * p.z + double(transform[r][3]));
@@ -100,7 +110,6 @@ void appendMesh(const aiMesh& mesh, unsigned meshIndex, const aiMatrix4x4& trans
   bool cornerSplit = mesh.mNumVertices == 3 * mesh.mNumFaces;
   for (std::uint32_t u : uses) cornerSplit = cornerSplit && u == 1;
   std::vector<std::uint32_t> remap(mesh.mNumVertices);
-  const std::size_t base = xyz.size() / 3;
   if (cornerSplit) {
     std::unordered_map<PositionKey, std::uint32_t, PositionKeyHash> welded;
     welded.reserve(mesh.mNumVertices);

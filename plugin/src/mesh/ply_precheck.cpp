@@ -1,5 +1,6 @@
 #include "mesh/ply_precheck.h"
 
+#include <cmath>
 #include <cstdint>
 #include <cstdlib>
 #include <cstring>
@@ -124,33 +125,41 @@ void checkAscii(const std::vector<PlyElement>& elements, const char* data, std::
             << element.count;
         fail(path, out.str());
       }
-      std::size_t expected = 0;
+      // Which property each value belongs to, so a bad value can be named.
+      std::vector<const PlyProperty*> owner;
       for (const PlyProperty& p : element.properties) {
         if (p.countSize == 0) {
-          ++expected;
+          owner.push_back(&p);
           continue;
         }
         char* end = nullptr;
-        const long items = expected < tokens.size() ? std::strtol(tokens[expected].c_str(), &end, 10) : -1;
-        if (expected >= tokens.size() || *end != '\0' || items < 0) {
+        const long items = owner.size() < tokens.size() ? std::strtol(tokens[owner.size()].c_str(), &end, 10) : -1;
+        if (owner.size() >= tokens.size() || *end != '\0' || items < 0) {
           std::ostringstream out;
           out << "element '" << element.name << "' record " << i << " (line " << line << " of the body): list '"
               << p.name << "' has no valid length";
           fail(path, out.str());
         }
-        expected += 1 + std::size_t(items);
+        if (std::size_t(items) > tokens.size()) break;  // reported as a count mismatch below
+        owner.insert(owner.end(), 1 + std::size_t(items), &p);
       }
-      bool numeric = tokens.size() == expected;
-      for (const std::string& token : tokens) {
-        char* end = nullptr;
-        std::strtod(token.c_str(), &end);
-        numeric = numeric && *end == '\0';
-      }
-      if (!numeric) {
+      if (tokens.size() != owner.size()) {
         std::ostringstream out;
         out << "element '" << element.name << "' record " << i << " (line " << line << " of the body) has "
-            << tokens.size() << " values where " << expected << " numbers are expected";
+            << tokens.size() << " values where " << owner.size() << " are expected";
         fail(path, out.str());
+      }
+      for (std::size_t k = 0; k < tokens.size(); ++k) {
+        // assimp's number parser misreads words such as "nan" and shifts the record, so only finite
+        // numbers pass.
+        char* end = nullptr;
+        const double value = std::strtod(tokens[k].c_str(), &end);
+        if (*end != '\0' || !std::isfinite(value)) {
+          std::ostringstream out;
+          out << "element '" << element.name << "' record " << i << " (line " << line << " of the body): property '"
+              << owner[k]->name << "' has the value '" << tokens[k] << "', not a finite number";
+          fail(path, out.str());
+        }
       }
     }
   }
