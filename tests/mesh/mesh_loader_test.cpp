@@ -34,17 +34,19 @@ TEST(LoadMesh, RealMeshesKeepTheFilesVerticesAndTriangles) {
   // Compared element by element with an independent reader of the documented layout: no welding,
   // no reordering, unreferenced vertices kept (bunny-69451 has 1,113), duplicate positions kept
   // (the teapot has 403).
+  std::size_t found = 0;
   for (const char* file : {"torus-1152.ply", "bunny-69451.ply", "teapot-6320.ply", "bunny-948.ply",
                            "armadillo-5000.ply", "fandisk-12946.ply"}) {
     const std::string path = test::meshPath(file);
     if (path.empty()) continue;
+    ++found;
     const TriangleMesh mesh = loadMesh(path);
     const test::MeshArrays reference = test::readReferencePly(path);
     EXPECT_EQ(mesh.positions(), reference.xyz) << file;
     EXPECT_EQ(mesh.indices(), reference.indices) << file;
     EXPECT_EQ(mesh.name(), path);
   }
-  GPUCOL_REQUIRE_MESH(torus, "torus-1152.ply");
+  if (found == 0) GTEST_SKIP() << "no real meshes in " << test::meshDirectory();
 }
 
 TEST(LoadMesh, TorusCountsAndClosed) {
@@ -172,7 +174,7 @@ TEST(LoadMesh, MissingEmptyAndGarbageFiles) {
   EXPECT_CONTAINS(loadError(garbagePly), garbagePly + ": assimp cannot read the mesh file: ");
   // An OBJ file with vertices but no faces holds no triangle mesh.
   const std::string noFaces = dir.write("nofaces.obj", "v 0 0 0\nv 1 0 0\nv 0 1 0\n");
-  EXPECT_CONTAINS(loadError(noFaces), noFaces + ": ");
+  EXPECT_CONTAINS(loadError(noFaces), noFaces + ": assimp cannot read the mesh file: Validation failed: Mesh");
 }
 
 TEST(LoadMesh, TruncatedBinaryPly) {

@@ -205,6 +205,12 @@ TEST(MeshReport, DerivedArmadillosAreSlightlyDirty) {
     EXPECT_EQ(r.boundaryEdges + r.nonManifoldEdges, bad) << file << ": " << r.summary();
     EXPECT_FALSE(r.closed) << file;
   }
+  // Edges shared by three triangles but no hole: the summary must not call it open.
+  GPUCOL_REQUIRE_MESH(path, "armadillo-27674.ply");
+  const MeshReport r = loadMesh(path).report();
+  EXPECT_EQ(r.boundaryEdges, 0u);
+  EXPECT_EQ(r.summary(), "27674 triangles, 13839 vertices, 41508 edges, not closed, 3 non-manifold edges, "
+                         "0 degenerate, 3 duplicate triangles");
 }
 
 TEST(MeshReport, LargeMeshLoadsAndReportsQuickly) {

@@ -109,7 +109,8 @@ std::string MeshReport::summary() const {
   if (closed && inconsistentEdges == 0) {
     out << "closed 2-manifold";
   } else {
-    out << (closed ? "closed" : "open");
+    // "open" only when there is a hole; edges shared by three or more triangles alone are not one.
+    out << (boundaryEdges > 0 ? "open" : closed ? "closed" : "not closed");
     if (boundaryEdges > 0) out << " (" << boundaryEdges << " boundary edges)";
     if (nonManifoldEdges > 0) out << ", " << nonManifoldEdges << " non-manifold edges";
     if (inconsistentEdges > 0) out << ", " << inconsistentEdges << " inconsistently wound edges";
