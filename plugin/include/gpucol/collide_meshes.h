@@ -57,9 +57,9 @@ struct MeshPairResult {
 /// One pair of a batch query.
 struct MeshPairQuery {
   const MeshShape* shapeA = nullptr;  ///< First shape (its triangles are "A" in the result).
-  btTransform transformA;             ///< World transform of shape A.
+  btTransform transformA = btTransform::getIdentity();  ///< World transform of shape A.
   const MeshShape* shapeB = nullptr;  ///< Second shape.
-  btTransform transformB;             ///< World transform of shape B.
+  btTransform transformB = btTransform::getIdentity();  ///< World transform of shape B.
 };
 
 /// Collides two mesh shapes at the given world transforms, without a world.
