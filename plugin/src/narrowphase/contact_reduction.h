@@ -20,7 +20,8 @@ struct ReductionInput {
 /// dimensions: its position scaled into the unit cube of all the contacts' bounding box (an axis of zero
 /// extent maps to 0), and its normal mapped from [-1, 1] to [0, 1]. Each occupied bin keeps one contact:
 /// the deepest, ties to the lowest index. So at most resolution^6 contacts survive, the deepest contact
-/// always does, and the result does not depend on the order of equal contacts' processing.
+/// always does, and the same input always gives the same indices. The thesis keeps the contact farthest
+/// from the cube's origin instead; see contact_reduction.cpp for why we keep the deepest.
 /// Throws std::invalid_argument for a negative resolution and for a NaN or infinite value (naming the
 /// contact's index), which could not be binned.
 std::vector<std::uint32_t> reduceContacts(const std::vector<ReductionInput>& contacts, int resolution);
