@@ -222,9 +222,11 @@ TEST(MeshReport, LargeMeshLoadsAndReportsQuickly) {
   EXPECT_EQ(mesh.triangleCount(), 399904u);
   EXPECT_TRUE(mesh.report().closed) << mesh.report().summary();
   EXPECT_EQ(mesh.report().edgeCount, 599856u);
-  // Generous for a shared 2-core machine; measured well under this (see the module notes).
-  EXPECT_LT(seconds, 5.0) << "load + report took " << seconds << " s";
   std::printf("[ info ] armadillo-399904: load + validation + report %.3f s\n", seconds);
+#if defined(NDEBUG) && !defined(__SANITIZE_ADDRESS__)
+  // Optimised builds only: measured 0.2 to 0.55 s on a shared 2-core machine; 3 s leaves room for load.
+  EXPECT_LT(seconds, 3.0) << "load + report took " << seconds << " s";
+#endif
 }
 
 }  // namespace
