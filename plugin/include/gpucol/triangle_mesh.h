@@ -32,15 +32,21 @@ class TriangleMesh {
   /// Topology and quality report, computed once at construction.
   const MeshReport& report() const { return m_report; }
 
-  /// Volume, centre of mass and inertia for a uniform density; throws MeshError for an open mesh.
+  /// Volume, centre of mass and inertia for a uniform density, computed in double about the bounding box
+  /// centre. Throws MeshError, saying why, for an open or non-manifold mesh, inconsistent winding, a
+  /// negative signed volume (inward winding: it is reported, never flipped), no enclosed volume, or a
+  /// density that is not finite and positive.
   MassProperties massProperties(double density = 1.0) const;
 
-  /// The same mesh with every vertex mapped by p' = rotation * p + translation (rotation row-major).
+  /// The same mesh with every vertex mapped by p' = rotation * p + translation (rotation row-major,
+  /// computed in double, stored as float). Throws MeshError unless rotation is a proper rotation
+  /// (orthonormal to 1e-6, det +1) and the results are finite.
   TriangleMesh transformed(const std::array<double, 9>& rotation, const std::array<double, 3>& translation) const;
 
   /// The mesh moved into its principal frame (centre of mass at the origin, principal axes along x, y, z),
   /// so that a btRigidBody gets a diagonal inertia; `massProperties()` of the result has a diagonal tensor.
-  /// `fromPrincipal` receives the transform from the principal frame back to the original frame.
+  /// `fromPrincipalRotation` and `fromPrincipalTranslation`, when given, receive the transform from the
+  /// principal frame back to the original one (p = R p' + t). Throws like massProperties().
   TriangleMesh inPrincipalFrame(double density, std::array<double, 9>* fromPrincipalRotation = nullptr,
                                 std::array<double, 3>* fromPrincipalTranslation = nullptr) const;
 
@@ -54,6 +60,9 @@ class TriangleMesh {
 };
 
 /// Loads a mesh file (PLY, OBJ, STL and the other formats assimp reads); throws MeshError naming the file.
+/// PLY and OFF keep the file's vertices and triangles exactly; formats that give each face corner its own
+/// vertex (OBJ, STL) are welded on exactly equal positions. Polygons are triangulated; points and lines
+/// are refused. All meshes of the scene are merged under their node transforms.
 TriangleMesh loadMesh(const std::string& path);
 
 }  // namespace gpucol

@@ -4,6 +4,7 @@
 #include <assimp/Importer.hpp>
 #include <cerrno>
 #include <cmath>
+#include <cstdint>
 #include <cstring>
 #include <filesystem>
 #include <fstream>
@@ -84,6 +85,11 @@ void appendMesh(const aiMesh& mesh, unsigned meshIndex, const aiMatrix4x4& trans
     }
   }
 
+  if (xyz.size() / 3 + mesh.mNumVertices > std::size_t(UINT32_MAX)) {
+    std::ostringstream out;
+    out << path << ": the scene has more than " << UINT32_MAX << " vertices, beyond 32-bit triangle indices";
+    throw MeshError(out.str());
+  }
   // Positions in double through the node transform, stored as float like the rest of gpucol. A
   // non-finite coordinate is named before the transform would smear it over x, y and z (0 * NaN).
   const std::size_t base = xyz.size() / 3;
