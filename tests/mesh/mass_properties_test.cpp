@@ -18,7 +18,9 @@ namespace {
 
 using Matrix = Eigen::Matrix<double, 3, 3, Eigen::RowMajor>;
 
-Matrix asMatrix(const std::array<double, 9>& a) { return Matrix(a.data()); }
+Matrix asMatrix(const std::array<double, 9>& a) {
+  return Matrix(a.data());
+}
 
 std::string massError(const TriangleMesh& mesh, double density = 1.0) {
   try {
@@ -45,7 +47,8 @@ TEST(MassProperties, BoxMatchesClosedForm) {
     EXPECT_NEAR(mp.centerOfMass[2], 0.25, 1e-12);
     const double expected[9] = {mass / 3 * (b * b + c * c), 0, 0, 0, mass / 3 * (a * a + c * c), 0, 0, 0,
                                 mass / 3 * (a * a + b * b)};
-    for (int k = 0; k < 9; ++k) EXPECT_NEAR(mp.inertia[k], expected[k], 1e-12 * mass * c * c) << "entry " << k;
+    for (int k = 0; k < 9; ++k)
+      EXPECT_NEAR(mp.inertia[k], expected[k], 1e-12 * mass * c * c) << "entry " << k;
     EXPECT_NEAR(mp.principalMoments[0], expected[8], 1e-12 * mass * c * c);  // ascending: z, y, x
     EXPECT_NEAR(mp.principalMoments[1], expected[4], 1e-12 * mass * c * c);
     EXPECT_NEAR(mp.principalMoments[2], expected[0], 1e-12 * mass * c * c);
@@ -79,7 +82,8 @@ TEST(MassProperties, SphereApproachesClosedForm) {
   // to 1e-3 by the icosahedral symmetry.
   const double r = 2.0;
   const auto sphere = test::icosphereArrays(r, 5);
-  const MassProperties mp = TriangleMesh::fromArrays(sphere.xyz, sphere.indices, "sphere").massProperties(1.0);
+  const MassProperties mp =
+      TriangleMesh::fromArrays(sphere.xyz, sphere.indices, "sphere").massProperties(1.0);
   const double volume = 4.0 / 3.0 * M_PI * r * r * r, moment = 0.4 * volume * r * r;
   EXPECT_LT(mp.volume, volume);
   EXPECT_NEAR(mp.volume / volume, 1.0, 1e-3);
@@ -150,14 +154,17 @@ TEST(MassProperties, PrincipalFrameIsDiagonal) {
       EXPECT_NEAR(mp.principalMoments[i], original.principalMoments[i], 1e-5 * scale) << file;
       EXPECT_NEAR(mp.inertia[4 * i], original.principalMoments[i], 1e-5 * scale) << file;
       for (int j = 0; j < 3; ++j) {
-        if (i != j) { EXPECT_NEAR(mp.inertia[3 * i + j], 0.0, 1e-5 * scale) << file; }
+        if (i != j) {
+          EXPECT_NEAR(mp.inertia[3 * i + j], 0.0, 1e-5 * scale) << file;
+        }
       }
     }
     EXPECT_NEAR(asMatrix(backRotation).determinant(), 1.0, 1e-12);
     // The returned transform maps the principal mesh back onto the original vertices.
     const TriangleMesh back = principal.transformed(backRotation, backTranslation);
     for (std::size_t k = 0; k < mesh.positions().size(); ++k)
-      ASSERT_NEAR(back.positions()[k], mesh.positions()[k], 2e-6 * length + 1e-6 * std::abs(mesh.positions()[k]));
+      ASSERT_NEAR(back.positions()[k], mesh.positions()[k],
+                  2e-6 * length + 1e-6 * std::abs(mesh.positions()[k]));
   }
 }
 
@@ -184,37 +191,47 @@ TEST(MassProperties, RefusesOpenNonManifoldInsideOutAndFlat) {
   // Open: drop the last triangle.
   auto open = box;
   open.indices.resize(open.indices.size() - 3);
-  EXPECT_EQ(massError(TriangleMesh::fromArrays(open.xyz, open.indices, "open")),
-            "open: cannot compute mass properties: the mesh is not a closed manifold (3 boundary edges, 0 edges "
-            "shared by more than two triangles), so it encloses no well-defined volume");
+  EXPECT_EQ(
+      massError(TriangleMesh::fromArrays(open.xyz, open.indices, "open")),
+      "open: cannot compute mass properties: the mesh is not a closed manifold (3 boundary edges, 0 edges "
+      "shared by more than two triangles), so it encloses no well-defined volume");
   // Non-manifold: a fin triangle on an existing edge (and its other two edges are boundary).
   auto fin = box;
   fin.xyz.insert(fin.xyz.end(), {5, 5, 5});
-  fin.indices.insert(fin.indices.end(), {fin.indices[0], fin.indices[1], std::uint32_t(fin.xyz.size() / 3 - 1)});
-  EXPECT_NE(massError(TriangleMesh::fromArrays(fin.xyz, fin.indices, "fin")).find("1 edges shared by more than two"),
+  fin.indices.insert(fin.indices.end(),
+                     {fin.indices[0], fin.indices[1], std::uint32_t(fin.xyz.size() / 3 - 1)});
+  EXPECT_NE(massError(TriangleMesh::fromArrays(fin.xyz, fin.indices, "fin"))
+                .find("1 edges shared by more than two"),
             std::string::npos);
   // Inside out: every triangle reversed.
   auto inverted = box;
-  for (std::size_t t = 0; t < inverted.indices.size(); t += 3) std::swap(inverted.indices[t + 1], inverted.indices[t + 2]);
+  for (std::size_t t = 0; t < inverted.indices.size(); t += 3)
+    std::swap(inverted.indices[t + 1], inverted.indices[t + 2]);
   const std::string inside = massError(TriangleMesh::fromArrays(inverted.xyz, inverted.indices, "inverted"));
-  EXPECT_NE(inside.find("inverted: cannot compute mass properties: the signed volume is negative (-8)"), std::string::npos)
+  EXPECT_NE(inside.find("inverted: cannot compute mass properties: the signed volume is negative (-8)"),
+            std::string::npos)
       << inside;
   EXPECT_NE(inside.find("inward normals"), std::string::npos);
   // One triangle flipped: closed, but its three edges are walked twice the same way.
   auto flipped = box;
   std::swap(flipped.indices[1], flipped.indices[2]);
-  EXPECT_NE(massError(TriangleMesh::fromArrays(flipped.xyz, flipped.indices, "flipped")).find("3 edges are walked"),
-            std::string::npos);
+  EXPECT_NE(
+      massError(TriangleMesh::fromArrays(flipped.xyz, flipped.indices, "flipped")).find("3 edges are walked"),
+      std::string::npos);
   // Flat: a triangle and its reverse close each other's edges but enclose nothing.
-  const TriangleMesh sheet = TriangleMesh::fromArrays({0, 0, 0, 1, 0, 0, 0, 1, 0}, {0, 1, 2, 0, 2, 1}, "sheet");
-  EXPECT_NE(massError(sheet).find("sheet: cannot compute mass properties: the mesh encloses no volume"), std::string::npos);
+  const TriangleMesh sheet =
+      TriangleMesh::fromArrays({0, 0, 0, 1, 0, 0, 0, 1, 0}, {0, 1, 2, 0, 2, 1}, "sheet");
+  EXPECT_NE(massError(sheet).find("sheet: cannot compute mass properties: the mesh encloses no volume"),
+            std::string::npos);
   // Bad density.
   const TriangleMesh cube = TriangleMesh::fromArrays(box.xyz, box.indices, "cube");
   EXPECT_NE(massError(cube, 0.0).find("density must be finite and positive, got 0"), std::string::npos);
   EXPECT_THROW(cube.massProperties(NAN), MeshError);
   // A real open mesh.
   const std::string path = test::meshPath("bunny-69451.ply");
-  if (!path.empty()) { EXPECT_NE(massError(loadMesh(path)).find("223 boundary edges"), std::string::npos); }
+  if (!path.empty()) {
+    EXPECT_NE(massError(loadMesh(path)).find("223 boundary edges"), std::string::npos);
+  }
 }
 
 }  // namespace

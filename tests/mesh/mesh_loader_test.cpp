@@ -27,8 +27,9 @@ std::string loadError(const std::string& path) {
   return {};
 }
 
-#define EXPECT_CONTAINS(text, part) \
-  EXPECT_NE(std::string(text).find(part), std::string::npos) << "\"" << (text) << "\" lacks \"" << (part) << "\""
+#define EXPECT_CONTAINS(text, part)                          \
+  EXPECT_NE(std::string(text).find(part), std::string::npos) \
+      << "\"" << (text) << "\" lacks \"" << (part) << "\""
 
 TEST(LoadMesh, RealMeshesKeepTheFilesVerticesAndTriangles) {
   // Compared element by element with an independent reader of the documented layout: no welding,
@@ -59,11 +60,12 @@ TEST(LoadMesh, TorusCountsAndClosed) {
 
 TEST(LoadMesh, AsciiPlyAndOffKeepSharedVertices) {
   test::TempDir dir;
-  const std::string ply = dir.write("tet.ply",
-                                    "ply\nformat ascii 1.0\ncomment a tetrahedron and one unused vertex\n"
-                                    "element vertex 5\nproperty float x\nproperty float y\nproperty float z\n"
-                                    "element face 4\nproperty list uchar int vertex_indices\nend_header\n"
-                                    "0 0 0\n1 0 0\n0 1 0\n0 0 1\n5 5 5\n3 0 2 1\n3 0 1 3\n3 0 3 2\n3 1 2 3\n");
+  const std::string ply =
+      dir.write("tet.ply",
+                "ply\nformat ascii 1.0\ncomment a tetrahedron and one unused vertex\n"
+                "element vertex 5\nproperty float x\nproperty float y\nproperty float z\n"
+                "element face 4\nproperty list uchar int vertex_indices\nend_header\n"
+                "0 0 0\n1 0 0\n0 1 0\n0 0 1\n5 5 5\n3 0 2 1\n3 0 1 3\n3 0 3 2\n3 1 2 3\n");
   const TriangleMesh mesh = loadMesh(ply);
   EXPECT_EQ(mesh.vertexCount(), 5u);
   EXPECT_EQ(mesh.indices(), (std::vector<std::uint32_t>{0, 2, 1, 0, 1, 3, 0, 3, 2, 1, 2, 3}));
@@ -174,7 +176,8 @@ TEST(LoadMesh, MissingEmptyAndGarbageFiles) {
   EXPECT_CONTAINS(loadError(garbagePly), garbagePly + ": assimp cannot read the mesh file: ");
   // An OBJ file with vertices but no faces holds no triangle mesh.
   const std::string noFaces = dir.write("nofaces.obj", "v 0 0 0\nv 1 0 0\nv 0 1 0\n");
-  EXPECT_CONTAINS(loadError(noFaces), noFaces + ": assimp cannot read the mesh file: Validation failed: Mesh");
+  EXPECT_CONTAINS(loadError(noFaces),
+                  noFaces + ": assimp cannot read the mesh file: Validation failed: Mesh");
 }
 
 TEST(LoadMesh, TruncatedBinaryPly) {
@@ -186,8 +189,9 @@ TEST(LoadMesh, TruncatedBinaryPly) {
   EXPECT_CONTAINS(loadError(inFaces), inFaces + ": malformed PLY file: truncated: element 'face' record ");
   EXPECT_CONTAINS(loadError(inFaces), "of 1152 (property 'vertex_indices')");
   const std::string inVertices = dir.write("vertices.ply", bytes.substr(0, 5000));
-  EXPECT_CONTAINS(loadError(inVertices),
-                  inVertices + ": malformed PLY file: truncated: element 'vertex' declares 576 records of 12 bytes");
+  EXPECT_CONTAINS(
+      loadError(inVertices),
+      inVertices + ": malformed PLY file: truncated: element 'vertex' declares 576 records of 12 bytes");
   const std::string inHeader = dir.write("header.ply", bytes.substr(0, 200));
   EXPECT_EQ(loadError(inHeader), inHeader + ": malformed PLY file: the header has no 'end_header' line");
   const std::string lastByte = dir.write("last.ply", bytes.substr(0, bytes.size() - 1));
@@ -196,43 +200,53 @@ TEST(LoadMesh, TruncatedBinaryPly) {
 
 TEST(LoadMesh, MalformedPlyHeadersAndAsciiBodies) {
   test::TempDir dir;
-  const std::string head = "ply\nformat ascii 1.0\nelement vertex 3\nproperty float x\nproperty float y\n"
-                           "property float z\nelement face 1\nproperty list uchar int vertex_indices\nend_header\n";
+  const std::string head =
+      "ply\nformat ascii 1.0\nelement vertex 3\nproperty float x\nproperty float y\n"
+      "property float z\nelement face 1\nproperty list uchar int vertex_indices\nend_header\n";
   const std::string good = dir.write("good.ply", head + "0 0 0\n1 0 0\n0 1 0\n3 0 1 2\n");
   EXPECT_EQ(loadMesh(good).triangleCount(), 1u);
   const std::string shortBody = dir.write("short.ply", head + "0 0 0\n1 0 0\n0 1 0\n");
   EXPECT_EQ(loadError(shortBody),
             shortBody + ": malformed PLY file: truncated: the file ends before element 'face' record 0 of 1");
   const std::string shortLine = dir.write("line.ply", head + "0 0 0\n1 0\n0 1 0\n3 0 1 2\n");
-  EXPECT_EQ(loadError(shortLine), shortLine + ": malformed PLY file: element 'vertex' record 1 (line 2 of the body) "
-                                             "has 2 values where 3 are expected");
+  EXPECT_EQ(loadError(shortLine), shortLine +
+                                      ": malformed PLY file: element 'vertex' record 1 (line 2 of the body) "
+                                      "has 2 values where 3 are expected");
   const std::string word = dir.write("word.ply", head + "0 0 0\n1 0 zero\n0 1 0\n3 0 1 2\n");
-  EXPECT_CONTAINS(loadError(word), "element 'vertex' record 1 (line 2 of the body): property 'z' has the value 'zero'");
+  EXPECT_CONTAINS(loadError(word),
+                  "element 'vertex' record 1 (line 2 of the body): property 'z' has the value 'zero'");
   const std::string badList = dir.write("list.ply", head + "0 0 0\n1 0 0\n0 1 0\n3 0 1\n");
-  EXPECT_CONTAINS(loadError(badList), "element 'face' record 0 (line 4 of the body) has 3 values where 4 are expected");
+  EXPECT_CONTAINS(loadError(badList),
+                  "element 'face' record 0 (line 4 of the body) has 3 values where 4 are expected");
   const std::string hugeList = dir.write("hugelist.ply", head + "0 0 0\n1 0 0\n0 1 0\n999999999999 0 1 2\n");
   EXPECT_CONTAINS(loadError(hugeList), "element 'face' record 0 (line 4 of the body) has 4 values where");
-  const std::string badType = dir.write("type.ply", "ply\nformat ascii 1.0\nelement vertex 1\nproperty quad x\nend_header\n0\n");
+  const std::string badType =
+      dir.write("type.ply", "ply\nformat ascii 1.0\nelement vertex 1\nproperty quad x\nend_header\n0\n");
   EXPECT_CONTAINS(loadError(badType), "unknown property type in 'property quad x'");
   const std::string badFormat = dir.write("format.ply", "ply\nformat binary_middle_endian 1.0\nend_header\n");
   EXPECT_CONTAINS(loadError(badFormat), "unknown format 'binary_middle_endian'");
   // A huge declared count with a tiny body is caught without overflow or allocation.
-  const std::string huge = dir.write("huge.ply", "ply\nformat binary_little_endian 1.0\nelement vertex 18446744073709551615\n"
-                                                 "property float x\nproperty float y\nproperty float z\nend_header\n");
+  const std::string huge =
+      dir.write("huge.ply",
+                "ply\nformat binary_little_endian 1.0\nelement vertex 18446744073709551615\n"
+                "property float x\nproperty float y\nproperty float z\nend_header\n");
   EXPECT_CONTAINS(loadError(huge), "truncated: element 'vertex' declares 18446744073709551615 records");
   // Out-of-range and negative indices are caught by assimp's structure validation, which names the
   // face and the corner.
   const std::string outOfRange = dir.write("range.ply", head + "0 0 0\n1 0 0\n0 1 0\n3 0 1 7\n");
-  EXPECT_EQ(loadError(outOfRange), outOfRange + ": assimp cannot read the mesh file: Validation failed: "
-                                                "aiMesh::mFaces[0]::mIndices[2] is out of range");
+  EXPECT_EQ(loadError(outOfRange), outOfRange +
+                                       ": assimp cannot read the mesh file: Validation failed: "
+                                       "aiMesh::mFaces[0]::mIndices[2] is out of range");
   const std::string negative = dir.write("negative.ply", head + "0 0 0\n1 0 0\n0 1 0\n3 0 -1 2\n");
   EXPECT_CONTAINS(loadError(negative), "aiMesh::mFaces[0]::mIndices[1] is out of range");
   const std::string nan = dir.write("nan.ply", head + "0 0 0\n1 nan 0\n0 1 0\n3 0 1 2\n");
-  EXPECT_CONTAINS(loadError(nan), nan + ": malformed PLY file: element 'vertex' record 1 (line 2 of the body): "
-                                        "property 'y' has the value 'nan', not a finite number");
+  EXPECT_CONTAINS(loadError(nan), nan +
+                                      ": malformed PLY file: element 'vertex' record 1 (line 2 of the body): "
+                                      "property 'y' has the value 'nan', not a finite number");
   // In a binary file a NaN is a well-formed float; validation names the vertex and the coordinate.
-  std::string binary = "ply\nformat binary_little_endian 1.0\nelement vertex 3\nproperty float x\nproperty float y\n"
-                       "property float z\nelement face 1\nproperty list uchar int vertex_indices\nend_header\n";
+  std::string binary =
+      "ply\nformat binary_little_endian 1.0\nelement vertex 3\nproperty float x\nproperty float y\n"
+      "property float z\nelement face 1\nproperty list uchar int vertex_indices\nend_header\n";
   const float xyz[9] = {0, 0, 0, 1, 0, 0, 0, 1, std::numeric_limits<float>::quiet_NaN()};
   const std::int32_t face[3] = {0, 1, 2};
   binary.append(reinterpret_cast<const char*>(xyz), sizeof xyz);

@@ -60,9 +60,11 @@ MeshReport referenceReport(const std::vector<float>& xyz, const std::vector<std:
     n[1] = e[0][2] * e[1][0] - e[0][0] * e[1][2];
     n[2] = e[0][0] * e[1][1] - e[0][1] * e[1][0];
     long double longest = 0;
-    for (auto& edge : e) longest = std::max(longest, edge[0] * edge[0] + edge[1] * edge[1] + edge[2] * edge[2]);
+    for (auto& edge : e)
+      longest = std::max(longest, edge[0] * edge[0] + edge[1] * edge[1] + edge[2] * edge[2]);
     const long double area2 = std::sqrt(n[0] * n[0] + n[1] * n[1] + n[2] * n[2]);
-    if (longest == 0 || area2 <= kDegenerateTriangleRatio * longest) r.degenerateTriangles.push_back(std::uint32_t(t));
+    if (longest == 0 || area2 <= kDegenerateTriangleRatio * longest)
+      r.degenerateTriangles.push_back(std::uint32_t(t));
   }
   std::vector<bool> used(r.vertexCount);
   for (auto v : idx) used[v] = true;
@@ -120,19 +122,21 @@ TEST(MeshReport, ClosedBoxAndOpenBox) {
   EXPECT_EQ(closed.edgeCount, 72u);  // E = 3F/2
   EXPECT_EQ(closed.vertexCount, 26u);
   EXPECT_EQ(closed.boundaryEdges + closed.nonManifoldEdges + closed.inconsistentEdges, 0u);
-  EXPECT_EQ(closed.summary(), "48 triangles, 26 vertices, 72 edges, closed 2-manifold, 0 degenerate, 0 duplicate triangles");
+  EXPECT_EQ(closed.summary(),
+            "48 triangles, 26 vertices, 72 edges, closed 2-manifold, 0 degenerate, 0 duplicate triangles");
 
   auto open = box;
   open.indices.resize(open.indices.size() - 6);  // remove one quad: a square hole of 4 edges
-  open.xyz.insert(open.xyz.end(), {9, 9, 9});     // and an unused vertex
+  open.xyz.insert(open.xyz.end(), {9, 9, 9});    // and an unused vertex
   const MeshReport r = TriangleMesh::fromArrays(open.xyz, open.indices).report();
   EXPECT_FALSE(r.closed);
   EXPECT_FALSE(r.edgeCountMatchesClosedManifold);
   EXPECT_EQ(r.boundaryEdges, 4u);
   EXPECT_EQ(r.unreferencedVertices, 1u);
-  EXPECT_EQ(r.summary(),
-            "46 triangles, 27 vertices, 71 edges, open (4 boundary edges), 0 degenerate, 0 duplicate triangles, "
-            "1 unreferenced vertices");
+  EXPECT_EQ(
+      r.summary(),
+      "46 triangles, 27 vertices, 71 edges, open (4 boundary edges), 0 degenerate, 0 duplicate triangles, "
+      "1 unreferenced vertices");
 }
 
 TEST(MeshReport, DuplicateTrianglesInAnyOrderOrWinding) {
@@ -190,7 +194,7 @@ TEST(MeshReport, RealMeshesMatchManifest) {
     EXPECT_EQ(r.unreferencedVertices, m.unreferenced) << m.file;
     EXPECT_EQ(r.closed, m.closed) << m.file;
     EXPECT_EQ(r.edgeCountMatchesClosedManifold, m.closed) << m.file;
-    EXPECT_EQ(r.inconsistentEdges, 0u) << m.file;  // manifest: no inconsistently oriented edges
+    EXPECT_EQ(r.inconsistentEdges, 0u) << m.file;          // manifest: no inconsistently oriented edges
     EXPECT_TRUE(r.degenerateTriangles.empty()) << m.file;  // manifest: no zero-area triangles
   }
   if (found == 0) GTEST_SKIP() << "no real meshes in " << test::meshDirectory();
@@ -209,8 +213,9 @@ TEST(MeshReport, DerivedArmadillosAreSlightlyDirty) {
   GPUCOL_REQUIRE_MESH(path, "armadillo-27674.ply");
   const MeshReport r = loadMesh(path).report();
   EXPECT_EQ(r.boundaryEdges, 0u);
-  EXPECT_EQ(r.summary(), "27674 triangles, 13839 vertices, 41508 edges, not closed, 3 non-manifold edges, "
-                         "0 degenerate, 3 duplicate triangles");
+  EXPECT_EQ(r.summary(),
+            "27674 triangles, 13839 vertices, 41508 edges, not closed, 3 non-manifold edges, "
+            "0 degenerate, 3 duplicate triangles");
 }
 
 TEST(MeshReport, LargeMeshLoadsAndReportsQuickly) {

@@ -51,8 +51,9 @@ MeshArrays boxArrays(std::array<double, 3> h, std::array<double, 3> c, int n) {
 
 MeshArrays icosphereArrays(double r, int levels) {
   const double t = (1.0 + std::sqrt(5.0)) / 2.0;
-  std::vector<std::array<double, 3>> p = {{-1, t, 0}, {1, t, 0},  {-1, -t, 0}, {1, -t, 0}, {0, -1, t},  {0, 1, t},
-                                          {0, -1, -t}, {0, 1, -t}, {t, 0, -1}, {t, 0, 1},  {-t, 0, -1}, {-t, 0, 1}};
+  std::vector<std::array<double, 3>> p = {{-1, t, 0}, {1, t, 0}, {-1, -t, 0}, {1, -t, 0},
+                                          {0, -1, t}, {0, 1, t}, {0, -1, -t}, {0, 1, -t},
+                                          {t, 0, -1}, {t, 0, 1}, {-t, 0, -1}, {-t, 0, 1}};
   std::vector<std::array<std::uint32_t, 3>> f = {{0, 11, 5}, {0, 5, 1},  {0, 1, 7},   {0, 7, 10}, {0, 10, 11},
                                                  {1, 5, 9},  {5, 11, 4}, {11, 10, 2}, {10, 7, 6}, {7, 1, 8},
                                                  {3, 9, 4},  {3, 4, 2},  {3, 2, 6},   {3, 6, 8},  {3, 8, 9},
@@ -72,7 +73,8 @@ MeshArrays icosphereArrays(double r, int levels) {
     };
     std::vector<std::array<std::uint32_t, 3>> next;
     for (const auto& tri : f) {
-      const std::uint32_t ab = midpoint(tri[0], tri[1]), bc = midpoint(tri[1], tri[2]), ca = midpoint(tri[2], tri[0]);
+      const std::uint32_t ab = midpoint(tri[0], tri[1]), bc = midpoint(tri[1], tri[2]),
+                          ca = midpoint(tri[2], tri[0]);
       next.push_back({tri[0], ab, ca});
       next.push_back({tri[1], bc, ab});
       next.push_back({tri[2], ca, bc});
@@ -113,7 +115,9 @@ TempDir::~TempDir() {
   std::filesystem::remove_all(m_path, ec);
 }
 
-std::string TempDir::file(const std::string& name) const { return (std::filesystem::path(m_path) / name).string(); }
+std::string TempDir::file(const std::string& name) const {
+  return (std::filesystem::path(m_path) / name).string();
+}
 
 std::string TempDir::write(const std::string& name, const std::string& bytes) const {
   const std::string path = file(name);
@@ -142,7 +146,9 @@ MeshArrays readReferencePly(const std::string& path) {
     std::istringstream in(line);
     std::string keyword, name;
     in >> keyword >> name;
-    if (keyword == "format") { EXPECT_EQ(name, "binary_little_endian") << path; }
+    if (keyword == "format") {
+      EXPECT_EQ(name, "binary_little_endian") << path;
+    }
     if (keyword == "element" && name == "vertex") in >> vertices;
     if (keyword == "element" && name == "face") in >> faces;
   }

@@ -1,5 +1,7 @@
 // Validation of TriangleMesh::fromArrays (thesis §5.3.1): every bad input gives a MeshError whose
 // message names the source, the element and the value; valid but poor input is kept and reported.
+#include "gpucol/triangle_mesh.h"
+
 #include <gtest/gtest.h>
 
 #include <cmath>
@@ -7,7 +9,6 @@
 #include <string>
 
 #include "gpucol/mesh_error.h"
-#include "gpucol/triangle_mesh.h"
 #include "mesh_test_util.h"
 
 namespace gpucol {
@@ -16,7 +17,8 @@ namespace {
 using test::MeshArrays;
 
 /// The message of the MeshError that fromArrays throws, or a test failure if it does not throw one.
-std::string errorOf(std::vector<float> xyz, std::vector<std::uint32_t> indices, const std::string& name = "probe") {
+std::string errorOf(std::vector<float> xyz, std::vector<std::uint32_t> indices,
+                    const std::string& name = "probe") {
   try {
     TriangleMesh::fromArrays(std::move(xyz), std::move(indices), name);
   } catch (const MeshError& e) {
@@ -43,7 +45,8 @@ TEST(TriangleMeshValidation, ArrayLengths) {
 TEST(TriangleMeshValidation, NonFiniteCoordinates) {
   std::vector<float> xyz = kQuad;
   xyz[3 * 2 + 1] = std::numeric_limits<float>::quiet_NaN();
-  EXPECT_EQ(errorOf(xyz, {0, 1, 2, 0, 2, 3}, "part.ply"), "part.ply: vertex 2 has a non-finite coordinate y = nan");
+  EXPECT_EQ(errorOf(xyz, {0, 1, 2, 0, 2, 3}, "part.ply"),
+            "part.ply: vertex 2 has a non-finite coordinate y = nan");
   xyz = kQuad;
   xyz[3 * 3 + 2] = -std::numeric_limits<float>::infinity();
   EXPECT_EQ(errorOf(xyz, {0, 1, 2, 0, 2, 3}), "probe: vertex 3 has a non-finite coordinate z = -inf");
@@ -97,7 +100,8 @@ TEST(TriangleMeshTransform, RejectsWhatIsNotAProperRotation) {
     mesh.transformed({1, 0, 0, 0, 1, 0, 0, 0, 1}, {1e39, 0, 0});
     ADD_FAILURE() << "no MeshError";
   } catch (const MeshError& e) {
-    EXPECT_NE(std::string(e.what()).find("box: vertex 0 has a non-finite coordinate x = inf"), std::string::npos)
+    EXPECT_NE(std::string(e.what()).find("box: vertex 0 has a non-finite coordinate x = inf"),
+              std::string::npos)
         << e.what();
   }
 }
@@ -113,7 +117,8 @@ TEST(TriangleMeshTransform, MapsEveryVertex) {
     for (int i = 0; i < 3; ++i) {
       double expected = t[i];
       for (int j = 0; j < 3; ++j) expected += r[3 * i + j] * double(mesh.positions()[3 * v + j]);
-      EXPECT_NEAR(moved.positions()[3 * v + i], expected, 4e-6) << "vertex " << v;  // float rounding at |x| ~ 30
+      EXPECT_NEAR(moved.positions()[3 * v + i], expected, 4e-6)
+          << "vertex " << v;  // float rounding at |x| ~ 30
     }
   }
 }

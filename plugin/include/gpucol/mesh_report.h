@@ -17,19 +17,20 @@ inline constexpr double kDegenerateTriangleRatio = 1e-6;
 /// What a mesh is, topologically and numerically (thesis §5.3.1). Open and non-manifold meshes still
 /// collide; the report says so.
 struct MeshReport {
-  std::size_t vertexCount = 0;            ///< Vertices in the mesh.
-  std::size_t triangleCount = 0;          ///< Triangles in the mesh.
-  std::size_t edgeCount = 0;              ///< Distinct undirected edges.
-  std::size_t boundaryEdges = 0;          ///< Edges used by exactly one triangle.
-  std::size_t nonManifoldEdges = 0;       ///< Edges used by more than two triangles.
-  std::size_t inconsistentEdges = 0;      ///< Edges whose two triangles walk them the same way (flipped winding).
-  bool edgeCountMatchesClosedManifold = false;  ///< The thesis's quick check E == 3F/2.
+  std::size_t vertexCount = 0;        ///< Vertices in the mesh.
+  std::size_t triangleCount = 0;      ///< Triangles in the mesh.
+  std::size_t edgeCount = 0;          ///< Distinct undirected edges.
+  std::size_t boundaryEdges = 0;      ///< Edges used by exactly one triangle.
+  std::size_t nonManifoldEdges = 0;   ///< Edges used by more than two triangles.
+  std::size_t inconsistentEdges = 0;  ///< Edges whose two triangles walk them the same way (flipped winding).
+  bool edgeCountMatchesClosedManifold = false;     ///< The thesis's quick check E == 3F/2.
   std::vector<std::uint32_t> degenerateTriangles;  ///< Ids, ascending: flatness <= kDegenerateTriangleRatio.
-  std::vector<std::uint32_t> duplicateTriangles;   ///< Ids, ascending: same vertex set as an earlier triangle.
-  std::size_t unreferencedVertices = 0;   ///< Vertices no triangle uses.
-  bool closed = false;                    ///< Every edge used by exactly two triangles.
+  std::vector<std::uint32_t> duplicateTriangles;  ///< Ids, ascending: same vertex set as an earlier triangle.
+  std::size_t unreferencedVertices = 0;           ///< Vertices no triangle uses.
+  bool closed = false;                            ///< Every edge used by exactly two triangles.
 
-  /// One line a person can read, e.g. "1152 triangles, 576 vertices, 1728 edges, closed 2-manifold, 0 degenerate, ...".
+  /// One line a person can read, e.g. "1152 triangles, 576 vertices, 1728 edges, closed 2-manifold, 0
+  /// degenerate, ...".
   std::string summary() const;
 };
 

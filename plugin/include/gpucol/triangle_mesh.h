@@ -41,7 +41,8 @@ class TriangleMesh {
   /// The same mesh with every vertex mapped by p' = rotation * p + translation (rotation row-major,
   /// computed in double, stored as float). Throws MeshError unless rotation is a proper rotation
   /// (orthonormal to 1e-6, det +1) and the results are finite.
-  TriangleMesh transformed(const std::array<double, 9>& rotation, const std::array<double, 3>& translation) const;
+  TriangleMesh transformed(const std::array<double, 9>& rotation,
+                           const std::array<double, 3>& translation) const;
 
   /// The mesh moved into its principal frame (centre of mass at the origin, principal axes along x, y, z),
   /// so that a btRigidBody gets a diagonal inertia; `massProperties()` of the result has a diagonal tensor.

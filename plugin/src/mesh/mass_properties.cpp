@@ -20,8 +20,9 @@ constexpr double kMinRelativeVolume = 1e-12;
 
 }  // namespace
 
-MassProperties computeMassProperties(const std::vector<float>& positions, const std::vector<std::uint32_t>& indices,
-                                     const MeshReport& report, double density, const std::string& name) {
+MassProperties computeMassProperties(const std::vector<float>& positions,
+                                     const std::vector<std::uint32_t>& indices, const MeshReport& report,
+                                     double density, const std::string& name) {
   // Thesis §5.3.1: volume, centre of mass and inertia are only meaningful for a closed manifold.
   if (!(std::isfinite(density) && density > 0)) {
     std::ostringstream out;
@@ -31,7 +32,8 @@ MassProperties computeMassProperties(const std::vector<float>& positions, const 
   if (report.boundaryEdges > 0 || report.nonManifoldEdges > 0) {
     std::ostringstream out;
     out << "the mesh is not a closed manifold (" << report.boundaryEdges << " boundary edges, "
-        << report.nonManifoldEdges << " edges shared by more than two triangles), so it encloses no well-defined volume";
+        << report.nonManifoldEdges
+        << " edges shared by more than two triangles), so it encloses no well-defined volume";
     refuse(name, out.str());
   }
   if (report.inconsistentEdges > 0) {
@@ -62,10 +64,12 @@ MassProperties computeMassProperties(const std::vector<float>& positions, const 
   Eigen::Matrix3d secondMoment120 = Eigen::Matrix3d::Zero();
   const auto corner = [&](std::uint32_t v) -> Eigen::Vector3d {
     return Eigen::Vector3d(positions[3 * std::size_t(v)], positions[3 * std::size_t(v) + 1],
-                           positions[3 * std::size_t(v) + 2]) - reference;
+                           positions[3 * std::size_t(v) + 2]) -
+           reference;
   };
   for (std::size_t t = 0; t < indices.size() / 3; ++t) {
-    const Eigen::Vector3d a = corner(indices[3 * t]), b = corner(indices[3 * t + 1]), c = corner(indices[3 * t + 2]);
+    const Eigen::Vector3d a = corner(indices[3 * t]), b = corner(indices[3 * t + 1]),
+                          c = corner(indices[3 * t + 2]);
     const double det = a.dot(b.cross(c));
     const Eigen::Vector3d s = a + b + c;
     sixVolume += det;

@@ -15,7 +15,8 @@ MeshReport analyzeMesh(const std::vector<float>& positions, const std::vector<st
 
 /// Volume, centre of mass and inertia of a closed, consistently wound mesh of uniform density.
 /// Throws MeshError (naming `name`) when the report says the mesh cannot enclose a solid.
-MassProperties computeMassProperties(const std::vector<float>& positions, const std::vector<std::uint32_t>& indices,
-                                     const MeshReport& report, double density, const std::string& name);
+MassProperties computeMassProperties(const std::vector<float>& positions,
+                                     const std::vector<std::uint32_t>& indices, const MeshReport& report,
+                                     double density, const std::string& name);
 
 }  // namespace gpucol

@@ -54,7 +54,8 @@ PositionKey keyOf(const float* p) {
 
 std::vector<char> readWholeFile(const std::string& path) {
   std::error_code ec;
-  if (std::filesystem::is_directory(path, ec)) throw MeshError(path + ": cannot read mesh file: it is a directory");
+  if (std::filesystem::is_directory(path, ec))
+    throw MeshError(path + ": cannot read mesh file: it is a directory");
   std::ifstream in(path, std::ios::binary);
   if (!in) throw MeshError(path + ": cannot open mesh file: " + std::strerror(errno));
   std::vector<char> bytes((std::istreambuf_iterator<char>(in)), std::istreambuf_iterator<char>());
@@ -74,7 +75,10 @@ void appendMesh(const aiMesh& mesh, unsigned meshIndex, const aiMatrix4x4& trans
     if (face.mNumIndices != 3) {
       std::ostringstream out;
       out << path << ": mesh " << meshIndex << " ('" << mesh.mName.C_Str() << "') face " << f << " has "
-          << face.mNumIndices << (face.mNumIndices == 1 ? " index (a point)" : face.mNumIndices == 2 ? " indices (a line)" : " indices")
+          << face.mNumIndices
+          << (face.mNumIndices == 1   ? " index (a point)"
+              : face.mNumIndices == 2 ? " indices (a line)"
+                                      : " indices")
           << "; gpucol needs triangles (polygons are triangulated, points and lines are refused)";
       throw MeshError(out.str());
     }
@@ -99,7 +103,8 @@ void appendMesh(const aiMesh& mesh, unsigned meshIndex, const aiMatrix4x4& trans
     for (int k = 0; k < 3; ++k) {
       if (!std::isfinite(p[k])) {
         std::ostringstream out;
-        out << path << ": vertex " << base + v << " has a non-finite coordinate " << "xyz"[k] << " = " << p[k];
+        out << path << ": vertex " << base + v << " has a non-finite coordinate "
+            << "xyz"[k] << " = " << p[k];
         throw MeshError(out.str());
       }
     }
@@ -153,7 +158,8 @@ void appendNode(const aiScene& scene, const aiNode& node, const aiMatrix4x4& par
     const unsigned m = node.mMeshes[i];
     appendMesh(*scene.mMeshes[m], m, transform, path, xyz, indices);
   }
-  for (unsigned c = 0; c < node.mNumChildren; ++c) appendNode(scene, *node.mChildren[c], transform, path, xyz, indices);
+  for (unsigned c = 0; c < node.mNumChildren; ++c)
+    appendNode(scene, *node.mChildren[c], transform, path, xyz, indices);
 }
 
 }  // namespace
@@ -170,8 +176,10 @@ TriangleMesh loadMesh(const std::string& path) {
     // Other formats may reference side files (OBJ's .mtl), so assimp opens the path itself.
     scene = importer.ReadFile(path, kPostProcess);
   }
-  if (scene == nullptr) throw MeshError(path + ": assimp cannot read the mesh file: " + importer.GetErrorString());
-  if ((scene->mFlags & AI_SCENE_FLAGS_INCOMPLETE) != 0 || scene->mRootNode == nullptr || scene->mNumMeshes == 0)
+  if (scene == nullptr)
+    throw MeshError(path + ": assimp cannot read the mesh file: " + importer.GetErrorString());
+  if ((scene->mFlags & AI_SCENE_FLAGS_INCOMPLETE) != 0 || scene->mRootNode == nullptr ||
+      scene->mNumMeshes == 0)
     throw MeshError(path + ": the file holds no triangle mesh");
 
   std::vector<float> xyz;

@@ -1,7 +1,7 @@
 #include <algorithm>
-#include <tuple>
 #include <cmath>
 #include <sstream>
+#include <tuple>
 
 #include "mesh/mesh_analysis.h"
 
@@ -28,7 +28,8 @@ double flatness(const float* a, const float* b, const float* c) {
   const double e0[3] = {double(b[0]) - a[0], double(b[1]) - a[1], double(b[2]) - a[2]};
   const double e1[3] = {double(c[0]) - a[0], double(c[1]) - a[1], double(c[2]) - a[2]};
   const double e2[3] = {double(c[0]) - b[0], double(c[1]) - b[1], double(c[2]) - b[2]};
-  const double n[3] = {e0[1] * e1[2] - e0[2] * e1[1], e0[2] * e1[0] - e0[0] * e1[2], e0[0] * e1[1] - e0[1] * e1[0]};
+  const double n[3] = {e0[1] * e1[2] - e0[2] * e1[1], e0[2] * e1[0] - e0[0] * e1[2],
+                       e0[0] * e1[1] - e0[1] * e1[0]};
   const double twiceArea = std::sqrt(n[0] * n[0] + n[1] * n[1] + n[2] * n[2]);
   const auto sq = [](const double* e) { return e[0] * e[0] + e[1] * e[1] + e[2] * e[2]; };
   const double longest = std::max({sq(e0), sq(e1), sq(e2)});
@@ -93,7 +94,8 @@ MeshReport analyzeMesh(const std::vector<float>& positions, const std::vector<st
     return std::tie(x.v[0], x.v[1], x.v[2], x.id) < std::tie(y.v[0], y.v[1], y.v[2], y.id);
   });
   for (std::size_t i = 1; i < sorted.size(); ++i) {
-    if (std::equal(sorted[i].v, sorted[i].v + 3, sorted[i - 1].v)) report.duplicateTriangles.push_back(sorted[i].id);
+    if (std::equal(sorted[i].v, sorted[i].v + 3, sorted[i - 1].v))
+      report.duplicateTriangles.push_back(sorted[i].id);
   }
   std::sort(report.duplicateTriangles.begin(), report.duplicateTriangles.end());
 
@@ -115,7 +117,8 @@ std::string MeshReport::summary() const {
     if (nonManifoldEdges > 0) out << ", " << nonManifoldEdges << " non-manifold edges";
     if (inconsistentEdges > 0) out << ", " << inconsistentEdges << " inconsistently wound edges";
   }
-  out << ", " << degenerateTriangles.size() << " degenerate, " << duplicateTriangles.size() << " duplicate triangles";
+  out << ", " << degenerateTriangles.size() << " degenerate, " << duplicateTriangles.size()
+      << " duplicate triangles";
   if (unreferencedVertices > 0) out << ", " << unreferencedVertices << " unreferenced vertices";
   return out.str();
 }

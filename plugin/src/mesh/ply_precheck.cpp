@@ -37,7 +37,8 @@ enum class PlyFormat { kAscii, kBinaryLittle, kBinaryBig };
 int typeSize(const std::string& type) {
   if (type == "char" || type == "uchar" || type == "int8" || type == "uint8") return 1;
   if (type == "short" || type == "ushort" || type == "int16" || type == "uint16") return 2;
-  if (type == "int" || type == "uint" || type == "int32" || type == "uint32" || type == "float" || type == "float32")
+  if (type == "int" || type == "uint" || type == "int32" || type == "uint32" || type == "float" ||
+      type == "float32")
     return 4;
   if (type == "double" || type == "float64") return 8;
   return 0;
@@ -46,8 +47,10 @@ int typeSize(const std::string& type) {
 /// Reads an unsigned or signed list count of `bytes` bytes in the file's byte order.
 std::int64_t readCount(const unsigned char* p, int bytes, bool isSigned, bool bigEndian) {
   std::uint64_t value = 0;
-  for (int i = 0; i < bytes; ++i) value |= std::uint64_t(p[bigEndian ? i : bytes - 1 - i]) << (8 * (bytes - 1 - i));
-  if (isSigned && (value >> (8 * bytes - 1)) != 0) return std::int64_t(value) - (std::int64_t(1) << (8 * bytes));
+  for (int i = 0; i < bytes; ++i)
+    value |= std::uint64_t(p[bigEndian ? i : bytes - 1 - i]) << (8 * (bytes - 1 - i));
+  if (isSigned && (value >> (8 * bytes - 1)) != 0)
+    return std::int64_t(value) - (std::int64_t(1) << (8 * bytes));
   return std::int64_t(value);
 }
 
@@ -99,8 +102,8 @@ void checkBinary(const std::vector<PlyElement>& elements, const unsigned char* d
   }
 }
 
-void checkAscii(const std::vector<PlyElement>& elements, const char* data, std::size_t size, std::size_t offset,
-                const std::string& path) {
+void checkAscii(const std::vector<PlyElement>& elements, const char* data, std::size_t size,
+                std::size_t offset, const std::string& path) {
   // assimp reads an ASCII record per line; a record must be one line holding exactly its numbers.
   std::size_t line = 0;
   const auto nextLine = [&](std::vector<std::string>& tokens) {
@@ -133,11 +136,12 @@ void checkAscii(const std::vector<PlyElement>& elements, const char* data, std::
           continue;
         }
         char* end = nullptr;
-        const long items = owner.size() < tokens.size() ? std::strtol(tokens[owner.size()].c_str(), &end, 10) : -1;
+        const long items =
+            owner.size() < tokens.size() ? std::strtol(tokens[owner.size()].c_str(), &end, 10) : -1;
         if (owner.size() >= tokens.size() || *end != '\0' || items < 0) {
           std::ostringstream out;
-          out << "element '" << element.name << "' record " << i << " (line " << line << " of the body): list '"
-              << p.name << "' has no valid length";
+          out << "element '" << element.name << "' record " << i << " (line " << line
+              << " of the body): list '" << p.name << "' has no valid length";
           fail(path, out.str());
         }
         if (std::size_t(items) > tokens.size()) break;  // reported as a count mismatch below
@@ -156,8 +160,9 @@ void checkAscii(const std::vector<PlyElement>& elements, const char* data, std::
         const double value = std::strtod(tokens[k].c_str(), &end);
         if (*end != '\0' || !std::isfinite(value)) {
           std::ostringstream out;
-          out << "element '" << element.name << "' record " << i << " (line " << line << " of the body): property '"
-              << owner[k]->name << "' has the value '" << tokens[k] << "', not a finite number";
+          out << "element '" << element.name << "' record " << i << " (line " << line
+              << " of the body): property '" << owner[k]->name << "' has the value '" << tokens[k]
+              << "', not a finite number";
           fail(path, out.str());
         }
       }
@@ -193,10 +198,14 @@ void checkPlyStructure(const char* data, std::size_t size, const std::string& pa
     } else if (keyword == "format") {
       std::string name, version;
       in >> name >> version;
-      if (name == "ascii") format = PlyFormat::kAscii;
-      else if (name == "binary_little_endian") format = PlyFormat::kBinaryLittle;
-      else if (name == "binary_big_endian") format = PlyFormat::kBinaryBig;
-      else fail(path, "unknown format '" + name + "'");
+      if (name == "ascii")
+        format = PlyFormat::kAscii;
+      else if (name == "binary_little_endian")
+        format = PlyFormat::kBinaryLittle;
+      else if (name == "binary_big_endian")
+        format = PlyFormat::kBinaryBig;
+      else
+        fail(path, "unknown format '" + name + "'");
       formatSeen = true;
     } else if (keyword == "element") {
       PlyElement element;

@@ -15,15 +15,18 @@ const char* const kAxisNames[3] = {"x", "y", "z"};
 
 /// Rejects what no later stage could make sense of (thesis §5.3.1); the message names the source,
 /// the element and the value so a user can find it in the file.
-void validate(const std::vector<float>& xyz, const std::vector<std::uint32_t>& indices, const std::string& name) {
+void validate(const std::vector<float>& xyz, const std::vector<std::uint32_t>& indices,
+              const std::string& name) {
   if (xyz.size() % 3 != 0) {
     std::ostringstream out;
-    out << name << ": the coordinate array has " << xyz.size() << " floats, not a multiple of 3 (x y z per vertex)";
+    out << name << ": the coordinate array has " << xyz.size()
+        << " floats, not a multiple of 3 (x y z per vertex)";
     throw MeshError(out.str());
   }
   if (indices.size() % 3 != 0) {
     std::ostringstream out;
-    out << name << ": the index array has " << indices.size() << " entries, not a multiple of 3 (three per triangle)";
+    out << name << ": the index array has " << indices.size()
+        << " entries, not a multiple of 3 (three per triangle)";
     throw MeshError(out.str());
   }
   const std::size_t vertices = xyz.size() / 3, triangles = indices.size() / 3;
@@ -35,7 +38,8 @@ void validate(const std::vector<float>& xyz, const std::vector<std::uint32_t>& i
   for (std::size_t i = 0; i < xyz.size(); ++i) {
     if (!std::isfinite(xyz[i])) {
       std::ostringstream out;
-      out << name << ": vertex " << i / 3 << " has a non-finite coordinate " << kAxisNames[i % 3] << " = " << xyz[i];
+      out << name << ": vertex " << i / 3 << " has a non-finite coordinate " << kAxisNames[i % 3] << " = "
+          << xyz[i];
       throw MeshError(out.str());
     }
   }
@@ -53,8 +57,8 @@ void validate(const std::vector<float>& xyz, const std::vector<std::uint32_t>& i
       const int next = (k + 1) % 3;
       if (tri[k] == tri[next]) {
         std::ostringstream out;
-        out << name << ": triangle " << t << " repeats vertex index " << tri[k] << " (corners " << std::min(k, next)
-            << " and " << std::max(k, next) << ")";
+        out << name << ": triangle " << t << " repeats vertex index " << tri[k] << " (corners "
+            << std::min(k, next) << " and " << std::max(k, next) << ")";
         throw MeshError(out.str());
       }
     }
@@ -63,7 +67,8 @@ void validate(const std::vector<float>& xyz, const std::vector<std::uint32_t>& i
 
 }  // namespace
 
-TriangleMesh TriangleMesh::fromArrays(std::vector<float> xyz, std::vector<std::uint32_t> indices, std::string name) {
+TriangleMesh TriangleMesh::fromArrays(std::vector<float> xyz, std::vector<std::uint32_t> indices,
+                                      std::string name) {
   validate(xyz, indices, name);
   TriangleMesh mesh;
   mesh.m_positions = std::move(xyz);
