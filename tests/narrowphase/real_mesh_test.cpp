@@ -2,10 +2,6 @@
 // (adjacent triangles share vertices exactly: touching) and against a rotated, shifted copy of itself,
 // compared with the double-precision reference.
 
-#include <assimp/cimport.h>
-#include <assimp/mesh.h>
-#include <assimp/postprocess.h>
-#include <assimp/scene.h>
 #include <gtest/gtest.h>
 
 #include <Eigen/Geometry>
@@ -15,6 +11,7 @@
 #include <random>
 #include <vector>
 
+#include "gpucol/triangle_mesh.h"
 #include "narrowphase/triangle_contact.h"
 #include "narrowphase/triangle_intersection.h"
 #include "random_triangles.h"
@@ -26,26 +23,18 @@ namespace {
 
 using test::TriangleF;
 
-/// The triangles of a mesh file, read with assimp (the plugin's loader lives in the mesh module, which the
-/// near phase does not depend on), at most `limit` of them.
+/// The triangles of a mesh file, read with the plugin's loader, at most `limit` of them.
 std::vector<TriangleF> loadTriangles(const std::string& path, std::size_t limit) {
+  const TriangleMesh mesh = loadMesh(path);
   std::vector<TriangleF> triangles;
-  const aiScene* scene = aiImportFile(path.c_str(), aiProcess_Triangulate);
-  if (scene == nullptr) return triangles;
-  for (unsigned m = 0; m < scene->mNumMeshes; ++m) {
-    const aiMesh* mesh = scene->mMeshes[m];
-    for (unsigned f = 0; f < mesh->mNumFaces && triangles.size() < limit; ++f) {
-      const aiFace& face = mesh->mFaces[f];
-      if (face.mNumIndices != 3) continue;
-      TriangleF t;
-      for (int k = 0; k < 3; ++k) {
-        const aiVector3D& v = mesh->mVertices[face.mIndices[k]];
-        t[k] = Eigen::Vector3f(v.x, v.y, v.z);
-      }
-      triangles.push_back(t);
+  for (std::size_t t = 0; t < mesh.triangleCount() && triangles.size() < limit; ++t) {
+    TriangleF triangle;
+    for (int k = 0; k < 3; ++k) {
+      const float* v = mesh.positions().data() + 3 * std::size_t(mesh.indices()[3 * t + k]);
+      triangle[k] = Eigen::Vector3f(v[0], v[1], v[2]);
     }
+    triangles.push_back(triangle);
   }
-  aiReleaseImport(scene);
   return triangles;
 }
 
