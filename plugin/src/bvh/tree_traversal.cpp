@@ -28,6 +28,9 @@ struct NodePair {
 /// a few thousand independent subproblems keep every core busy even when most of them die after a test or two.
 constexpr std::size_t kParallelFront = 4096;
 
+/// Front pairs per parallel_for chunk.
+constexpr std::size_t kParallelGrain = 16;
+
 /// The map of one call, prepared once (thesis §3.3.3: with non-updated AABBs the rotation is set up once for the
 /// two hierarchies and reused by every box test), with |M| and the inflation.
 class BoxCarrier {
@@ -69,74 +72,92 @@ class BoxCarrier {
 };
 
 /// Touching counts as overlapping: the comparisons are exact on float, all rounding went into the inflation.
+/// Written with `&` rather than `&&`: the six comparisons are cheaper than the branches that would skip some of
+/// them, and the result feeds a branch-free push (Traverser::expand), so a wrong guess costs nothing.
 inline bool overlaps(const float* lo, const float* hi, const CarriedBox& b) {
-  return lo[0] <= b.max[0] && b.min[0] <= hi[0] && lo[1] <= b.max[1] && b.min[1] <= hi[1] && lo[2] <= b.max[2] &&
-         b.min[2] <= hi[2];
+  return (lo[0] <= b.max[0]) & (b.min[0] <= hi[0]) & (lo[1] <= b.max[1]) & (b.min[1] <= hi[1]) &
+         (lo[2] <= b.max[2]) & (b.min[2] <= hi[2]);
+}
+
+/// Stack entries one depth-first descent below one start pair can need: each expansion pops one pair and pushes
+/// at most four, and descends at least one of the trees by a level, so at most depthA + depthB expansions lie on
+/// one path and the stack never holds more than 3 per expansion on the path, plus the start pair.
+std::size_t stackBound(const AabbTree& a, const AabbTree& b) {
+  return 3 * (static_cast<std::size_t>(a.depth()) + static_cast<std::size_t>(b.depth())) + 1;
 }
 
 /// Depth-first simultaneous descent from a set of overlapping node pairs (thesis Alg. 5.1), with an explicit stack.
+///
+/// The stack is a plain array of stackBound() entries, and children are pushed without a branch: the entry is
+/// written at the top in any case and the top moves up by the outcome of the box test. The tests come out about
+/// half and half, so a branch per test is mispredicted about half the time, which cost more than the test itself.
 class Traverser {
  public:
   Traverser(const AabbTree& a, const AabbTree& b, const BoxCarrier& carrier)
       : m_nodesA(a.nodes().data()), m_nodesB(b.nodes().data()), m_entriesA(a.leafEntries().data()),
         m_entriesB(b.leafEntries().data()), m_carrier(carrier) {}
 
-  /// Expands one overlapping pair by one level: children pairs that overlap go to `next`, leaf pairs to `out`.
-  template <typename Sink>
-  void expand(const NodePair& pair, Sink& next, std::vector<TrianglePair>& out, std::uint64_t& tests) const {
+  /// Expands one overlapping pair by one level: children pairs that overlap are written from `top` on (room for
+  /// four is needed), leaf pairs go to `out`. Returns the new top.
+  NodePair* expand(const NodePair& pair, NodePair* top, std::vector<TrianglePair>& out, std::uint64_t& tests) const {
     const AabbNode& na = m_nodesA[pair.a];
     const AabbNode& nb = m_nodesB[pair.b];
-    if (na.isLeaf()) {
-      if (nb.isLeaf()) {
-        emitLeafPair(na, nb, pair.boxB, out, tests);
-        return;
+    const bool leafA = na.isLeaf();
+    const bool leafB = nb.isLeaf();
+    if (!leafA && !leafB) {
+      // Node against node: both descend at once, four tests (thesis Alg. 5.1); each of B's children is carried
+      // once for two tests. "Descend the larger box" (thesis §3.3.2) was measured on the thesis scene
+      // (armadillo-27674 twice, 0.3 x size apart, 0.5 rad): 92485 tests against 87657 for simultaneous descent,
+      // and no faster, since it pays a size comparison per pair and carries a child of B for each single test
+      // where B descends, while here each carried child serves two tests.
+      const std::uint32_t a0 = pair.a + 1, a1 = na.first;
+      const AabbNode& childA0 = m_nodesA[a0];
+      const AabbNode& childA1 = m_nodesA[a1];
+      const std::uint32_t childrenB[2] = {pair.b + 1, nb.first};
+      for (std::uint32_t cb : childrenB) {
+        const CarriedBox box = m_carrier.carry(m_nodesB[cb].min, m_nodesB[cb].max);
+        *top = {a0, cb, box};
+        top += overlaps(childA0.min, childA0.max, box);
+        *top = {a1, cb, box};
+        top += overlaps(childA1.min, childA1.max, box);
       }
+      tests += 4;
+      return top;
+    }
+    if (leafA && leafB) {
+      emitLeafPair(na, nb, pair.boxB, out, tests);
+      return top;
+    }
+    if (leafA) {
       // Leaf against node: two tests, B's children carried.
       const std::uint32_t childrenB[2] = {pair.b + 1, nb.first};
       for (std::uint32_t cb : childrenB) {
-        const AabbNode& child = m_nodesB[cb];
-        const CarriedBox box = m_carrier.carry(child.min, child.max);
-        ++tests;
-        if (overlaps(na.min, na.max, box)) next.push_back({pair.a, cb, box});
+        const CarriedBox box = m_carrier.carry(m_nodesB[cb].min, m_nodesB[cb].max);
+        *top = {pair.a, cb, box};
+        top += overlaps(na.min, na.max, box);
       }
-      return;
+      tests += 2;
+      return top;
     }
+    // Node against leaf: two tests, B's box already carried.
     const std::uint32_t childrenA[2] = {pair.a + 1, na.first};
-    if (nb.isLeaf()) {
-      // Node against leaf: two tests, B's box already carried.
-      for (std::uint32_t ca : childrenA) {
-        const AabbNode& child = m_nodesA[ca];
-        ++tests;
-        if (overlaps(child.min, child.max, pair.boxB)) next.push_back({ca, pair.b, pair.boxB});
-      }
-      return;
+    for (std::uint32_t ca : childrenA) {
+      *top = {ca, pair.b, pair.boxB};
+      top += overlaps(m_nodesA[ca].min, m_nodesA[ca].max, pair.boxB);
     }
-    // Node against node: both descend at once, four tests (thesis Alg. 5.1); each of B's children is carried once
-    // for two tests. "Descend the larger box" (thesis §3.3.2) was measured on the thesis scene (armadillo-27674
-    // twice, 0.3 x size apart, 0.5 rad): 92485 tests against 87657 for simultaneous descent, and no faster, since
-    // it pays a size comparison per pair and carries a child of B for each single test where B descends, while
-    // here each carried child serves two tests.
-    const std::uint32_t childrenB[2] = {pair.b + 1, nb.first};
-    for (std::uint32_t cb : childrenB) {
-      const AabbNode& childB = m_nodesB[cb];
-      const CarriedBox box = m_carrier.carry(childB.min, childB.max);
-      for (std::uint32_t ca : childrenA) {
-        const AabbNode& childA = m_nodesA[ca];
-        ++tests;
-        if (overlaps(childA.min, childA.max, box)) next.push_back({ca, cb, box});
-      }
-    }
+    tests += 2;
+    return top;
   }
 
-  /// Runs the depth-first descent below `start` (already known to overlap) to the end.
-  void run(const NodePair& start, std::vector<NodePair>& stack, std::vector<TrianglePair>& out,
-           std::uint64_t& tests) const {
-    stack.clear();
-    stack.push_back(start);
-    while (!stack.empty()) {
-      const NodePair pair = stack.back();
-      stack.pop_back();
-      expand(pair, stack, out, tests);
+  /// Runs the depth-first descent below `start` (already known to overlap) to the end; `stack` holds at least
+  /// stackBound() entries.
+  void run(const NodePair& start, NodePair* stack, std::vector<TrianglePair>& out, std::uint64_t& tests) const {
+    NodePair* top = stack;
+    *top++ = start;
+    while (top != stack) {
+      --top;
+      const NodePair pair = *top;
+      top = expand(pair, top, out, tests);
     }
   }
 
@@ -211,25 +232,29 @@ void findCandidatePairs(const AabbTree& a, const AabbTree& b, const AffineMap& b
     return;
   }
 
+  const std::size_t bound = stackBound(a, b);
   if (!parallel) {
-    std::vector<NodePair> stack;
-    traverser.run(root, stack, out, tests);
+    std::vector<NodePair> stack(bound);
+    traverser.run(root, stack.data(), out, tests);
   } else {
     // Breadth-first until the front holds enough independent pairs (thesis §5.4.2 expands level by level too),
     // then each worker finishes its share depth first with its own stack and output.
     std::vector<NodePair> front{root}, next;
     while (!front.empty() && front.size() < kParallelFront) {
-      next.clear();
-      for (const NodePair& pair : front) traverser.expand(pair, next, out, tests);
+      next.resize(4 * front.size());
+      NodePair* top = next.data();
+      for (const NodePair& pair : front) top = traverser.expand(pair, top, out, tests);
+      next.resize(static_cast<std::size_t>(top - next.data()));
       front.swap(next);
     }
     if (!front.empty()) {
       tbb::enumerable_thread_specific<WorkerState> workers;
-      tbb::parallel_for(tbb::blocked_range<std::size_t>(0, front.size(), 16),
+      tbb::parallel_for(tbb::blocked_range<std::size_t>(0, front.size(), kParallelGrain),
                         [&](const tbb::blocked_range<std::size_t>& range) {
                           WorkerState& w = workers.local();
+                          w.stack.resize(bound);
                           for (std::size_t i = range.begin(); i != range.end(); ++i) {
-                            traverser.run(front[i], w.stack, w.out, w.tests);
+                            traverser.run(front[i], w.stack.data(), w.out, w.tests);
                           }
                         });
       std::size_t total = out.size();
