@@ -6,9 +6,11 @@
 #include "b3_gpu_grid_peer.h"
 
 #include <Bullet3OpenCL/BroadphaseCollision/b3GpuGridBroadphase.h>
+#include <Bullet3Common/b3Logging.h>
 #include <Bullet3OpenCL/Initialize/b3OpenCLUtils.h>
 
 #include <algorithm>
+#include <cstdio>
 #include <filesystem>
 #include <stdexcept>
 
@@ -36,6 +38,9 @@ class TunableGridBroadphase : public b3GpuGridBroadphase {
   }
 };
 
+/// Bullet3 prints its kernel compilation progress with b3Printf (stdout); the benchmark's tables own stdout.
+void printToStderr(const char* message) { std::fputs(message, stderr); }
+
 /// Large proxies: boxes whose largest extent is more than this many times the median largest extent.
 constexpr float kLargeFactor = 4.0f;
 
@@ -59,6 +64,7 @@ B3GpuGridPeer::B3GpuGridPeer(const std::string& deviceFilter) : m_impl(std::make
   static std::string cachePath;
   cachePath = cache.string() + "/";
   b3OpenCLUtils::setCachePath(cachePath.c_str());
+  b3SetCustomPrintfFunc(printToStderr);
 
   cl_int err = 0;
   const int platforms = b3OpenCLUtils::getNumPlatforms(&err);

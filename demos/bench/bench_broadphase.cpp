@@ -1,6 +1,7 @@
 // gpucol-bench broadphase: per step (setAabb of every proxy + calculateOverlappingPairs) of
-// gpucol::GridBroadphase (CPU, and OpenCL when a pair finder is registered) beside btDbvtBroadphase and
-// bt32BitAxisSweep3 on the same moving boxes; median ms, ratios, pair counts, memory (issue 4, "Speed").
+// gpucol::GridBroadphase (CPU, and OpenCL when a pair finder is registered) beside btDbvtBroadphase,
+// bt32BitAxisSweep3 and Bullet3's b3GpuGridBroadphase (b3_gpu_grid_peer.h, same OpenCL device) on the same
+// moving boxes; median ms, ratios, pair counts, memory (issue 4, "Speed").
 #include <btBulletCollisionCommon.h>
 
 #include <algorithm>
@@ -16,9 +17,12 @@
 #include <string>
 #include <vector>
 
+#include "b3_gpu_grid_peer.h"
 #include "bench_commands.h"
+#include "bench_stats.h"
 #include "broadphase/grid_pair_finder.h"
 #include "gpucol/grid_broadphase.h"
+#include "opencl/host/opencl_context.h"
 
 namespace gpucol::bench {
 namespace {
@@ -99,11 +103,18 @@ using Clock = std::chrono::steady_clock;
 struct Result {
   std::string broadphase;
   double medianMs = 0;
-  std::size_t pairs = 0;        // pairs in the cache after the last step
+  std::size_t pairs = 0;        // pairs reported after the last step (in the cache, or by the b3 peer)
   std::size_t realPairs = 0;    // of those, the ones whose AABBs really overlap
   std::size_t memoryBytes = 0;  // 0 where not known
-  bool skipped = false;
+  std::string note;             // why a broad phase did not run ("" when it ran)
 };
+
+Result notRun(const std::string& label, const std::string& why) {
+  Result r;
+  r.broadphase = label;
+  r.note = why;
+  return r;
+}
 
 Result run(const std::string& label, btBroadphaseInterface& bp, Scene scene, int steps,
            const std::function<std::size_t()>& memory = nullptr) {
@@ -125,10 +136,9 @@ Result run(const std::string& label, btBroadphaseInterface& bp, Scene scene, int
     bp.calculateOverlappingPairs(&dispatcher);
     ms.push_back(std::chrono::duration<double, std::milli>(Clock::now() - start).count());
   }
-  std::sort(ms.begin(), ms.end());
   Result r;
   r.broadphase = label;
-  r.medianMs = ms[ms.size() / 2];
+  r.medianMs = median(ms);
   btOverlappingPairCache* cache = bp.getOverlappingPairCache();
   r.pairs = std::size_t(cache->getNumOverlappingPairs());
   for (int i = 0; i < cache->getNumOverlappingPairs(); ++i) {
@@ -139,6 +149,61 @@ Result run(const std::string& label, btBroadphaseInterface& bp, Scene scene, int
   if (memory) r.memoryBytes = memory();
   // No destroyProxy loop: Bullet's caches scan every pair per removed proxy (quadratic teardown, the same
   // for every broad phase here); the broad phases free their proxies when they are destroyed.
+  return r;
+}
+
+/// The scene's boxes as the plain arrays b3GpuGridBroadphase's peer reads (all active, default filters).
+struct SceneArrays {
+  std::vector<float> lo[3], hi[3];
+  std::vector<std::int32_t> group, mask;
+  std::vector<std::uint8_t> flags;
+
+  explicit SceneArrays(std::size_t n) : group(n, btBroadphaseProxy::DefaultFilter), mask(n, btBroadphaseProxy::AllFilter),
+                                        flags(n, kProxyActive) {
+    for (int a = 0; a < 3; ++a) lo[a].resize(n), hi[a].resize(n);
+  }
+  void store(const Scene& s) {
+    for (std::size_t i = 0; i < s.centre.size(); ++i)
+      for (int a = 0; a < 3; ++a) lo[a][i] = s.centre[i][a] - s.half[i][a], hi[a][i] = s.centre[i][a] + s.half[i][a];
+  }
+  ProxyArrays view() const {
+    ProxyArrays v;
+    v.count = std::uint32_t(flags.size());
+    v.minX = lo[0].data(), v.minY = lo[1].data(), v.minZ = lo[2].data();
+    v.maxX = hi[0].data(), v.maxY = hi[1].data(), v.maxZ = hi[2].data();
+    v.group = group.data(), v.mask = mask.data(), v.flags = flags.data();
+    return v;
+  }
+};
+
+/// Bullet3's b3GpuGridBroadphase through B3GpuGridPeer: a step is writing the moved boxes and uploading
+/// them (its setAabb) plus its calculateOverlappingPairs; pairs are the peer's, real pairs those of them
+/// whose boxes overlap.
+Result runB3(const std::string& label, B3GpuGridPeer& peer, Scene scene, int steps) {
+  SceneArrays arrays(scene.centre.size());
+  arrays.store(scene);
+  peer.setBoxes(arrays.view());  // creates the proxies, not timed
+  peer.step();
+  std::vector<double> ms;
+  std::size_t found = 0;
+  for (int t = 0; t < steps; ++t) {
+    scene.advance(scene, t);
+    const auto start = Clock::now();
+    arrays.store(scene);
+    peer.setBoxes(arrays.view());
+    found = peer.step();
+    ms.push_back(std::chrono::duration<double, std::milli>(Clock::now() - start).count());
+  }
+  Result r;
+  r.broadphase = label;
+  r.medianMs = median(ms);
+  r.pairs = found;
+  const ProxyArrays v = arrays.view();
+  for (std::uint64_t key : peer.pairs()) {
+    const std::uint32_t a = std::uint32_t(key >> 32), b = std::uint32_t(key);
+    r.realPairs += v.minX[a] <= v.maxX[b] && v.minX[b] <= v.maxX[a] && v.minY[a] <= v.maxY[b] && v.minY[b] <= v.maxY[a] &&
+                   v.minZ[a] <= v.maxZ[b] && v.minZ[b] <= v.maxZ[a];
+  }
   return r;
 }
 
@@ -154,21 +219,26 @@ std::vector<std::string> parseNames(const std::string& text) {
   std::vector<std::string> v;
   std::stringstream ss(text);
   std::string item;
-  while (std::getline(ss, item, ',')) v.push_back(item);
+  while (std::getline(ss, item, ','))
+    if (!item.empty()) v.push_back(item);
   return v;
 }
 
 struct Options {
   std::string sizes = "1000,10000,100000";
   std::string scenes = "uniform,column,mixed";
-  std::string peers = "dbvt,sap";
+  std::string runs = "cpu,opencl,dbvt,sap,b3";
   int steps = 7;
   std::string csv;
   std::string cellRule = "size";
   std::string output = "compacted";
   std::string sqrtMode = "double";
+  std::string device;
   int bruteForceBelow = Config{}.bruteForceBelow;
   std::size_t peerMax = 1000000;
+  // bt32BitAxisSweep3 inserts each new proxy by walking its edges down the three sorted axes: n proxies
+  // cost O(n^2) to create (measured here: 30K take 14 s, so 100K would take minutes), so it is left out above this.
+  std::size_t sapMax = 30000;
 };
 
 void runAll(const Options& o) {
@@ -176,10 +246,39 @@ void runAll(const Options& o) {
   if (!o.csv.empty()) {
     csv.open(o.csv);
     if (!csv) throw std::runtime_error("cannot write " + o.csv);
-    csv << "scene,n,broadphase,median_ms,ratio_vs_gpucol_cpu,pairs,real_pairs,bytes_per_proxy_minus_8_per_pair\n";
+    csv << "scene,n,broadphase,median_ms,ratio_vs_gpucol_cpu,pairs,real_pairs,bytes_per_proxy_minus_8_per_pair,note\n";
   }
-  const bool haveOpenCl = makeOpenClPairFinder(Config{}) != nullptr;
-  std::printf("%-8s %9s %-16s %11s %9s %11s %11s %9s\n", "scene", "N", "broadphase", "median ms", "x gpucol", "pairs",
+  const std::vector<std::string> runs = parseNames(o.runs);
+  auto wanted = [&](const char* name) { return std::find(runs.begin(), runs.end(), name) != runs.end(); };
+  for (const std::string& name : runs)
+    if (name != "cpu" && name != "opencl" && name != "dbvt" && name != "sap" && name != "b3")
+      throw std::runtime_error("unknown broad phase " + name + " (cpu, opencl, dbvt, sap, b3)");
+
+  // Ours on OpenCL and Bullet3's peer run on the same device: the one gpucol's OpenCL layer chooses.
+  Config base;
+  base.openclDevice = o.device;
+  base.bruteForceBelow = o.bruteForceBelow;
+  std::string openClWhy;
+  std::string deviceName;
+  if (wanted("opencl") || wanted("b3")) {
+    if (opencl::OpenClContext* context = opencl::OpenClContext::tryGet(o.device)) {
+      deviceName = context->deviceName();
+      if (!makeOpenClPairFinder(base)) openClWhy = "not run: no OpenCL pair finder registered";
+    } else {
+      openClWhy = "not run: no usable OpenCL device";
+    }
+  }
+  std::unique_ptr<B3GpuGridPeer> b3;
+  std::string b3Why = openClWhy;
+  if (wanted("b3") && b3Why.empty()) {
+    try {
+      b3 = std::make_unique<B3GpuGridPeer>(deviceName);
+    } catch (const std::exception& e) {
+      b3Why = std::string("not run: ") + e.what();
+    }
+  }
+  std::printf("OpenCL device: %s\n", deviceName.empty() ? "(none)" : deviceName.c_str());
+  std::printf("%-8s %9s %-18s %11s %9s %11s %11s %9s\n", "scene", "N", "broadphase", "median ms", "x gpucol", "pairs",
               "real pairs", "B/proxy");
   for (const std::string& sceneName : parseNames(o.scenes))
     for (std::size_t n : parseList(o.sizes)) {
@@ -194,54 +293,67 @@ void runAll(const Options& o) {
       tuning.densityCellSize = o.cellRule == "density";
       tuning.bitMaskOutput = o.output == "bitmask";
       tuning.newtonSqrt = o.sqrtMode == "newton";
-      {
-        Config config;
-        config.broadphaseBackend = Backend::Cpu;
-        config.bruteForceBelow = o.bruteForceBelow;
-        GridBroadphase grid(config);
-        grid.setTuning(tuning);
-        results.push_back(run("gpucol-cpu", grid, make(), o.steps, [&] { return grid.stats().memoryBytes; }));
-      }
-      if (haveOpenCl) {
-        Config config;
-        config.broadphaseBackend = Backend::OpenCL;
-        config.bruteForceBelow = o.bruteForceBelow;
-        GridBroadphase grid(config);
-        grid.setTuning(tuning);
-        results.push_back(run("gpucol-opencl", grid, make(), o.steps, [&] { return grid.stats().memoryBytes; }));
-      }
-      for (const std::string& peer : parseNames(o.peers)) {
-        if (n > o.peerMax) {
-          Result r;
-          r.broadphase = peer;
-          r.skipped = true;
-          results.push_back(r);
+      for (const Backend backend : {Backend::Cpu, Backend::OpenCL}) {
+        const bool cpu = backend == Backend::Cpu;
+        const std::string label = cpu ? "gpucol-cpu" : "gpucol-opencl";
+        if (!wanted(cpu ? "cpu" : "opencl")) continue;
+        if (!cpu && !openClWhy.empty()) {
+          results.push_back(notRun(label, openClWhy));
           continue;
         }
-        if (peer == "dbvt") {
+        Config config = base;
+        config.broadphaseBackend = backend;
+        GridBroadphase grid(config);
+        grid.setTuning(tuning);
+        results.push_back(run(label, grid, make(), o.steps, [&] { return grid.stats().memoryBytes; }));
+        if (!cpu && !grid.stats().usedOpenCl) results.back().note = "ran on the CPU: OpenCL path fell back";
+      }
+      if (wanted("dbvt")) {
+        if (n > o.peerMax) {
+          results.push_back(notRun("btDbvt", "not run: above --peer-max"));
+        } else {
           btDbvtBroadphase dbvt;
           results.push_back(run("btDbvt", dbvt, make(), o.steps));
-        } else if (peer == "sap") {
+        }
+      }
+      if (wanted("sap")) {
+        if (n > o.sapMax) {
+          results.push_back(notRun("bt32BitAxisSweep3", "not run: setup O(n^2) (above --sap-max)"));
+        } else {
           Scene sc = make();
           if (n + 2 > 2147483646u) throw std::runtime_error("too many proxies for bt32BitAxisSweep3");
           bt32BitAxisSweep3 sap(sc.lo, sc.hi, unsigned(n + 2));
           results.push_back(run("bt32BitAxisSweep3", sap, sc, o.steps));
-        } else {
-          throw std::runtime_error("unknown peer " + peer + " (dbvt, sap)");
         }
       }
-      const double base = results[0].medianMs;
+      if (wanted("b3")) {
+        if (!b3)
+          results.push_back(notRun("b3GpuGrid", b3Why));
+        else if (n > o.peerMax)
+          results.push_back(notRun("b3GpuGrid", "not run: above --peer-max"));
+        else
+          results.push_back(runB3("b3GpuGrid", *b3, make(), o.steps));
+      }
+      const double reference = !results.empty() && results[0].note.empty() ? results[0].medianMs : 0.0;
       for (const Result& r : results) {
-        const double perProxy = r.memoryBytes ? (double(r.memoryBytes) - 8.0 * double(r.pairs)) / double(n) : 0.0;
-        if (r.skipped) {
-          std::printf("%-8s %9zu %-16s %11s\n", sceneName.c_str(), n, r.broadphase.c_str(), "skipped");
+        if (!r.note.empty() && r.medianMs == 0) {
+          std::printf("%-8s %9zu %-18s %s\n", sceneName.c_str(), n, r.broadphase.c_str(), r.note.c_str());
+          if (csv) csv << sceneName << ',' << n << ',' << r.broadphase << ",,,,,," << r.note << '\n';
           continue;
         }
-        std::printf("%-8s %9zu %-16s %11.3f %9.2f %11zu %11zu %9.1f\n", sceneName.c_str(), n, r.broadphase.c_str(),
-                    r.medianMs, r.medianMs / base, r.pairs, r.realPairs, perProxy);
+        // Memory is known for GridBroadphase only; the others show "-" (empty in the CSV).
+        std::string perProxy = "-", perProxyCsv;
+        if (r.memoryBytes) {
+          char text[32];
+          std::snprintf(text, sizeof text, "%.1f", (double(r.memoryBytes) - 8.0 * double(r.pairs)) / double(n));
+          perProxy = perProxyCsv = text;
+        }
+        const double ratio = reference > 0 ? r.medianMs / reference : 0.0;
+        std::printf("%-8s %9zu %-18s %11.3f %9.2f %11zu %11zu %9s %s\n", sceneName.c_str(), n, r.broadphase.c_str(),
+                    r.medianMs, ratio, r.pairs, r.realPairs, perProxy.c_str(), r.note.c_str());
         if (csv)
-          csv << sceneName << ',' << n << ',' << r.broadphase << ',' << r.medianMs << ',' << r.medianMs / base << ','
-              << r.pairs << ',' << r.realPairs << ',' << perProxy << '\n';
+          csv << sceneName << ',' << n << ',' << r.broadphase << ',' << r.medianMs << ',' << ratio << ',' << r.pairs << ','
+              << r.realPairs << ',' << perProxyCsv << ',' << r.note << '\n';
       }
       std::fflush(stdout);
     }
@@ -249,20 +361,48 @@ void runAll(const Options& o) {
 
 const CommandRegistration kRegistration([](CLI::App& app) {
   auto options = std::make_shared<Options>();
-  CLI::App* cmd = app.add_subcommand("broadphase", "GridBroadphase beside btDbvtBroadphase and bt32BitAxisSweep3");
-  cmd->add_option("--n", options->sizes, "comma-separated proxy counts (1e6 allowed)");
-  cmd->add_option("--scenes", options->scenes, "comma-separated scenes: uniform, column, mixed");
-  cmd->add_option("--peers", options->peers, "comma-separated Bullet peers: dbvt, sap (empty for none)");
-  cmd->add_option("--steps", options->steps, "timed steps per case (median reported)")->check(CLI::PositiveNumber);
+  CLI::App* cmd = app.add_subcommand(
+      "broadphase",
+      "Per step (setAabb of every proxy + calculateOverlappingPairs), median ms of gpucol::GridBroadphase on the "
+      "CPU and through OpenCL beside btDbvtBroadphase, bt32BitAxisSweep3 and Bullet3's b3GpuGridBroadphase (same "
+      "OpenCL device), on moving boxes.");
+  cmd->footer(
+      "Columns: 'x gpucol' = median ms / gpucol-cpu's median ms (above 1: slower than gpucol-cpu); 'pairs' = pairs "
+      "in the pair cache after the last step (b3GpuGrid: pairs it found); 'real pairs' = of those, the pairs whose "
+      "AABBs overlap (btDbvt keeps fattened, stale pairs); 'B/proxy' = (bytes held by GridBroadphase - 8 x pairs) / "
+      "N. A broad phase that does not run says why.\n"
+      "Example: gpucol-bench broadphase --n 1000,10000,100000 --scenes uniform --csv bp.csv");
+  cmd->add_option("--n", options->sizes, "comma-separated proxy counts (1e6 allowed)")->capture_default_str();
+  cmd->add_option("--scenes", options->scenes, "comma-separated scenes: uniform (cloud), column (falling, the paper's), "
+                                               "mixed (sizes, a few huge boxes)")
+      ->capture_default_str();
+  cmd->add_option("--run", options->runs,
+                  "comma-separated broad phases: cpu, opencl (gpucol), dbvt (btDbvtBroadphase), sap "
+                  "(bt32BitAxisSweep3), b3 (b3GpuGridBroadphase)")
+      ->capture_default_str();
+  cmd->add_option("--steps", options->steps, "timed steps per case (median reported)")
+      ->check(CLI::PositiveNumber)
+      ->capture_default_str();
   cmd->add_option("--csv", options->csv, "also write the table to this CSV file");
+  cmd->add_option("--device", options->device,
+                  "OpenCL device name substring (Config::openclDevice; GPUCOL_OPENCL_DEVICE overrides); b3 uses "
+                  "the same device");
   cmd->add_option("--cell-rule", options->cellRule, "grid cell size rule: size or density")
-      ->check(CLI::IsMember({"size", "density"}));
+      ->check(CLI::IsMember({"size", "density"}))
+      ->capture_default_str();
   cmd->add_option("--output", options->output, "candidate output: compacted or bitmask")
-      ->check(CLI::IsMember({"compacted", "bitmask"}));
+      ->check(CLI::IsMember({"compacted", "bitmask"}))
+      ->capture_default_str();
   cmd->add_option("--sqrt", options->sqrtMode, "mapping-function square root: double or newton")
-      ->check(CLI::IsMember({"double", "newton"}));
-  cmd->add_option("--brute-force-below", options->bruteForceBelow, "Config::bruteForceBelow")->check(CLI::NonNegativeNumber);
-  cmd->add_option("--peer-max", options->peerMax, "skip the Bullet peers above this many proxies");
+      ->check(CLI::IsMember({"double", "newton"}))
+      ->capture_default_str();
+  cmd->add_option("--brute-force-below", options->bruteForceBelow, "Config::bruteForceBelow")
+      ->check(CLI::NonNegativeNumber)
+      ->capture_default_str();
+  cmd->add_option("--peer-max", options->peerMax, "skip btDbvt and b3GpuGrid above this many proxies")
+      ->capture_default_str();
+  cmd->add_option("--sap-max", options->sapMax, "skip bt32BitAxisSweep3 above this many proxies (its setup is O(n^2))")
+      ->capture_default_str();
   cmd->callback([options] { runAll(*options); });
 });
 
