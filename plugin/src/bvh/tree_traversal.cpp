@@ -6,22 +6,33 @@
 
 #include <algorithm>
 #include <cmath>
+#include <cstddef>
+
+#if defined(__SSE2__)
+#include <emmintrin.h>
+#endif
 
 namespace gpucol {
 namespace {
 
-/// A box of B carried into A's frame.
+/// A box of B carried into A's frame. Lane 3 of each corner is padding, so that a corner is one 4-float load.
 struct CarriedBox {
-  float min[3];
-  float max[3];
+  float min[4];
+  float max[4];
 };
 
 /// A pair of nodes whose boxes are already known to overlap, with B's box carried (so it is carried once).
 struct NodePair {
+  CarriedBox boxB;
   std::uint32_t a;
   std::uint32_t b;
-  CarriedBox boxB;
 };
+
+// The box code reads a node's or a leaf entry's corner as 4 floats: min[0..2] + max[0], max[0..2] + the index
+// that follows. Both reads stay inside the struct.
+static_assert(offsetof(AabbNode, max) == 12 && sizeof(AabbNode) >= 28, "AabbNode corners must be 4-float readable");
+static_assert(offsetof(AabbLeafEntry, max) == 12 && sizeof(AabbLeafEntry) >= 28,
+              "AabbLeafEntry corners must be 4-float readable");
 
 /// Front size at which the breadth-first expansion stops and the parallel depth-first traversal starts:
 /// a few thousand independent subproblems keep every core busy even when most of them die after a test or two.
@@ -30,8 +41,19 @@ constexpr std::size_t kParallelFront = 4096;
 /// Front pairs per parallel_for chunk.
 constexpr std::size_t kParallelGrain = 16;
 
+#if defined(__SSE2__)
+/// Lane i of v in all four lanes.
+template <int i>
+inline __m128 splat(__m128 v) {
+  return _mm_shuffle_ps(v, v, _MM_SHUFFLE(i, i, i, i));
+}
+#endif
+
 /// The map of one call, prepared once (thesis §3.3.3: with non-updated AABBs the rotation is set up once for the
 /// two hierarchies and reused by every box test), with |M| and the inflation.
+///
+/// With SSE (every x86-64 CPU) a box is carried as three column products of 4 lanes, the same operations in
+/// the same order as the scalar code (((M_i0 c_0 + M_i1 c_1) + M_i2 c_2) + t_i), so both give the same bits.
 class BoxCarrier {
  public:
   BoxCarrier(const AabbTree& b, const AffineMap& map) {
@@ -44,22 +66,53 @@ class BoxCarrier {
       m_t[i] = map.translation(i);
       m_inflation[i] = inflation(i);
     }
+#if defined(__SSE2__)
+    for (int j = 0; j < 3; ++j) {
+      m_column[j] = _mm_setr_ps(m_m[0][j], m_m[1][j], m_m[2][j], 0.0f);
+      m_absColumn[j] = _mm_setr_ps(m_abs[0][j], m_abs[1][j], m_abs[2][j], 0.0f);
+    }
+    m_translation = _mm_setr_ps(m_t[0], m_t[1], m_t[2], 0.0f);
+    m_inflationLanes = _mm_setr_ps(m_inflation[0], m_inflation[1], m_inflation[2], 0.0f);
+#endif
   }
 
   /// centre' = M c + t, extents' = |M| e + inflation: contains every point of the box mapped by M, t.
+  /// `lo` and `hi` point at the corners of an AabbNode or AabbLeafEntry (4 floats readable from each).
   CarriedBox carry(const float* lo, const float* hi) const {
+    CarriedBox out;
+#if defined(__SSE2__)
+    // Lane 3 holds the next field (max[0], or an index whose bits may read as a denormal float, slow to add):
+    // it is cleared before any arithmetic.
+    const __m128 keepXyz = _mm_castsi128_ps(_mm_setr_epi32(-1, -1, -1, 0));
+    const __m128 l = _mm_and_ps(_mm_loadu_ps(lo), keepXyz);
+    const __m128 h = _mm_and_ps(_mm_loadu_ps(hi), keepXyz);
+    const __m128 half = _mm_set1_ps(0.5f);
+    const __m128 c = _mm_mul_ps(_mm_add_ps(l, h), half);
+    const __m128 e = _mm_mul_ps(_mm_sub_ps(h, l), half);
+    const __m128 centre = _mm_add_ps(
+        _mm_add_ps(_mm_add_ps(_mm_mul_ps(m_column[0], splat<0>(c)), _mm_mul_ps(m_column[1], splat<1>(c))),
+                   _mm_mul_ps(m_column[2], splat<2>(c))),
+        m_translation);
+    const __m128 extent = _mm_add_ps(
+        _mm_add_ps(_mm_add_ps(_mm_mul_ps(m_absColumn[0], splat<0>(e)), _mm_mul_ps(m_absColumn[1], splat<1>(e))),
+                   _mm_mul_ps(m_absColumn[2], splat<2>(e))),
+        m_inflationLanes);
+    _mm_storeu_ps(out.min, _mm_sub_ps(centre, extent));
+    _mm_storeu_ps(out.max, _mm_add_ps(centre, extent));
+#else
     float c[3], e[3];
     for (int j = 0; j < 3; ++j) {
       c[j] = (lo[j] + hi[j]) * 0.5f;
       e[j] = (hi[j] - lo[j]) * 0.5f;
     }
-    CarriedBox out;
     for (int i = 0; i < 3; ++i) {
       const float ci = m_m[i][0] * c[0] + m_m[i][1] * c[1] + m_m[i][2] * c[2] + m_t[i];
       const float ei = m_abs[i][0] * e[0] + m_abs[i][1] * e[1] + m_abs[i][2] * e[2] + m_inflation[i];
       out.min[i] = ci - ei;
       out.max[i] = ci + ei;
     }
+    out.min[3] = out.max[3] = 0.0f;
+#endif
     return out;
   }
 
@@ -68,14 +121,28 @@ class BoxCarrier {
   float m_abs[3][3];
   float m_t[3];
   float m_inflation[3];
+#if defined(__SSE2__)
+  __m128 m_column[3];
+  __m128 m_absColumn[3];
+  __m128 m_translation;
+  __m128 m_inflationLanes;
+#endif
 };
 
 /// Touching counts as overlapping: the comparisons are exact on float, all rounding went into the inflation.
-/// Written with `&` rather than `&&`: the six comparisons are cheaper than the branches that would skip some of
-/// them, and the result feeds a branch-free push (Traverser::expand), so a wrong guess costs nothing.
+/// `lo` and `hi` are 4-float readable corners as in BoxCarrier::carry. Free of branches (with SSE one compare
+/// per corner, else `&` rather than `&&`): the result feeds a branch-free push (Traverser::expand), and the tests
+/// come out about half and half, so a branch would be mispredicted half the time.
 inline bool overlaps(const float* lo, const float* hi, const CarriedBox& b) {
+#if defined(__SSE2__)
+  // Lane 3 compares padding and is ignored; comparisons take any bits without a slow path.
+  const __m128 ok = _mm_and_ps(_mm_cmple_ps(_mm_loadu_ps(lo), _mm_loadu_ps(b.max)),
+                               _mm_cmple_ps(_mm_loadu_ps(b.min), _mm_loadu_ps(hi)));
+  return (_mm_movemask_ps(ok) & 7) == 7;
+#else
   return (lo[0] <= b.max[0]) & (b.min[0] <= hi[0]) & (lo[1] <= b.max[1]) & (b.min[1] <= hi[1]) &
          (lo[2] <= b.max[2]) & (b.min[2] <= hi[2]);
+#endif
 }
 
 /// Stack entries one depth-first descent below one start pair can need: each expansion pops one pair and pushes
@@ -115,9 +182,9 @@ class Traverser {
       const std::uint32_t childrenB[2] = {pair.b + 1, nb.first};
       for (std::uint32_t cb : childrenB) {
         const CarriedBox box = m_carrier.carry(m_nodesB[cb].min, m_nodesB[cb].max);
-        *top = {a0, cb, box};
+        *top = {box, a0, cb};
         top += overlaps(childA0.min, childA0.max, box);
-        *top = {a1, cb, box};
+        *top = {box, a1, cb};
         top += overlaps(childA1.min, childA1.max, box);
       }
       tests += 4;
@@ -132,7 +199,7 @@ class Traverser {
       const std::uint32_t childrenB[2] = {pair.b + 1, nb.first};
       for (std::uint32_t cb : childrenB) {
         const CarriedBox box = m_carrier.carry(m_nodesB[cb].min, m_nodesB[cb].max);
-        *top = {pair.a, cb, box};
+        *top = {box, pair.a, cb};
         top += overlaps(na.min, na.max, box);
       }
       tests += 2;
@@ -141,7 +208,7 @@ class Traverser {
     // Node against leaf: two tests, B's box already carried.
     const std::uint32_t childrenA[2] = {pair.a + 1, na.first};
     for (std::uint32_t ca : childrenA) {
-      *top = {ca, pair.b, pair.boxB};
+      *top = {pair.boxB, ca, pair.b};
       top += overlaps(m_nodesA[ca].min, m_nodesA[ca].max, pair.boxB);
     }
     tests += 2;
@@ -282,7 +349,7 @@ void findCandidatePairs(const AabbTree& a, const AabbTree& b, const AffineMap& b
   std::uint64_t tests = 1;
   const AabbNode& rootA = a.node(0);
   const AabbNode& rootB = b.node(0);
-  const NodePair root{0, 0, carrier.carry(rootB.min, rootB.max)};
+  const NodePair root{carrier.carry(rootB.min, rootB.max), 0, 0};
   if (!overlaps(rootA.min, rootA.max, root.boxB)) {
     if (stats) stats->nodeTests += tests;
     return;
