@@ -7,6 +7,7 @@
 #include <limits>
 #include <random>
 
+#include "narrowphase/triangle_plane.h"
 #include "random_triangles.h"
 #include "reference_triangles.h"
 
@@ -69,6 +70,74 @@ TEST(TriangleIntersection, AgreesWithDoubleReferenceOnRandomFamilies) {
             << " outside\n";
   EXPECT_EQ(outsideBand, 0);
   EXPECT_GE(total, 100000);
+}
+
+/// What the double test of trianglesIntersect decides at Möller's two plane rejections (the same helpers, the
+/// same order): true when it answers "no" there or earlier, false when it goes on to the coplanar or interval test.
+bool doublePlaneStepsReject(const TriangleF& a, const TriangleF& b) {
+  const test::TriangleD da = test::toDouble(a), db = test::toDouble(b);
+  const detail::TrianglePlane planeA = detail::makePlane(da[0], da[1], da[2]);
+  if (planeA.degenerate) return true;
+  double dB[3];
+  detail::signedDistances(planeA, db[0], db[1], db[2], dB);
+  if (detail::allOnOneSide(dB)) return true;
+  const detail::TrianglePlane planeB = detail::makePlane(db[0], db[1], db[2]);
+  if (planeB.degenerate) return true;
+  if (detail::allInPlane(dB)) return false;
+  double dA[3];
+  detail::signedDistances(planeB, da[0], da[1], da[2], dA);
+  return detail::allOnOneSide(dA);
+}
+
+/// The float pre-test may only reject a pair the double test rejects too, so the answers stay the double test's;
+/// its branch-free form must agree with it exactly.
+/// Checked on every random family and on pairs built to sit at the pre-test's margin: B's vertices lifted off
+/// A's plane by 1e-9..1e-3 of the size (the margin is about 3e-6), at scales from 1e-6 to 1e6.
+TEST(TriangleIntersection, FloatPreTestRejectsOnlyWhatTheDoubleTestRejects) {
+  std::mt19937_64 rng(20240612);
+  long checked = 0, rejected = 0, keptNearMargin = 0, rejectedNearMargin = 0;
+  auto check = [&](const TriangleF& a, const TriangleF& b, bool nearMargin) {
+    ++checked;
+    const bool apart = detail::floatCertainlyApart(a[0], a[1], a[2], b[0], b[1], b[2]);
+    EXPECT_EQ(detail::floatCertainlyApartBranchFree(a[0], a[1], a[2], b[0], b[1], b[2]) != 0u, apart);
+    if (!apart) {
+      keptNearMargin += nearMargin;
+      return;
+    }
+    ++rejected;
+    rejectedNearMargin += nearMargin;
+    EXPECT_TRUE(doublePlaneStepsReject(a, b)) << "float rejected a pair the double test does not reject: "
+                                              << a[0].transpose() << " / " << b[0].transpose();
+  };
+  for (int f = 0; f < static_cast<int>(PairFamily::Count); ++f) {
+    for (int i = 0; i < 20000; ++i) {
+      TriangleF a, b;
+      test::randomPair(static_cast<PairFamily>(f), rng, a, b);
+      check(a, b, false);
+      check(b, a, false);
+    }
+  }
+  std::uniform_real_distribution<double> unit(-1.0, 1.0), logLift(-9.0, -3.0), logScale(-6.0, 6.0);
+  for (int i = 0; i < 100000; ++i) {
+    const double scale = std::pow(10.0, logScale(rng));
+    const Eigen::Vector3d offset(unit(rng), unit(rng), unit(rng));
+    const Eigen::Matrix3d rotation = test::randomRotation(rng);
+    TriangleF a, b;
+    for (int k = 0; k < 3; ++k) {
+      a[k] = (scale * (rotation * Eigen::Vector3d(unit(rng), unit(rng), 0) + offset)).cast<float>();
+      // In A's plane (z = 0 before the rotation), lifted to one side by a tiny fraction of the size.
+      const double lift = std::pow(10.0, logLift(rng));
+      b[k] = (scale * (rotation * Eigen::Vector3d(unit(rng), unit(rng), lift) + offset)).cast<float>();
+    }
+    if (!test::wellShaped(a) || !test::wellShaped(b)) continue;
+    check(a, b, true);
+    check(b, a, true);
+  }
+  std::cout << "  " << checked << " pairs, " << rejected << " rejected in float; at the margin " << rejectedNearMargin
+            << " rejected, " << keptNearMargin << " left to the double test\n";
+  // The margin pairs reach both outcomes, so the comparison above really ran at the pre-test's edge.
+  EXPECT_GT(rejectedNearMargin, 1000);
+  EXPECT_GT(keptNearMargin, 1000);
 }
 
 /// Touching configurations built from coordinates that float represents exactly must count as
