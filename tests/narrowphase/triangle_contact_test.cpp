@@ -10,6 +10,7 @@
 #include <random>
 
 #include "narrowphase/triangle_intersection.h"
+#include "narrowphase/triangle_plane.h"
 #include "random_triangles.h"
 #include "reference_triangles.h"
 
@@ -24,6 +25,37 @@ std::optional<TriangleContact> contactOf(const TriangleF& a, const TriangleF& b)
   const Eigen::Vector3f pa[3] = {a[0], a[1], a[2]};
   const Eigen::Vector3f pb[3] = {b[0], b[1], b[2]};
   return generateContact(pa, pb);
+}
+
+/// The near phase takes "intersects" from the contact generation instead of running trianglesIntersect as well:
+/// the two must agree on every pair, and the contact must be generateContact's, bit for bit.
+TEST(TriangleContact, ContactAndTestAgreesWithTrianglesIntersect) {
+  std::mt19937_64 rng(11);
+  long intersecting = 0, withContact = 0;
+  for (int f = 0; f < static_cast<int>(PairFamily::Count); ++f) {
+    for (int i = 0; i < 20000; ++i) {
+      TriangleF a, b;
+      test::randomPair(static_cast<PairFamily>(f), rng, a, b);
+      const Eigen::Vector3f pa[3] = {a[0], a[1], a[2]};
+      const Eigen::Vector3f pb[3] = {b[0], b[1], b[2]};
+      bool intersects = true;
+      const std::optional<TriangleContact> c = detail::generateContactAndTest(pa, pb, intersects);
+      ASSERT_EQ(intersects, trianglesIntersect(a[0], a[1], a[2], b[0], b[1], b[2]))
+          << test::familyName(static_cast<PairFamily>(f)) << " pair " << i;
+      const std::optional<TriangleContact> expected = generateContact(pa, pb);
+      ASSERT_EQ(c.has_value(), expected.has_value());
+      if (c) {
+        EXPECT_EQ(c->point, expected->point);
+        EXPECT_EQ(c->normalOnB, expected->normalOnB);
+        EXPECT_EQ(c->depth, expected->depth);
+      }
+      intersecting += intersects;
+      withContact += c.has_value();
+    }
+  }
+  // Both answers occur, and some intersecting pairs have their contact dropped, so each branch was compared.
+  EXPECT_GT(intersecting, 10000);
+  EXPECT_GT(intersecting, withContact);
 }
 
 /// The §5.3.4 contact computed again in double, straight from its definition, for non-coplanar

@@ -125,18 +125,35 @@ struct NearHit {
 // Candidates per task of the near phase: enough to amortise a task, small enough to balance two to eight cores.
 constexpr std::size_t kNearChunk = 512;
 
+// How far ahead the near phase prefetches B's indices and vertices, in candidates.
+constexpr std::size_t kIndexAhead = 16;
+constexpr std::size_t kVertexAhead = 8;
+
+// A hint to bring the line holding `p` into the cache; nothing where the compiler has no such builtin.
+inline void prefetch(const void* p) {
+#if defined(__GNUC__)
+  __builtin_prefetch(p);
+#else
+  (void)p;
+#endif
+}
+
+// Distance in floats between two coordinates' rows of ChunkTriangles: not a power of two, so that the 18 rows
+// written together do not all fall into the same few sets of the L1 cache (a 2 KiB stride put 9 rows per set).
+constexpr std::size_t kNearRow = kNearChunk + 16;
+
 // One chunk's triangles, coordinate by coordinate (structure of arrays): value k (0..8 A's vertices, 9..17 B's,
-// x y z per vertex) of the chunk's j-th candidate is at [k * kNearChunk + j], so the float pre-test runs over the
+// x y z per vertex) of the chunk's j-th candidate is at [k * kNearRow + j], so the float pre-test runs over the
 // chunk as vector code.
 class ChunkTriangles {
  public:
-  ChunkTriangles() : m_values(18 * kNearChunk) {}
+  ChunkTriangles() : m_values(18 * kNearRow) {}
 
   void store(std::size_t j, const Eigen::Vector3f (&a)[3], const Eigen::Vector3f (&b)[3]) {
     for (int v = 0; v < 3; ++v) {
       for (int c = 0; c < 3; ++c) {
-        m_values[(3 * v + c) * kNearChunk + j] = a[v][c];
-        m_values[(9 + 3 * v + c) * kNearChunk + j] = b[v][c];
+        m_values[(3 * v + c) * kNearRow + j] = a[v][c];
+        m_values[(9 + 3 * v + c) * kNearRow + j] = b[v][c];
       }
     }
   }
@@ -151,8 +168,8 @@ class ChunkTriangles {
   const float* data() const { return m_values.data(); }
 
   Eigen::Vector3f vertex(int first, std::size_t j) const {
-    const float* p = m_values.data() + first * kNearChunk + j;
-    return Eigen::Vector3f(p[0], p[kNearChunk], p[2 * kNearChunk]);
+    const float* p = m_values.data() + first * kNearRow + j;
+    return Eigen::Vector3f(p[0], p[kNearRow], p[2 * kNearRow]);
   }
 
  private:
@@ -177,16 +194,27 @@ std::vector<NearHit> runNearPhase(const TriangleMesh& meshA, const TriangleMesh&
     const std::size_t count = std::min(candidates.size(), begin + kNearChunk) - begin;
     ChunkTriangles triangles;
     Eigen::Vector3f a[3], b[3];
+    // B's triangles are read in no useful order, so each costs a cache miss for its indices and then one per
+    // vertex; prefetching the indices kIndexAhead candidates ahead and the vertices kVertexAhead ahead overlaps
+    // those misses instead of paying them one after the other.
+    const std::uint32_t* const indicesB = meshB.indices().data();
+    const float* const positionsB = meshB.positions().data();
     for (std::size_t j = 0; j < count; ++j) {
-      const TrianglePair& pair = candidates[begin + j];
-      if (j == 0 || pair.triangleA != candidates[begin + j - 1].triangleA) triangleOfA(meshA, pair.triangleA, frame, a);
+      const std::size_t i = begin + j;
+      if (i + kIndexAhead < candidates.size()) prefetch(indicesB + 3 * std::size_t(candidates[i + kIndexAhead].triangleB));
+      if (i + kVertexAhead < candidates.size()) {
+        const std::uint32_t* corner = indicesB + 3 * std::size_t(candidates[i + kVertexAhead].triangleB);
+        for (int k = 0; k < 3; ++k) prefetch(positionsB + 3 * std::size_t(corner[k]));
+      }
+      const TrianglePair& pair = candidates[i];
+      if (j == 0 || pair.triangleA != candidates[i - 1].triangleA) triangleOfA(meshA, pair.triangleA, frame, a);
       triangleOfB(meshB, pair.triangleB, frame, b);
       triangles.store(j, a, b);
     }
     // Plain pointers, loaded once: the stores into `apart` could alias the vector's own fields otherwise, and
     // the compiler would give up on vector code.
     const float* const v = triangles.data();
-    constexpr std::size_t n = kNearChunk;
+    constexpr std::size_t n = kNearRow;
     std::uint8_t apart[kNearChunk];
     for (std::size_t j = 0; j < count; ++j) {
       const Eigen::Vector3f a0(v[j], v[n + j], v[2 * n + j]), a1(v[3 * n + j], v[4 * n + j], v[5 * n + j]),
@@ -199,8 +227,9 @@ std::vector<NearHit> runNearPhase(const TriangleMesh& meshA, const TriangleMesh&
     for (std::size_t j = 0; j < count; ++j) {
       if (apart[j]) continue;
       triangles.load(j, a, b);
-      if (!detail::trianglesIntersectDouble(a[0], a[1], a[2], b[0], b[1], b[2])) continue;
-      const std::optional<TriangleContact> contact = generateContact(a, b);
+      bool intersects = false;
+      const std::optional<TriangleContact> contact = detail::generateContactAndTest(a, b, intersects);
+      if (!intersects) continue;
       hits.push_back({begin + j, contact.has_value(), contact ? *contact : TriangleContact{}});
     }
   });

@@ -8,24 +8,32 @@
 
 namespace gpucol {
 
-std::optional<TriangleContact> generateContact(const Eigen::Vector3f (&af)[3],
-                                               const Eigen::Vector3f (&bf)[3]) {
+std::optional<TriangleContact> generateContact(const Eigen::Vector3f (&a)[3], const Eigen::Vector3f (&b)[3]) {
+  bool intersects = false;
+  return detail::generateContactAndTest(a, b, intersects);
+}
+
+namespace detail {
+
+std::optional<TriangleContact> generateContactAndTest(const Eigen::Vector3f (&af)[3], const Eigen::Vector3f (&bf)[3],
+                                                      bool& intersects) {
+  intersects = false;
   // Double arithmetic on the float input, as in trianglesIntersect (see triangle_plane.h).
   const Eigen::Vector3d a[3] = {af[0].cast<double>(), af[1].cast<double>(), af[2].cast<double>()};
   const Eigen::Vector3d b[3] = {bf[0].cast<double>(), bf[1].cast<double>(), bf[2].cast<double>()};
 
   // The intersection test first (thesis §5.3.4 runs Möller's test, §3.5, before generating contacts);
   // its signed distances are reused below.
-  const detail::TrianglePlane planeA = detail::makePlane(a[0], a[1], a[2]);
+  const TrianglePlane planeA = makePlane(a[0], a[1], a[2]);
   if (planeA.degenerate) return std::nullopt;
   double dB[3];
-  detail::signedDistances(planeA, b[0], b[1], b[2], dB);
-  if (detail::allOnOneSide(dB)) return std::nullopt;
-  const detail::TrianglePlane planeB = detail::makePlane(b[0], b[1], b[2]);
+  signedDistances(planeA, b[0], b[1], b[2], dB);
+  if (allOnOneSide(dB)) return std::nullopt;
+  const TrianglePlane planeB = makePlane(b[0], b[1], b[2]);
   if (planeB.degenerate) return std::nullopt;
   double dA[3];
-  detail::signedDistances(planeB, a[0], a[1], a[2], dA);
-  if (detail::allOnOneSide(dA)) return std::nullopt;
+  signedDistances(planeB, a[0], a[1], a[2], dA);
+  if (allOnOneSide(dA)) return std::nullopt;
 
   const double lengthA = planeA.normal.norm();
   const double lengthB = planeB.normal.norm();
@@ -37,24 +45,26 @@ std::optional<TriangleContact> generateContact(const Eigen::Vector3f (&af)[3],
   // Coplanar (after snapping, the same cases trianglesIntersect sends to the 2-D test): touching face
   // on face, so depth 0 along nB. The snapped distances are exactly 0, which is what the general rule
   // below would give too; only the point needs the 2-D overlap.
-  const bool coplanarB = detail::allInPlane(dB);
-  if (coplanarB || detail::allInPlane(dA)) {
+  const bool coplanarB = allInPlane(dB);
+  if (coplanarB || allInPlane(dA)) {
     Eigen::Vector3d point;
-    const int dropAxis = detail::dominantAxis(coplanarB ? planeA.normal : planeB.normal);
-    if (!detail::coplanarTrianglesOverlap(pa, pb, dropAxis, &point)) return std::nullopt;
+    const int dropAxis = dominantAxis(coplanarB ? planeA.normal : planeB.normal);
+    if (!coplanarTrianglesOverlap(pa, pb, dropAxis, &point)) return std::nullopt;
+    intersects = true;
     return TriangleContact{point.cast<float>(), nB.cast<float>(), 0.0f};
   }
 
   // Möller's interval test on the intersection line L, with the crossing points kept in 3-D: the same
   // arithmetic as trianglesIntersect on the dominant axis, so both functions decide alike.
   const Eigen::Vector3d lineDirection = planeA.normal.cross(planeB.normal);
-  const int axis = detail::dominantAxis(lineDirection);
+  const int axis = dominantAxis(lineDirection);
   Eigen::Vector3d sA[2], sB[2];
-  detail::planeCrossing(pa, dA, sA[0], sA[1]);
-  detail::planeCrossing(pb, dB, sB[0], sB[1]);
+  planeCrossing(pa, dA, sA[0], sA[1]);
+  planeCrossing(pb, dB, sB[0], sB[1]);
   if (sA[1][axis] < sA[0][axis]) std::swap(sA[0], sA[1]);
   if (sB[1][axis] < sB[0][axis]) std::swap(sB[0], sB[1]);
   if (sA[0][axis] > sB[1][axis] || sB[0][axis] > sA[1][axis]) return std::nullopt;
+  intersects = true;
 
   // §5.3.4: the distance to move each triangle along the other's normal until it is out of the other's
   // plane. The distances are scaled by the plane's |normal|; a triangle that only touches the plane has
@@ -83,5 +93,7 @@ std::optional<TriangleContact> generateContact(const Eigen::Vector3f (&af)[3],
   return TriangleContact{(0.5 * (low + high)).cast<float>(), normalOnB.cast<float>(),
                          static_cast<float>(0.0 - move)};
 }
+
+}  // namespace detail
 
 }  // namespace gpucol

@@ -16,6 +16,9 @@
 #include <Eigen/Geometry>
 #include <algorithm>
 #include <cmath>
+#include <optional>
+
+#include "narrowphase/triangle_contact.h"
 
 namespace gpucol::detail {
 
@@ -236,6 +239,13 @@ inline unsigned floatCertainlyApartBranchFree(const Eigen::Vector3f& a0, const E
 /// run floatCertainlyApart themselves: Möller's test in double, as documented there.
 bool trianglesIntersectDouble(const Eigen::Vector3f& a0, const Eigen::Vector3f& a1, const Eigen::Vector3f& a2,
                               const Eigen::Vector3f& b0, const Eigen::Vector3f& b1, const Eigen::Vector3f& b2);
+
+/// generateContact that also says whether the pair intersects (defined in triangle_contact.cpp). generateContact
+/// runs Möller's test in the same arithmetic as trianglesIntersectDouble before it makes a contact, so
+/// `intersects` is exactly trianglesIntersectDouble's answer, and a caller that needs both (the near phase keeps
+/// intersecting pairs whose contact is dropped) runs the test once instead of twice.
+std::optional<TriangleContact> generateContactAndTest(const Eigen::Vector3f (&a)[3], const Eigen::Vector3f (&b)[3],
+                                                      bool& intersects);
 
 /// floatCertainlyApart for one pair.
 inline bool floatCertainlyApart(const Eigen::Vector3f& a0, const Eigen::Vector3f& a1, const Eigen::Vector3f& a2,
