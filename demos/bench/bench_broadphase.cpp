@@ -98,6 +98,16 @@ Scene mixedSizes(std::size_t n, std::uint32_t seed) {
   return s;
 }
 
+/// Mostly asleep: the uniform cloud where only every 100th box moves (the rest re-send unchanged boxes, as
+/// Bullet does for sleeping bodies): what "skip what a scene does not need" saves.
+Scene sleepingCloud(std::size_t n, std::uint32_t seed) {
+  Scene s = uniformCloud(n, seed);
+  s.name = "sleeping";
+  for (std::size_t i = 0; i < n; ++i)
+    if (i % 100 != 0) s.velocity[i] = btVector3(0, 0, 0);
+  return s;
+}
+
 using Clock = std::chrono::steady_clock;
 
 struct Result {
@@ -286,7 +296,8 @@ void runAll(const Options& o) {
         if (sceneName == "uniform") return uniformCloud(n, 1);
         if (sceneName == "column") return fallingColumn(n, 2);
         if (sceneName == "mixed") return mixedSizes(n, 3);
-        throw std::runtime_error("unknown scene " + sceneName + " (uniform, column, mixed)");
+        if (sceneName == "sleeping") return sleepingCloud(n, 4);
+        throw std::runtime_error("unknown scene " + sceneName + " (uniform, column, mixed, sleeping)");
       };
       std::vector<Result> results;
       GridBroadphaseTuning tuning;
@@ -374,7 +385,7 @@ const CommandRegistration kRegistration([](CLI::App& app) {
       "Example: gpucol-bench broadphase --n 1000,10000,100000 --scenes uniform --csv bp.csv");
   cmd->add_option("--n", options->sizes, "comma-separated proxy counts (1e6 allowed)")->capture_default_str();
   cmd->add_option("--scenes", options->scenes, "comma-separated scenes: uniform (cloud), column (falling, the paper's), "
-                                               "mixed (sizes, a few huge boxes)")
+                                               "mixed (sizes, a few huge boxes), sleeping (cloud, 1% moving)")
       ->capture_default_str();
   cmd->add_option("--run", options->runs,
                   "comma-separated broad phases: cpu, opencl (gpucol), dbvt (btDbvtBroadphase), sap "

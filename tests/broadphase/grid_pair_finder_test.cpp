@@ -171,6 +171,87 @@ TEST(GridPairFinder, AddAndRemoveBetweenSearches) {
   }
 }
 
+TEST(GridPairFinder, RestingProxiesAreNotRebinnedAndPairsStayExact) {
+  // Stage 11: with ProxyArrays::moved, a finder keeps its grid while few proxies change. Each step a few
+  // boxes move (some far, some out of the grid's bounds), vanish, reappear, change filters, and a huge
+  // box moves; the pairs must equal brute force and the unchanged proxies must be counted as resting.
+  Scene s = uniformCloud(6000, 20.0f, 0.7f, 12);
+  for (std::size_t i = 0; i < s.flags.size(); i += 5) s.flags[i] |= gpucol::kProxyStatic;
+  s.add(0, -20.5f, 0, 25.0f, 0.5f, 25.0f, gpucol::kProxyActive | gpucol::kProxyStatic);  // huge static ground
+  s.add(0, 0, 0, 3.0f, 20.0f, 3.0f);                                                     // huge moving pillar
+  const std::uint32_t pillar = std::uint32_t(s.flags.size() - 1);
+  std::vector<std::uint8_t> moved(s.flags.size(), 1);
+  std::mt19937 rng(12);
+  std::uniform_real_distribution<float> step(-0.3f, 0.3f), far(-30.0f, 30.0f);
+  auto finder = gpucol::makeCpuPairFinder();
+  gpucol::PairFinderOptions o;
+  o.bruteForceBelow = 0;
+  int incrementalSteps = 0;
+  for (int t = 0; t < 12; ++t) {
+    gpucol::ProxyArrays view = s.view();
+    view.moved = moved.data();
+    std::vector<std::uint64_t> pairs;
+    finder->findPairs(view, o, pairs);
+    ASSERT_EQ(pairs, gpucol::findPairsBruteForce(s.view())) << "step " << t;
+    std::uint32_t active = 0, changedActive = 0;
+    for (std::size_t i = 0; i < s.flags.size(); ++i) {
+      active += (s.flags[i] & gpucol::kProxyActive) != 0;
+      changedActive += (s.flags[i] & gpucol::kProxyActive) && moved[i];
+    }
+    const gpucol::PairFinderStats& st = finder->stats();
+    EXPECT_EQ(st.restingProxies + st.rebinnedProxies, active) << "step " << t;
+    if (t == 0) {
+      EXPECT_FALSE(st.incremental) << "the first search has no grid to keep";
+    }
+    if (st.incremental) {
+      ++incrementalSteps;
+      // Since the grid was built, only the slots changed in the steps after it are re-binned.
+      EXPECT_GE(st.rebinnedProxies, changedActive) << "step " << t;
+      EXPECT_GE(st.restingProxies, active * 3 / 4) << "step " << t;
+    } else {
+      EXPECT_EQ(st.restingProxies, 0u);
+    }
+    std::fill(moved.begin(), moved.end(), std::uint8_t(0));
+    if (t == 6) {
+      // Many moves at once: the finder must fall back to a full search (and build a new grid).
+      for (std::size_t i = 0; i < s.flags.size(); i += 2) {
+        const float d = step(rng);
+        s.minX[i] += d, s.maxX[i] += d;
+        moved[i] = 1;
+      }
+      continue;
+    }
+    for (int k = 0; k < 60; ++k) {
+      const std::size_t i = rng() % s.flags.size();
+      moved[i] = 1;
+      switch (k % 6) {
+        case 0: s.flags[i] ^= gpucol::kProxyActive; break;                 // vanish or come back
+        case 1: s.group[i] = (s.group[i] == 1 ? 2 : 1), s.mask[i] = 1; break;  // filter change
+        case 2: {                                                           // jump far, even out of the grid
+          const float c[3] = {far(rng), far(rng), far(rng)};
+          const float h = 0.5f * (s.maxX[i] - s.minX[i]);
+          s.minX[i] = c[0] - h, s.maxX[i] = c[0] + h, s.minY[i] = c[1] - h, s.maxY[i] = c[1] + h;
+          s.minZ[i] = c[2] - h, s.maxZ[i] = c[2] + h;
+          break;
+        }
+        default: {
+          const float dx = step(rng), dy = step(rng), dz = step(rng);
+          s.minX[i] += dx, s.maxX[i] += dx, s.minY[i] += dy, s.maxY[i] += dy, s.minZ[i] += dz, s.maxZ[i] += dz;
+        }
+      }
+    }
+    if (t % 3 == 1) {
+      s.minX[pillar] += 1.5f, s.maxX[pillar] += 1.5f;
+      moved[pillar] = 1;
+    }
+    for (int k = 0; k < 10; ++k) {  // new proxies
+      s.add(far(rng) * 0.6f, far(rng) * 0.6f, far(rng) * 0.6f, 0.5f, 0.5f, 0.5f);
+      moved.push_back(1);
+    }
+  }
+  EXPECT_GE(incrementalSteps, 8) << "the kept grid was not used";
+}
+
 TEST(GridPairFinder, SparseGridPath) {
   // Two far-apart clusters make a grid with many more cells than keys: the explicit-key sort path.
   Scene s = uniformCloud(1500, 5.0f, 0.5f, 9);

@@ -152,6 +152,54 @@ TEST(GridBroadphase, PairCacheMatchesBruteForceOverStepsNoGrid) {
   EXPECT_FALSE(bp.stats().usedGrid);
 }
 
+TEST(GridBroadphase, StaticAndSleepingProxiesAreNotRebinned) {
+  // A static ground, static boxes (StaticFilter), sleeping boxes whose unchanged AABB Bullet re-sends every
+  // step, and a few moving ones: after the first step only the moving proxies are re-binned (stats), and
+  // the cache still equals brute force, through a proxy added and one destroyed on the way.
+  gpucol::Config config;
+  config.bruteForceBelow = 100;
+  gpucol::GridBroadphase bp(config);
+  btDefaultCollisionConfiguration configuration;
+  btCollisionDispatcher dispatcher(&configuration);
+  std::mt19937 rng(21);
+  const int count = 4000, movingCount = 60;
+  std::vector<Box> boxes(count + 1);
+  for (int i = 0; i < count; ++i) {
+    randomBox(rng, boxes[i], 15.0f);
+    if (i % 2 == 0) boxes[i].group = btBroadphaseProxy::StaticFilter;
+  }
+  boxes[count].lo = btVector3(-16, -16.5f, -16), boxes[count].hi = btVector3(16, -15, 16);  // ground
+  boxes[count].group = btBroadphaseProxy::StaticFilter;
+  for (int i = 0; i <= count; ++i)
+    boxes[i].proxy = bp.createProxy(boxes[i].lo, boxes[i].hi, BOX_SHAPE_PROXYTYPE,
+                                    reinterpret_cast<void*>(std::intptr_t(i)), boxes[i].group, boxes[i].mask, &dispatcher);
+  std::uniform_real_distribution<float> step(-0.3f, 0.3f);
+  for (int t = 0; t < 6; ++t) {
+    for (int i = 0; i <= count; ++i) {
+      Box& b = boxes[i];
+      if (!b.proxy) continue;
+      if (i % 2 == 1 && i < 2 * movingCount) {  // moving dynamic boxes
+        const btVector3 d(step(rng), step(rng) - 0.2f, step(rng));
+        b.lo += d, b.hi += d;
+      }
+      bp.setAabb(b.proxy, b.lo, b.hi, &dispatcher);  // everything re-sent, as btCollisionWorld does
+    }
+    if (t == 3) {
+      bp.destroyProxy(boxes[8].proxy, &dispatcher);  // a static box
+      boxes[8].proxy = nullptr;
+    }
+    bp.calculateOverlappingPairs(&dispatcher);
+    ASSERT_EQ(cachePairs(bp.getOverlappingPairCache()), bruteForce(boxes)) << "step " << t;
+    const gpucol::GridBroadphaseStats& st = bp.stats();
+    EXPECT_EQ(st.restingProxies + st.rebinnedProxies, st.proxies) << "step " << t;
+    if (t >= 1) {
+      // Only the moving boxes are re-binned; nothing else costs a binning or a test among the resting.
+      EXPECT_EQ(st.rebinnedProxies, std::uint32_t(movingCount)) << "step " << t;
+      EXPECT_EQ(st.restingProxies, st.proxies - movingCount) << "step " << t;
+    }
+  }
+}
+
 TEST(GridBroadphase, UserSuppliedCachesHashedAndSorted) {
   gpucol::Config config;
   config.bruteForceBelow = 100;

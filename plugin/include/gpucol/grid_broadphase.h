@@ -39,6 +39,11 @@ struct GridBroadphaseStats {
   bool usedGrid = false;
   /// True when the OpenCL pair finder ran.
   bool usedOpenCl = false;
+  /// Live proxies that were neither re-binned nor tested against each other this step: static or sleeping
+  /// ones whose box and filter did not change since the grid was last built (their pairs carry over).
+  std::uint32_t restingProxies = 0;
+  /// Live proxies binned (or tested against all) this step: every one on a full search, else the moved.
+  std::uint32_t rebinnedProxies = 0;
   /// Edge of the grid's cubic cells (0 without grid).
   float cellSize = 0.0f;
   /// Bytes held by the broad phase (proxies, arrays, pair lists, scratch), excluding the pair cache.

@@ -31,6 +31,11 @@ constexpr std::uint64_t kMaxCells = (std::uint64_t(1) << 32) - 1;
 constexpr std::uint64_t kMinChunk = 16384;
 /// The home-cell order of the binned boxes (for locality only) is renewed after this many searches.
 constexpr std::uint32_t kHomeOrderSteps = 8;
+/// Stage 11: a search keeps the last grid while at most this fraction of the active proxies changed since
+/// it was built; beyond that, binning everything again costs about as much and gives a fitted grid.
+constexpr double kIncrementalFraction = 0.125;
+/// Moved proxies per parallel task of an incremental search.
+constexpr std::size_t kMovedGrain = 256;
 /// Chunks per search at most, so per-chunk bookkeeping stays small next to the work.
 constexpr std::uint64_t kMaxChunks = 256;
 
@@ -89,6 +94,32 @@ inline CellRange cellRange(const LocalBox& b, const Grid& g) {
     r.hi[a] = cellOf(b.hi[a], g.origin[a], g.invCell, g.dims[a]);
   }
   return r;
+}
+
+/// Stage 3's test: a box that covers more than `limit` cells of edge `cell` (estimated from its extents).
+inline bool isHuge(const ProxyArrays& p, std::uint32_t s, float cell, std::uint32_t limit) {
+  const double inv = 1.0 / double(cell);
+  const double covered = (double(p.maxX[s] - p.minX[s]) * inv + 1.0) * (double(p.maxY[s] - p.minY[s]) * inv + 1.0) *
+                         (double(p.maxZ[s] - p.minZ[s]) * inv + 1.0);
+  return covered > double(limit);
+}
+
+inline LocalBox boxOf(const ProxyArrays& p, std::uint32_t s) {
+  return LocalBox{{p.minX[s], p.minY[s], p.minZ[s]}, {p.maxX[s], p.maxY[s], p.maxZ[s]}, s};
+}
+
+/// Touching-counts overlap of two local boxes, without short-circuit branches (see testRuns).
+inline bool boxesOverlap(const LocalBox& a, const LocalBox& b) {
+  return int(a.lo[0] <= b.hi[0]) & int(b.lo[0] <= a.hi[0]) & int(a.lo[1] <= b.hi[1]) & int(b.lo[1] <= a.hi[1]) &
+         int(a.lo[2] <= b.hi[2]) & int(b.lo[2] <= a.hi[2]);
+}
+
+/// Stage 9: the cell that holds the min corner of the overlap of a and b.
+inline std::uint32_t overlapCell(const LocalBox& a, const LocalBox& b, const Grid& g) {
+  const std::uint32_t cx = cellOf(std::max(a.lo[0], b.lo[0]), g.origin[0], g.invCell, g.dims[0]);
+  const std::uint32_t cy = cellOf(std::max(a.lo[1], b.lo[1]), g.origin[1], g.invCell, g.dims[1]);
+  const std::uint32_t cz = cellOf(std::max(a.lo[2], b.lo[2]), g.origin[2], g.invCell, g.dims[2]);
+  return std::uint32_t((std::uint64_t(cz) * g.dims[1] + cy) * g.dims[0] + cx);
 }
 
 inline std::uint32_t homeCell(const ProxyArrays& p, std::uint32_t s, const Grid& g) {
@@ -176,6 +207,8 @@ class CpuPairFinder final : public PairFinder {
   void testRuns(const ProxyArrays& p, const PairFinderOptions& options, const Grid& g);
   void testHuge(const ProxyArrays& p);
   void gather(std::vector<std::uint64_t>& pairs);
+  bool keepGrid(const ProxyArrays& p, const PairFinderOptions& options);
+  void incremental(const ProxyArrays& p, const PairFinderOptions& options, std::vector<std::uint64_t>& pairs);
   std::size_t scratchBytes() const;
 
   PairFinderStats m_stats;
@@ -190,6 +223,17 @@ class CpuPairFinder final : public PairFinder {
   std::vector<std::uint32_t> m_homeOrder;  // binned slots by home cell, as of the last home sort
   std::uint32_t m_homeOrderAge = 0;        // searches since that sort
   std::vector<std::uint8_t> m_isBinned;    // per slot: binned in this search
+  // Stage 11: the last full grid search (m_cellStart, m_sorted, m_box of a dense grid) kept for later
+  // searches while few proxies change.
+  bool m_kept = false;                   // m_cellStart/m_sorted/m_box/m_keptHuge describe m_keptGrid
+  bool m_denseBuilt = false;             // the last grid search filled m_cellStart (dense counting sort)
+  Grid m_keptGrid;
+  PairFinderOptions m_keptOptions;
+  std::vector<std::uint8_t> m_unchanged;  // per slot: active in the kept search and unchanged since
+  std::vector<std::uint32_t> m_keptHuge;  // huge proxies of the kept search
+  std::vector<std::uint64_t> m_lastPairs; // this finder's previous result
+  std::vector<std::uint32_t> m_moved;     // active slots changed since the kept search
+  std::vector<std::uint64_t> m_movedKeys; // (cell << 32) | index into m_moved, binned moved proxies
   std::vector<std::uint32_t> m_sorted;   // m_box indices sorted by (cell, index)
   std::vector<std::uint32_t> m_runCell;  // runs of >= 2 entries: cell index
   std::vector<std::uint32_t> m_runStart; // first entry in m_sorted
@@ -219,13 +263,140 @@ void CpuPairFinder::findPairs(const ProxyArrays& proxies, const PairFinderOption
   m_active.clear();
   for (std::uint32_t s = 0; s < proxies.count; ++s)
     if (proxies.flags[s] & kProxyActive) m_active.push_back(s);
-  if (m_active.size() < 2) return;
+  if (m_active.size() < 2) {
+    m_kept = false;
+    m_lastPairs.clear();
+    return;
+  }
   // Stage 1: the path.
-  if (m_active.size() < options.bruteForceBelow)
+  if (m_active.size() < options.bruteForceBelow) {
+    m_kept = false;
     bruteForce(proxies, options, pairs);
-  else
+  } else if (keepGrid(proxies, options)) {
+    incremental(proxies, options, pairs);
+  } else {
     grid(proxies, options, pairs);
+    // Stage 11: keep this grid (dense grids only: their cells are looked up directly).
+    m_kept = m_denseBuilt;
+    if (m_kept) {
+      m_keptOptions = options;
+      m_unchanged.assign(proxies.count, 0);
+      for (std::uint32_t s : m_active) m_unchanged[s] = 1;
+      m_keptHuge = m_huge;
+    }
+  }
+  m_lastPairs.assign(pairs.begin(), pairs.end());
+  m_stats.rebinnedProxies = std::uint32_t(m_active.size()) - m_stats.restingProxies;
   m_stats.scratchBytes = scratchBytes();
+}
+
+bool CpuPairFinder::keepGrid(const ProxyArrays& p, const PairFinderOptions& options) {
+  if (!m_kept || p.moved == nullptr || options.cellSizeRule != m_keptOptions.cellSizeRule ||
+      options.hugeCellLimit != m_keptOptions.hugeCellLimit || options.output != m_keptOptions.output ||
+      options.mappingSqrt != m_keptOptions.mappingSqrt) {
+    m_kept = false;
+    return false;
+  }
+  // A slot stays unchanged while it stays active and does not move; new slots start changed.
+  if (m_unchanged.size() < p.count) m_unchanged.resize(p.count, 0);
+  m_moved.clear();
+  for (std::uint32_t s = 0; s < p.count; ++s) {
+    if (p.moved[s] || !(p.flags[s] & kProxyActive)) m_unchanged[s] = 0;
+    if ((p.flags[s] & kProxyActive) && !m_unchanged[s]) m_moved.push_back(s);
+  }
+  if (double(m_moved.size()) > kIncrementalFraction * double(m_active.size())) {
+    m_kept = false;
+    return false;
+  }
+  return true;
+}
+
+void CpuPairFinder::incremental(const ProxyArrays& p, const PairFinderOptions& options,
+                                std::vector<std::uint64_t>& pairs) {
+  const Grid& g = m_keptGrid;
+  m_stats.usedGrid = true;
+  m_stats.incremental = true;
+  m_stats.cellSize = g.cell;
+  for (int a = 0; a < 3; ++a) m_stats.dims[a] = g.dims[a];
+  m_stats.restingProxies = std::uint32_t(m_active.size() - m_moved.size());
+  // Pairs of two unchanged proxies are carried over: neither box nor filter changed.
+  std::vector<std::uint64_t>& carried = m_keys;  // scratch of the sparse path, free here
+  carried.clear();
+  for (std::uint64_t key : m_lastPairs)
+    if (m_unchanged[std::uint32_t(key >> 32)] && m_unchanged[std::uint32_t(key)]) carried.push_back(key);
+
+  // Moved proxies: huge ones (on the kept cell size) test against every active proxy; the others are
+  // binned on the kept grid, looked up in its cells (stage 9's rule reports each pair in one cell) and
+  // tested against the kept huge boxes.
+  const std::size_t moved = m_moved.size();
+  const std::size_t tasks = (moved + kMovedGrain - 1) / kMovedGrain;
+  const std::size_t firstChunk = takeChunks(tasks);
+  std::vector<std::uint8_t>& movedHuge = m_isBinned;  // per moved index (free here: no chooseGrid)
+  movedHuge.resize(moved);
+  for (std::size_t i = 0; i < moved; ++i) movedHuge[i] = isHuge(p, m_moved[i], g.cell, options.hugeCellLimit);
+  tbb::parallel_for(std::size_t(0), tasks, [&](std::size_t t) {
+    auto& out = m_chunkPairs[firstChunk + t];
+    out.clear();
+    for (std::size_t i = t * kMovedGrain, e = std::min(moved, (t + 1) * kMovedGrain); i < e; ++i) {
+      const std::uint32_t sm = m_moved[i];
+      const LocalBox a = boxOf(p, sm);
+      if (movedHuge[i]) {
+        for (std::uint32_t s : m_active) {
+          if (s == sm) continue;
+          if (!m_unchanged[s]) {
+            // Another moved proxy: a huge one's pair belongs to the lower slot's row; a binned one's to ours.
+            const std::size_t j = std::size_t(std::lower_bound(m_moved.begin(), m_moved.end(), s) - m_moved.begin());
+            if (movedHuge[j] && s < sm) continue;
+          }
+          if (boxesOverlap(a, boxOf(p, s)) && passesFilter(p, sm, s)) out.push_back(makePairKey(sm, s));
+        }
+        continue;
+      }
+      forEachCell(cellRange(a, g), g, [&](std::uint32_t c) {
+        for (std::uint32_t e2 = m_cellStart[c], end = m_cellStart[c + 1]; e2 < end; ++e2) {
+          const LocalBox& b = m_box[m_sorted[e2]];
+          if (!m_unchanged[b.slot] || !boxesOverlap(a, b) || overlapCell(a, b, g) != c) continue;
+          if (passesFilter(p, sm, b.slot)) out.push_back(makePairKey(sm, b.slot));
+        }
+      });
+      for (std::uint32_t h : m_keptHuge)
+        if (m_unchanged[h] && boxesOverlap(a, boxOf(p, h)) && passesFilter(p, sm, h)) out.push_back(makePairKey(sm, h));
+    }
+  });
+  // Binned moved proxies among themselves: keys on the kept grid, sorted, runs tested pairwise.
+  m_movedKeys.clear();
+  for (std::size_t i = 0; i < moved; ++i)
+    if (!movedHuge[i])
+      forEachCell(cellRange(boxOf(p, m_moved[i]), g), g,
+                  [&](std::uint32_t c) { m_movedKeys.push_back((std::uint64_t(c) << 32) | i); });
+  tbb::parallel_sort(m_movedKeys.begin(), m_movedKeys.end());
+  std::uint64_t candidates = 0;
+  const std::size_t runChunk = takeChunks(1);
+  auto& runOut = m_chunkPairs[runChunk];
+  runOut.clear();
+  for (std::size_t i = 0; i < m_movedKeys.size();) {
+    std::size_t j = i + 1;
+    const std::uint32_t cell = std::uint32_t(m_movedKeys[i] >> 32);
+    while (j < m_movedKeys.size() && std::uint32_t(m_movedKeys[j] >> 32) == cell) ++j;
+    for (std::size_t x = i; x < j; ++x) {
+      const std::uint32_t sa = m_moved[std::uint32_t(m_movedKeys[x])];
+      const LocalBox a = boxOf(p, sa);
+      for (std::size_t y = x + 1; y < j; ++y) {
+        const std::uint32_t sb = m_moved[std::uint32_t(m_movedKeys[y])];
+        const LocalBox b = boxOf(p, sb);
+        ++candidates;
+        if (boxesOverlap(a, b) && overlapCell(a, b, g) == cell && passesFilter(p, sa, sb))
+          runOut.push_back(makePairKey(sa, sb));
+      }
+    }
+    i = j;
+  }
+  m_stats.keys = m_movedKeys.size();
+  m_stats.candidates = candidates;
+  gather(m_movedKeys);  // the new pairs (m_movedKeys is free again)
+  tbb::parallel_sort(m_movedKeys.begin(), m_movedKeys.end());
+  pairs.resize(carried.size() + m_movedKeys.size());
+  std::merge(carried.begin(), carried.end(), m_movedKeys.begin(), m_movedKeys.end(), pairs.begin());
 }
 
 void CpuPairFinder::bruteForce(const ProxyArrays& p, const PairFinderOptions& options,
@@ -401,7 +572,8 @@ void CpuPairFinder::binSorted(const ProxyArrays& p, const Grid& g) {
   m_runStart.clear();
   m_runLength.clear();
   if (dense) {
-    // Stage 5, dense grid: parallel counting sort by cell; each cell's boxes ascend (deterministic).
+    // Stage 5, dense grid: parallel counting sort by cell.
+    m_denseBuilt = true;
     m_sorted.resize(keys);
     countingSort(
         n, cells, m_cellStart, [&](std::size_t i, auto&& f) { forEachCell(cellRange(m_box[i], g), g, f); },
@@ -585,7 +757,9 @@ void CpuPairFinder::gather(std::vector<std::uint64_t>& pairs) {
 
 void CpuPairFinder::grid(const ProxyArrays& p, const PairFinderOptions& options, std::vector<std::uint64_t>& pairs) {
   m_stats.usedGrid = true;
+  m_denseBuilt = false;
   const Grid g = chooseGrid(p, options);
+  m_keptGrid = g;
   m_stats.cellSize = g.cell;
   for (int a = 0; a < 3; ++a) m_stats.dims[a] = g.dims[a];
   if (!m_binned.empty()) {
@@ -604,6 +778,8 @@ std::size_t CpuPairFinder::scratchBytes() const {
   bytes += m_cellStart.capacity() * 4 + m_keys.capacity() * 8 + m_sorted.capacity() * 4;
   bytes += m_box.capacity() * sizeof(LocalBox) + m_homeKeys.capacity() * 8 + m_homeOrder.capacity() * 4 +
            m_isBinned.capacity();
+  bytes += m_unchanged.capacity() + m_keptHuge.capacity() * 4 + m_lastPairs.capacity() * 8 + m_moved.capacity() * 4 +
+           m_movedKeys.capacity() * 8;
   bytes += m_runCell.capacity() * 4 + m_runStart.capacity() * 4 + m_runLength.capacity() * 4;
   bytes += m_runPrefix.capacity() * 8 + m_bits.capacity() * 8 + m_blockRuns.capacity() * 4 + m_offsets.capacity() * 4;
   for (const auto& c : m_chunkPairs) bytes += c.capacity() * 8;

@@ -18,8 +18,9 @@
 //     cellOf(x) = clamp(floor((x - origin) * invCell), 0, dim-1) in float, a monotone function, and the cell
 //     index is cx + dimX*(cy + dimY*cz). One 64-bit key per (cell, proxy): (cell << 32) | proxy. Count
 //     first (cells per box, exclusive prefix sum), then allocate and fill: no capacity to overflow.
-//  5. Sort the keys by (cell, proxy): a counting sort over cells when the grid is dense (cells <= 4 × keys),
-//     else tbb::parallel_sort. Equal cells become runs; proxies inside a run ascend.
+//  5. Sort the keys by cell: a parallel counting sort over cells when the grid is dense (cells <= 8 × boxes
+//     + 1024), else tbb::parallel_sort of (cell, proxy) keys. Equal cells become runs; the order inside a
+//     run does not matter (pairs are keyed by slot and sorted in stage 10).
 //  6. Per-cell counts: a run of m proxies holds m(m-1)/2 candidate pairs; an exclusive prefix sum over the
 //     runs numbers every candidate globally, k in [0, total).
 //  7. Mapping function: candidate k → its run (binary search in the prefix sum) → local index → (i, j) in
@@ -30,6 +31,12 @@
 //     cell holds the overlap's min corner, i.e. cellOf(max(minA, minB)) on each axis == the run's cell.
 // 10. Output: set bits in a bit mask over the candidates (§3.4) or append to per-chunk lists (compacted);
 //     either way the pair keys are gathered and sorted, so the order never depends on threads or device.
+//
+// 11. Resting proxies (CPU finder, "skip what a scene does not need"): when ProxyArrays::moved says which
+//     slots changed since this finder's previous search and few did, the grid of that search is kept:
+//     proxies unchanged since it was built (static or sleeping) are not re-binned and not tested among
+//     themselves (their pairs are carried over); only moved proxies are binned (on the kept grid) and
+//     tested against the kept cells, the kept huge boxes and each other. Same pairs, same order.
 //
 // Pair key: (std::uint64_t(lower slot) << 32) | higher slot. Slots are the indices into ProxyArrays.
 #include <cstdint>
@@ -69,6 +76,9 @@ struct ProxyArrays {
   const std::int32_t* mask = nullptr;
   /// kProxyActive | kProxyStatic bits per slot.
   const std::uint8_t* flags = nullptr;
+  /// Optional: nonzero for a slot whose box, filter or flags changed (or that is new) since the previous
+  /// findPairs call on the same finder. nullptr: anything may have changed (a full search).
+  const std::uint8_t* moved = nullptr;
 };
 
 /// How the grid's cell size is chosen (paper §4.1 and the alternative it is measured against).
@@ -110,6 +120,12 @@ struct PairFinderStats {
   std::uint32_t hugeProxies = 0;
   /// Bytes of scratch memory held by the finder after the search.
   std::size_t scratchBytes = 0;
+  /// True when the search kept the last grid and binned only moved proxies (stage 11).
+  bool incremental = false;
+  /// Active proxies neither re-binned nor tested among themselves in this search (stage 11).
+  std::uint32_t restingProxies = 0;
+  /// Active proxies binned (or, when huge, tested against all) in this search.
+  std::uint32_t rebinnedProxies = 0;
 };
 
 /// Finds every pair of active proxies whose AABBs overlap (touching counts) and pass the filters.

@@ -42,6 +42,8 @@ struct GridBroadphase::Impl {
   std::vector<float> minX, minY, minZ, maxX, maxY, maxZ;
   std::vector<std::int32_t> group, mask;
   std::vector<std::uint8_t> flags;
+  std::vector<std::uint8_t> moved;          // per slot: box, filter or life changed since the last search
+  const PairFinder* lastFinder = nullptr;   // the finder of the last search (moved is relative to it)
   std::vector<std::uint32_t> freeSlots;     // reusable now
   std::vector<std::uint32_t> pendingFree;   // freed since the last search: reused only after it
   std::vector<std::uint8_t> freedSinceSearch;  // per slot: its old pairs are already gone from the cache
@@ -63,6 +65,7 @@ struct GridBroadphase::Impl {
     v.minX = minX.data(), v.minY = minY.data(), v.minZ = minZ.data();
     v.maxX = maxX.data(), v.maxY = maxY.data(), v.maxZ = maxZ.data();
     v.group = group.data(), v.mask = mask.data(), v.flags = flags.data();
+    v.moved = moved.data();
     return v;
   }
 
@@ -106,7 +109,7 @@ struct GridBroadphase::Impl {
   void removeDeferred(btDispatcher* dispatcher);
 
   std::size_t memoryBytes(const PairFinder& finder) const {
-    return proxies.size() * sizeof(GridProxy) + flags.capacity() * (6 * sizeof(float) + 2 * sizeof(std::int32_t) + 2) +
+    return proxies.size() * sizeof(GridProxy) + flags.capacity() * (6 * sizeof(float) + 2 * sizeof(std::int32_t) + 3) +
            (freeSlots.capacity() + pendingFree.capacity()) * 4 +
            (accepted.capacity() + found.capacity() + next.capacity()) * 8 + finder.stats().scratchBytes;
   }
@@ -142,6 +145,7 @@ btBroadphaseProxy* GridBroadphase::createProxy(const btVector3& aabbMin, const b
     d.proxies.emplace_back();
     for (auto* v : {&d.minX, &d.minY, &d.minZ, &d.maxX, &d.maxY, &d.maxZ}) v->push_back(0.0f);
     d.group.push_back(0), d.mask.push_back(0), d.flags.push_back(0), d.freedSinceSearch.push_back(0);
+    d.moved.push_back(0);
   }
   GridProxy& p = d.proxies[slot];
   static_cast<btBroadphaseProxy&>(p) =
@@ -153,6 +157,7 @@ btBroadphaseProxy* GridBroadphase::createProxy(const btVector3& aabbMin, const b
   d.group[slot] = collisionFilterGroup;
   d.mask[slot] = collisionFilterMask;
   d.flags[slot] = Impl::flagsOf(collisionFilterGroup);
+  d.moved[slot] = 1;
   ++d.liveCount;
   d.dirty = true;
   return &p;
@@ -185,6 +190,7 @@ void GridBroadphase::setAabb(btBroadphaseProxy* proxy, const btVector3& aabbMin,
   if (d.minX[s] != aabbMin.x() || d.minY[s] != aabbMin.y() || d.minZ[s] != aabbMin.z() || d.maxX[s] != aabbMax.x() ||
       d.maxY[s] != aabbMax.y() || d.maxZ[s] != aabbMax.z()) {
     d.store(s, aabbMin, aabbMax);
+    d.moved[s] = 1;
     d.dirty = true;
   }
 }
@@ -233,6 +239,7 @@ void GridBroadphase::calculateOverlappingPairs(btDispatcher* dispatcher) {
       d.group[s] = p.m_collisionFilterGroup;
       d.mask[s] = p.m_collisionFilterMask;
       d.flags[s] = Impl::flagsOf(p.m_collisionFilterGroup);
+      d.moved[s] = 1;
       d.dirty = true;
     }
   }
@@ -244,8 +251,15 @@ void GridBroadphase::calculateOverlappingPairs(btDispatcher* dispatcher) {
   }
   st.searched = true;
   PairFinder& finder = d.chooseFinder(st);
-  finder.findPairs(d.view(), d.options(), d.found);
+  ProxyArrays view = d.view();
+  // `moved` is relative to the previous search of the same finder; after a switch of finder, all moved.
+  if (&finder != d.lastFinder) view.moved = nullptr;
+  finder.findPairs(view, d.options(), d.found);
+  d.lastFinder = &finder;
+  std::fill(d.moved.begin(), d.moved.end(), std::uint8_t(0));
   st.usedGrid = finder.stats().usedGrid;
+  st.restingProxies = finder.stats().restingProxies;
+  st.rebinnedProxies = finder.stats().rebinnedProxies;
   st.cellSize = finder.stats().cellSize;
   st.overlappingPairs = d.found.size();
 
@@ -339,6 +353,8 @@ void GridBroadphase::resetPool(btDispatcher* /*dispatcher*/) {
   std::vector<std::int32_t>().swap(d.mask);
   std::vector<std::uint8_t>().swap(d.flags);
   std::vector<std::uint8_t>().swap(d.freedSinceSearch);
+  std::vector<std::uint8_t>().swap(d.moved);
+  d.lastFinder = nullptr;
   d.freeSlots.clear(), d.pendingFree.clear(), d.accepted.clear();
   d.nextUniqueId = 0;
   d.dirty = true;
@@ -356,6 +372,7 @@ void GridBroadphase::printStats() {
 void GridBroadphase::setTuning(const GridBroadphaseTuning& tuning) {
   m_impl->tuning = tuning;
   m_impl->dirty = true;
+  m_impl->lastFinder = nullptr;  // a full search with the new options
 }
 
 const GridBroadphaseStats& GridBroadphase::stats() const { return m_impl->stats; }
