@@ -205,7 +205,7 @@ class CpuPairFinder final : public PairFinder {
   Grid chooseGrid(const ProxyArrays& p, const PairFinderOptions& options);
   void binSorted(const ProxyArrays& p, const Grid& g);
   void testRuns(const ProxyArrays& p, const PairFinderOptions& options, const Grid& g);
-  void testHuge(const ProxyArrays& p);
+  void testHuge(const ProxyArrays& p, const Grid& g);
   void gather(std::vector<std::uint64_t>& pairs);
   bool keepGrid(const ProxyArrays& p, const PairFinderOptions& options);
   void incremental(const ProxyArrays& p, const PairFinderOptions& options, std::vector<std::uint64_t>& pairs);
@@ -726,24 +726,43 @@ void CpuPairFinder::testRuns(const ProxyArrays& p, const PairFinderOptions& opti
   });
 }
 
-void CpuPairFinder::testHuge(const ProxyArrays& p) {
-  // Stage 3: every huge box against every other active box (huge pairs once, by the lower slot).
+void CpuPairFinder::testHuge(const ProxyArrays& p, const Grid& g) {
+  // Stage 3: every huge box against the other huge boxes (each pair once, from the earlier in m_huge) and
+  // against the binned boxes: either one by one, or, when it covers few enough cells of a dense grid,
+  // through those cells' entries with stage 9's rule (a binned box is in every cell it overlaps, so the
+  // cell of the overlap's min corner holds it; the huge box's clamped range covers that cell too).
   const std::size_t h = m_huge.size();
   if (h == 0) return;
-  const std::size_t n = m_active.size();
-  m_stats.candidates += std::uint64_t(h) * n;
   const std::size_t firstChunk = takeChunks(h);
+  const double keysPerCell = m_denseBuilt ? double(m_sorted.size()) / double(m_cellStart.size() - 1) : 0.0;
+  std::vector<std::uint64_t> tested(h, 0);
   tbb::parallel_for(std::size_t(0), h, [&](std::size_t hi) {
     const std::uint32_t sh = m_huge[hi];
+    const LocalBox a = boxOf(p, sh);
     auto& out = m_chunkPairs[firstChunk + hi];
     out.clear();
-    for (std::uint32_t s : m_active) {
-      if (s == sh) continue;
-      const bool otherHuge = std::binary_search(m_huge.begin(), m_huge.end(), s);
-      if (otherHuge && s < sh) continue;  // that pair belongs to the other huge box's row
-      if (aabbOverlap(p, sh, s) && passesFilter(p, sh, s)) out.push_back(makePairKey(sh, s));
+    for (std::size_t other = hi + 1; other < h; ++other) {
+      const std::uint32_t s = m_huge[other];
+      if (boxesOverlap(a, boxOf(p, s)) && passesFilter(p, sh, s)) out.push_back(makePairKey(sh, s));
+    }
+    tested[hi] = h - hi - 1;
+    const CellRange range = cellRange(a, g);
+    if (m_denseBuilt && double(range.count()) * (1.0 + keysPerCell) < double(m_binned.size())) {
+      forEachCell(range, g, [&](std::uint32_t c) {
+        for (std::uint32_t e = m_cellStart[c], end = m_cellStart[c + 1]; e < end; ++e) {
+          const LocalBox& b = m_box[m_sorted[e]];
+          if (boxesOverlap(a, b) && overlapCell(a, b, g) == c && passesFilter(p, sh, b.slot))
+            out.push_back(makePairKey(sh, b.slot));
+        }
+        tested[hi] += m_cellStart[c + 1] - m_cellStart[c];
+      });
+    } else {
+      for (std::uint32_t s : m_binned)
+        if (boxesOverlap(a, boxOf(p, s)) && passesFilter(p, sh, s)) out.push_back(makePairKey(sh, s));
+      tested[hi] += m_binned.size();
     }
   });
+  for (std::uint64_t t : tested) m_stats.candidates += t;
 }
 
 void CpuPairFinder::gather(std::vector<std::uint64_t>& pairs) {
@@ -766,7 +785,7 @@ void CpuPairFinder::grid(const ProxyArrays& p, const PairFinderOptions& options,
     binSorted(p, g);
     testRuns(p, options, g);
   }
-  testHuge(p);
+  testHuge(p, g);
   gather(pairs);
   // Stage 10: one order whatever the chunking, threads or device.
   tbb::parallel_sort(pairs.begin(), pairs.end());
