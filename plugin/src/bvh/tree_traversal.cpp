@@ -7,6 +7,8 @@
 #include <algorithm>
 #include <cmath>
 #include <cstddef>
+#include <memory>
+#include <utility>
 
 #if defined(__SSE2__)
 #include <emmintrin.h>
@@ -281,6 +283,26 @@ class Traverser {
   const BoxCarrier& m_carrier;
 };
 
+/// The breadth-first front: a growable array whose entries are left uninitialised until written (a
+/// std::vector::resize zero-filled four times the front per level, about a third of the serial part).
+class PairBuffer {
+ public:
+  /// Room for at least n entries; the previous contents are not kept.
+  NodePair* reserve(std::size_t n) {
+    if (n > m_capacity) {
+      m_data.reset(new NodePair[n]);
+      m_capacity = n;
+    }
+    return m_data.get();
+  }
+  /// The entries.
+  NodePair* data() const { return m_data.get(); }
+
+ private:
+  std::unique_ptr<NodePair[]> m_data;
+  std::size_t m_capacity = 0;
+};
+
 /// What each worker thread keeps between the front's pairs.
 struct WorkerState {
   std::vector<NodePair> stack;
@@ -378,17 +400,21 @@ void findCandidatePairs(const AabbTree& a, const AabbTree& b, const AffineMap& b
   } else {
     // Breadth-first until the front holds enough independent pairs (thesis §5.4.2 expands level by level too),
     // then each worker finishes its share depth first with its own stack and output.
-    std::vector<NodePair> front{root}, next;
-    while (!front.empty() && front.size() < kParallelFront) {
-      next.resize(4 * front.size());
-      NodePair* top = next.data();
-      for (const NodePair& pair : front) top = traverser.expand(pair, top, out, tests);
-      next.resize(static_cast<std::size_t>(top - next.data()));
-      front.swap(next);
+    PairBuffer frontBuffer, nextBuffer;
+    frontBuffer.reserve(1)[0] = root;
+    std::size_t frontSize = 1;
+    while (frontSize != 0 && frontSize < kParallelFront) {
+      const NodePair* const front = frontBuffer.data();
+      NodePair* const next = nextBuffer.reserve(4 * frontSize);
+      NodePair* top = next;
+      for (std::size_t i = 0; i < frontSize; ++i) top = traverser.expand(front[i], top, out, tests);
+      frontSize = static_cast<std::size_t>(top - next);
+      std::swap(frontBuffer, nextBuffer);
     }
-    if (!front.empty()) {
+    const NodePair* const front = frontBuffer.data();
+    if (frontSize != 0) {
       tbb::enumerable_thread_specific<WorkerState> workers;
-      tbb::parallel_for(tbb::blocked_range<std::size_t>(0, front.size(), kParallelGrain),
+      tbb::parallel_for(tbb::blocked_range<std::size_t>(0, frontSize, kParallelGrain),
                         [&](const tbb::blocked_range<std::size_t>& range) {
                           WorkerState& w = workers.local();
                           w.stack.resize(bound);
