@@ -169,6 +169,39 @@ inline std::uint32_t atomicAdd(std::uint32_t& counter, std::uint32_t value) {
   return __atomic_fetch_add(&counter, value, __ATOMIC_RELAXED);
 }
 
+/// Sorts pair keys (lower slot << 32 | higher slot, both below 2^slotBits) ascending: an LSD radix sort of
+/// the 2 × slotBits significant bits in 11-bit digits, using `scratch` as the second buffer. Faster than a
+/// comparison sort here (a pair list is a few keys per proxy and slots are dense), and the result is the
+/// sorted list whatever the input order.
+void radixSortPairs(std::vector<std::uint64_t>& keys, std::vector<std::uint64_t>& scratch, std::uint32_t slotBits) {
+  constexpr int kDigitBits = 11;
+  constexpr std::size_t kBuckets = std::size_t(1) << kDigitBits;
+  const std::size_t n = keys.size();
+  if (n < 2) return;
+  // Compact (a, b) to (a << slotBits) | b so that every pass sorts significant bits.
+  for (std::uint64_t& k : keys) k = ((k >> 32) << slotBits) | (k & 0xffffffffu);
+  scratch.resize(n);
+  const int bits = 2 * int(slotBits);
+  std::size_t count[kBuckets];
+  for (int shift = 0; shift < bits; shift += kDigitBits) {
+    std::fill(count, count + kBuckets, std::size_t(0));
+    for (std::uint64_t k : keys) ++count[(k >> shift) & (kBuckets - 1)];
+    std::size_t sum = 0;
+    for (std::size_t& c : count) sum += std::exchange(c, sum);
+    for (std::uint64_t k : keys) scratch[count[(k >> shift) & (kBuckets - 1)]++] = k;
+    keys.swap(scratch);
+  }
+  const std::uint64_t low = (std::uint64_t(1) << slotBits) - 1;
+  for (std::uint64_t& k : keys) k = ((k >> slotBits) << 32) | (k & low);
+}
+
+/// Bits needed for slots below `count` (at least 1).
+inline std::uint32_t slotBitsFor(std::uint32_t count) {
+  std::uint32_t bits = 1;
+  while (bits < 32 && (std::uint64_t(1) << bits) < count) ++bits;
+  return bits;
+}
+
 /// Parallel counting sort of items 0..items-1 into `cells` buckets; `buckets(i, f)` calls f(cell) for each
 /// bucket item i goes into, and place(i, position) stores item i at its position in the output. Afterwards
 /// start[c]..start[c+1] (start has cells + 1 entries) is bucket c's range of the output. Threads count with atomic increments, an inclusive scan turns counts into bucket ends,
@@ -234,6 +267,7 @@ class CpuPairFinder final : public PairFinder {
   std::vector<std::uint64_t> m_lastPairs; // this finder's previous result
   std::vector<std::uint32_t> m_moved;     // active slots changed since the kept search
   std::vector<std::uint64_t> m_movedKeys; // (cell << 32) | index into m_moved, binned moved proxies
+  std::vector<std::uint64_t> m_sortScratch;  // second buffer of the pair radix sort
   std::vector<std::uint32_t> m_sorted;   // m_box indices sorted by (cell, index)
   std::vector<std::uint32_t> m_runCell;  // runs of >= 2 entries: cell index
   std::vector<std::uint32_t> m_runStart; // first entry in m_sorted
@@ -300,13 +334,16 @@ bool CpuPairFinder::keepGrid(const ProxyArrays& p, const PairFinderOptions& opti
   // A slot stays unchanged while it stays active and does not move; new slots start changed.
   if (m_unchanged.size() < p.count) m_unchanged.resize(p.count, 0);
   m_moved.clear();
+  const std::size_t limit = std::size_t(kIncrementalFraction * double(m_active.size()));
   for (std::uint32_t s = 0; s < p.count; ++s) {
     if (p.moved[s] || !(p.flags[s] & kProxyActive)) m_unchanged[s] = 0;
-    if ((p.flags[s] & kProxyActive) && !m_unchanged[s]) m_moved.push_back(s);
-  }
-  if (double(m_moved.size()) > kIncrementalFraction * double(m_active.size())) {
-    m_kept = false;
-    return false;
+    if ((p.flags[s] & kProxyActive) && !m_unchanged[s]) {
+      m_moved.push_back(s);
+      if (m_moved.size() > limit) {  // too many: a full search, which rebuilds m_unchanged anyway
+        m_kept = false;
+        return false;
+      }
+    }
   }
   return true;
 }
@@ -394,7 +431,7 @@ void CpuPairFinder::incremental(const ProxyArrays& p, const PairFinderOptions& o
   m_stats.keys = m_movedKeys.size();
   m_stats.candidates = candidates;
   gather(m_movedKeys);  // the new pairs (m_movedKeys is free again)
-  tbb::parallel_sort(m_movedKeys.begin(), m_movedKeys.end());
+  radixSortPairs(m_movedKeys, m_sortScratch, slotBitsFor(p.count));
   pairs.resize(carried.size() + m_movedKeys.size());
   std::merge(carried.begin(), carried.end(), m_movedKeys.begin(), m_movedKeys.end(), pairs.begin());
 }
@@ -788,7 +825,7 @@ void CpuPairFinder::grid(const ProxyArrays& p, const PairFinderOptions& options,
   testHuge(p, g);
   gather(pairs);
   // Stage 10: one order whatever the chunking, threads or device.
-  tbb::parallel_sort(pairs.begin(), pairs.end());
+  radixSortPairs(pairs, m_sortScratch, slotBitsFor(p.count));
 }
 
 std::size_t CpuPairFinder::scratchBytes() const {
@@ -798,7 +835,7 @@ std::size_t CpuPairFinder::scratchBytes() const {
   bytes += m_box.capacity() * sizeof(LocalBox) + m_homeKeys.capacity() * 8 + m_homeOrder.capacity() * 4 +
            m_isBinned.capacity();
   bytes += m_unchanged.capacity() + m_keptHuge.capacity() * 4 + m_lastPairs.capacity() * 8 + m_moved.capacity() * 4 +
-           m_movedKeys.capacity() * 8;
+           m_movedKeys.capacity() * 8 + m_sortScratch.capacity() * 8;
   bytes += m_runCell.capacity() * 4 + m_runStart.capacity() * 4 + m_runLength.capacity() * 4;
   bytes += m_runPrefix.capacity() * 8 + m_bits.capacity() * 8 + m_blockRuns.capacity() * 4 + m_offsets.capacity() * 4;
   for (const auto& c : m_chunkPairs) bytes += c.capacity() * 8;
