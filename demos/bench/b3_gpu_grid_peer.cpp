@@ -5,8 +5,8 @@
 #endif
 #include "b3_gpu_grid_peer.h"
 
-#include <Bullet3OpenCL/BroadphaseCollision/b3GpuGridBroadphase.h>
 #include <Bullet3Common/b3Logging.h>
+#include <Bullet3OpenCL/BroadphaseCollision/b3GpuGridBroadphase.h>
 #include <Bullet3OpenCL/Initialize/b3OpenCLUtils.h>
 
 #include <algorithm>
@@ -39,7 +39,9 @@ class TunableGridBroadphase : public b3GpuGridBroadphase {
 };
 
 /// Bullet3 prints its kernel compilation progress with b3Printf (stdout); the benchmark's tables own stdout.
-void printToStderr(const char* message) { std::fputs(message, stderr); }
+void printToStderr(const char* message) {
+  std::fputs(message, stderr);
+}
 
 /// Large proxies: boxes whose largest extent is more than this many times the median largest extent.
 constexpr float kLargeFactor = 4.0f;
@@ -96,11 +98,13 @@ B3GpuGridPeer::B3GpuGridPeer(const std::string& deviceFilter) : m_impl(std::make
   m_impl->queue = clCreateCommandQueue(m_impl->context, m_impl->device, 0, &err);
   if (m_impl->queue == nullptr || err != CL_SUCCESS) {
     clReleaseContext(m_impl->context);
-    throw std::runtime_error("b3GpuGridBroadphase peer: clCreateCommandQueue failed with " + std::to_string(err));
+    throw std::runtime_error("b3GpuGridBroadphase peer: clCreateCommandQueue failed with " +
+                             std::to_string(err));
   }
   // Bullet3 reports kernel build failures only on stderr (b3Assert is compiled out in Debian's release
   // build); a failed build shows up as a failed launch below.
-  m_impl->broadphase = std::make_unique<TunableGridBroadphase>(m_impl->context, m_impl->device, m_impl->queue);
+  m_impl->broadphase =
+      std::make_unique<TunableGridBroadphase>(m_impl->context, m_impl->device, m_impl->queue);
 }
 
 B3GpuGridPeer::~B3GpuGridPeer() {
@@ -113,7 +117,9 @@ B3GpuGridPeer::~B3GpuGridPeer() {
   }
 }
 
-const std::string& B3GpuGridPeer::deviceName() const { return m_impl->deviceName; }
+const std::string& B3GpuGridPeer::deviceName() const {
+  return m_impl->deviceName;
+}
 
 void B3GpuGridPeer::setBoxes(const ProxyArrays& p) {
   Impl& m = *m_impl;

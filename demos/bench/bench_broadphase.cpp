@@ -68,12 +68,14 @@ Scene fallingColumn(std::size_t n, std::uint32_t seed) {
   std::uniform_real_distribution<float> jitter(-0.02f, 0.02f);
   for (std::size_t i = 0; i < n; ++i) {
     const std::size_t x = i % base, z = (i / base) % base, y = i / (base * base);
-    s.centre.emplace_back(float(x) * 1.1f + jitter(rng), 0.6f + float(y) * 1.1f, float(z) * 1.1f + jitter(rng));
+    s.centre.emplace_back(float(x) * 1.1f + jitter(rng), 0.6f + float(y) * 1.1f,
+                          float(z) * 1.1f + jitter(rng));
     s.half.emplace_back(0.5f, 0.5f, 0.5f);
     s.velocity.emplace_back(0, -0.3f + jitter(rng), 0);
   }
   const float top = 1.1f * float(n / (base * base) + 2);
-  s.lo = btVector3(-10, -10, -10), s.hi = btVector3(float(base) * 1.1f + 10, top + 10, float(base) * 1.1f + 10);
+  s.lo = btVector3(-10, -10, -10),
+  s.hi = btVector3(float(base) * 1.1f + 10, top + 10, float(base) * 1.1f + 10);
   s.advance = [](Scene& sc, int) {
     for (std::size_t i = 0; i < sc.centre.size(); ++i) {
       sc.centre[i] += sc.velocity[i];
@@ -94,7 +96,8 @@ Scene mixedSizes(std::size_t n, std::uint32_t seed) {
     const float r = 0.1f + 1.9f * std::pow(u(rng), 4.0f);
     h = btVector3(r, 0.1f + 1.9f * std::pow(u(rng), 4.0f), r);
   }
-  for (std::size_t i = 0; i < std::max<std::size_t>(1, n / 20000); ++i) s.half[i] = btVector3(0.1f, 0.1f, 0.1f) * side;
+  for (std::size_t i = 0; i < std::max<std::size_t>(1, n / 20000); ++i)
+    s.half[i] = btVector3(0.1f, 0.1f, 0.1f) * side;
   return s;
 }
 
@@ -133,9 +136,10 @@ Result run(const std::string& label, btBroadphaseInterface& bp, Scene scene, int
   std::vector<btBroadphaseProxy*> proxies;
   proxies.reserve(scene.centre.size());
   for (std::size_t i = 0; i < scene.centre.size(); ++i)
-    proxies.push_back(bp.createProxy(scene.centre[i] - scene.half[i], scene.centre[i] + scene.half[i], BOX_SHAPE_PROXYTYPE,
-                                     reinterpret_cast<void*>(i), btBroadphaseProxy::DefaultFilter,
-                                     btBroadphaseProxy::AllFilter, &dispatcher));
+    proxies.push_back(bp.createProxy(scene.centre[i] - scene.half[i], scene.centre[i] + scene.half[i],
+                                     BOX_SHAPE_PROXYTYPE, reinterpret_cast<void*>(i),
+                                     btBroadphaseProxy::DefaultFilter, btBroadphaseProxy::AllFilter,
+                                     &dispatcher));
   bp.calculateOverlappingPairs(&dispatcher);  // initial pairs, not timed
   std::vector<double> ms;
   for (int t = 0; t < steps; ++t) {
@@ -153,8 +157,8 @@ Result run(const std::string& label, btBroadphaseInterface& bp, Scene scene, int
   r.pairs = std::size_t(cache->getNumOverlappingPairs());
   for (int i = 0; i < cache->getNumOverlappingPairs(); ++i) {
     const btBroadphasePair& p = cache->getOverlappingPairArray()[i];
-    r.realPairs += TestAabbAgainstAabb2(p.m_pProxy0->m_aabbMin, p.m_pProxy0->m_aabbMax, p.m_pProxy1->m_aabbMin,
-                                        p.m_pProxy1->m_aabbMax);
+    r.realPairs += TestAabbAgainstAabb2(p.m_pProxy0->m_aabbMin, p.m_pProxy0->m_aabbMax,
+                                        p.m_pProxy1->m_aabbMin, p.m_pProxy1->m_aabbMax);
   }
   if (memory) r.memoryBytes = memory();
   // No destroyProxy loop: Bullet's caches scan every pair per removed proxy (quadratic teardown, the same
@@ -168,13 +172,16 @@ struct SceneArrays {
   std::vector<std::int32_t> group, mask;
   std::vector<std::uint8_t> flags;
 
-  explicit SceneArrays(std::size_t n) : group(n, btBroadphaseProxy::DefaultFilter), mask(n, btBroadphaseProxy::AllFilter),
-                                        flags(n, kProxyActive) {
+  explicit SceneArrays(std::size_t n)
+      : group(n, btBroadphaseProxy::DefaultFilter),
+        mask(n, btBroadphaseProxy::AllFilter),
+        flags(n, kProxyActive) {
     for (int a = 0; a < 3; ++a) lo[a].resize(n), hi[a].resize(n);
   }
   void store(const Scene& s) {
     for (std::size_t i = 0; i < s.centre.size(); ++i)
-      for (int a = 0; a < 3; ++a) lo[a][i] = s.centre[i][a] - s.half[i][a], hi[a][i] = s.centre[i][a] + s.half[i][a];
+      for (int a = 0; a < 3; ++a)
+        lo[a][i] = s.centre[i][a] - s.half[i][a], hi[a][i] = s.centre[i][a] + s.half[i][a];
   }
   ProxyArrays view() const {
     ProxyArrays v;
@@ -211,8 +218,8 @@ Result runB3(const std::string& label, B3GpuGridPeer& peer, Scene scene, int ste
   const ProxyArrays v = arrays.view();
   for (std::uint64_t key : peer.pairs()) {
     const std::uint32_t a = std::uint32_t(key >> 32), b = std::uint32_t(key);
-    r.realPairs += v.minX[a] <= v.maxX[b] && v.minX[b] <= v.maxX[a] && v.minY[a] <= v.maxY[b] && v.minY[b] <= v.maxY[a] &&
-                   v.minZ[a] <= v.maxZ[b] && v.minZ[b] <= v.maxZ[a];
+    r.realPairs += v.minX[a] <= v.maxX[b] && v.minX[b] <= v.maxX[a] && v.minY[a] <= v.maxY[b] &&
+                   v.minY[b] <= v.maxY[a] && v.minZ[a] <= v.maxZ[b] && v.minZ[b] <= v.maxZ[a];
   }
   return r;
 }
@@ -247,7 +254,8 @@ struct Options {
   int bruteForceBelow = Config{}.bruteForceBelow;
   std::size_t peerMax = 1000000;
   // bt32BitAxisSweep3 inserts each new proxy by walking its edges down the three sorted axes: n proxies
-  // cost O(n^2) to create (measured here: 30K take 14 s, so 100K would take minutes), so it is left out above this.
+  // cost O(n^2) to create (measured here: 30K take 14 s, so 100K would take minutes), so it is left out above
+  // this.
   std::size_t sapMax = 30000;
 };
 
@@ -256,7 +264,8 @@ void runAll(const Options& o) {
   if (!o.csv.empty()) {
     csv.open(o.csv);
     if (!csv) throw std::runtime_error("cannot write " + o.csv);
-    csv << "scene,n,broadphase,median_ms,ratio_vs_gpucol_cpu,pairs,real_pairs,bytes_per_proxy_minus_8_per_pair,note\n";
+    csv << "scene,n,broadphase,median_ms,ratio_vs_gpucol_cpu,pairs,real_pairs,bytes_per_proxy_minus_8_per_"
+           "pair,note\n";
   }
   const std::vector<std::string> runs = parseNames(o.runs);
   auto wanted = [&](const char* name) { return std::find(runs.begin(), runs.end(), name) != runs.end(); };
@@ -288,8 +297,8 @@ void runAll(const Options& o) {
     }
   }
   std::printf("OpenCL device: %s\n", deviceName.empty() ? "(none)" : deviceName.c_str());
-  std::printf("%-8s %9s %-18s %11s %9s %11s %11s %9s\n", "scene", "N", "broadphase", "median ms", "x gpucol", "pairs",
-              "real pairs", "B/proxy");
+  std::printf("%-8s %9s %-18s %11s %9s %11s %11s %9s\n", "scene", "N", "broadphase", "median ms", "x gpucol",
+              "pairs", "real pairs", "B/proxy");
   for (const std::string& sceneName : parseNames(o.scenes))
     for (std::size_t n : parseList(o.sizes)) {
       auto make = [&]() {
@@ -356,15 +365,17 @@ void runAll(const Options& o) {
         std::string perProxy = "-", perProxyCsv;
         if (r.memoryBytes) {
           char text[32];
-          std::snprintf(text, sizeof text, "%.1f", (double(r.memoryBytes) - 8.0 * double(r.pairs)) / double(n));
+          std::snprintf(text, sizeof text, "%.1f",
+                        (double(r.memoryBytes) - 8.0 * double(r.pairs)) / double(n));
           perProxy = perProxyCsv = text;
         }
         const double ratio = reference > 0 ? r.medianMs / reference : 0.0;
-        std::printf("%-8s %9zu %-18s %11.3f %9.2f %11zu %11zu %9s %s\n", sceneName.c_str(), n, r.broadphase.c_str(),
-                    r.medianMs, ratio, r.pairs, r.realPairs, perProxy.c_str(), r.note.c_str());
+        std::printf("%-8s %9zu %-18s %11.3f %9.2f %11zu %11zu %9s %s\n", sceneName.c_str(), n,
+                    r.broadphase.c_str(), r.medianMs, ratio, r.pairs, r.realPairs, perProxy.c_str(),
+                    r.note.c_str());
         if (csv)
-          csv << sceneName << ',' << n << ',' << r.broadphase << ',' << r.medianMs << ',' << ratio << ',' << r.pairs << ','
-              << r.realPairs << ',' << perProxyCsv << ',' << r.note << '\n';
+          csv << sceneName << ',' << n << ',' << r.broadphase << ',' << r.medianMs << ',' << ratio << ','
+              << r.pairs << ',' << r.realPairs << ',' << perProxyCsv << ',' << r.note << '\n';
       }
       std::fflush(stdout);
     }
@@ -372,20 +383,25 @@ void runAll(const Options& o) {
 
 const CommandRegistration kRegistration([](CLI::App& app) {
   auto options = std::make_shared<Options>();
-  CLI::App* cmd = app.add_subcommand(
-      "broadphase",
-      "Per step (setAabb of every proxy + calculateOverlappingPairs), median ms of gpucol::GridBroadphase on the "
-      "CPU and through OpenCL beside btDbvtBroadphase, bt32BitAxisSweep3 and Bullet3's b3GpuGridBroadphase (same "
-      "OpenCL device), on moving boxes.");
+  CLI::App* cmd = app.add_subcommand("broadphase",
+                                     "Per step (setAabb of every proxy + calculateOverlappingPairs), median "
+                                     "ms of gpucol::GridBroadphase on the "
+                                     "CPU and through OpenCL beside btDbvtBroadphase, bt32BitAxisSweep3 and "
+                                     "Bullet3's b3GpuGridBroadphase (same "
+                                     "OpenCL device), on moving boxes.");
   cmd->footer(
-      "Columns: 'x gpucol' = median ms / gpucol-cpu's median ms (above 1: slower than gpucol-cpu); 'pairs' = pairs "
-      "in the pair cache after the last step (b3GpuGrid: pairs it found); 'real pairs' = of those, the pairs whose "
-      "AABBs overlap (btDbvt keeps fattened, stale pairs); 'B/proxy' = (bytes held by GridBroadphase - 8 x pairs) / "
+      "Columns: 'x gpucol' = median ms / gpucol-cpu's median ms (above 1: slower than gpucol-cpu); 'pairs' = "
+      "pairs "
+      "in the pair cache after the last step (b3GpuGrid: pairs it found); 'real pairs' = of those, the pairs "
+      "whose "
+      "AABBs overlap (btDbvt keeps fattened, stale pairs); 'B/proxy' = (bytes held by GridBroadphase - 8 x "
+      "pairs) / "
       "N. A broad phase that does not run says why.\n"
       "Example: gpucol-bench broadphase --n 1000,10000,100000 --scenes uniform --csv bp.csv");
   cmd->add_option("--n", options->sizes, "comma-separated proxy counts (1e6 allowed)")->capture_default_str();
-  cmd->add_option("--scenes", options->scenes, "comma-separated scenes: uniform (cloud), column (falling, the paper's), "
-                                               "mixed (sizes, a few huge boxes), sleeping (cloud, 1% moving)")
+  cmd->add_option("--scenes", options->scenes,
+                  "comma-separated scenes: uniform (cloud), column (falling, the paper's), "
+                  "mixed (sizes, a few huge boxes), sleeping (cloud, 1% moving)")
       ->capture_default_str();
   cmd->add_option("--run", options->runs,
                   "comma-separated broad phases: cpu, opencl (gpucol), dbvt (btDbvtBroadphase), sap "
@@ -395,9 +411,10 @@ const CommandRegistration kRegistration([](CLI::App& app) {
       ->check(CLI::PositiveNumber)
       ->capture_default_str();
   cmd->add_option("--csv", options->csv, "also write the table to this CSV file");
-  cmd->add_option("--device", options->device,
-                  "OpenCL device name substring (Config::openclDevice; GPUCOL_OPENCL_DEVICE overrides); b3 uses "
-                  "the same device");
+  cmd->add_option(
+      "--device", options->device,
+      "OpenCL device name substring (Config::openclDevice; GPUCOL_OPENCL_DEVICE overrides); b3 uses "
+      "the same device");
   cmd->add_option("--cell-rule", options->cellRule, "grid cell size rule: size or density")
       ->check(CLI::IsMember({"size", "density"}))
       ->capture_default_str();
@@ -412,7 +429,8 @@ const CommandRegistration kRegistration([](CLI::App& app) {
       ->capture_default_str();
   cmd->add_option("--peer-max", options->peerMax, "skip btDbvt and b3GpuGrid above this many proxies")
       ->capture_default_str();
-  cmd->add_option("--sap-max", options->sapMax, "skip bt32BitAxisSweep3 above this many proxies (its setup is O(n^2))")
+  cmd->add_option("--sap-max", options->sapMax,
+                  "skip bt32BitAxisSweep3 above this many proxies (its setup is O(n^2))")
       ->capture_default_str();
   cmd->callback([options] { runAll(*options); });
 });

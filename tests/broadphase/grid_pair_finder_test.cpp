@@ -1,8 +1,9 @@
 // The CPU grid pair finder against the brute-force reference on the scenes of issue 4: uniform,
 // clustered, mixed sizes with a few huge boxes, a plane, hundreds of identical boxes at one spot, far
 // from the origin, negative coordinates, holes left by removed proxies; every option combination.
-#include <gtest/gtest.h>
+#include "broadphase/grid_pair_finder.h"
 
+#include <gtest/gtest.h>
 #include <tbb/global_control.h>
 
 #include <cstdint>
@@ -10,8 +11,6 @@
 #include <random>
 #include <string>
 #include <vector>
-
-#include "broadphase/grid_pair_finder.h"
 
 namespace {
 
@@ -21,8 +20,8 @@ struct Scene {
   std::vector<std::int32_t> group, mask;
   std::vector<std::uint8_t> flags;
 
-  void add(float cx, float cy, float cz, float hx, float hy, float hz, std::uint8_t flag = gpucol::kProxyActive,
-           std::int32_t g = 1, std::int32_t m = -1) {
+  void add(float cx, float cy, float cz, float hx, float hy, float hz,
+           std::uint8_t flag = gpucol::kProxyActive, std::int32_t g = 1, std::int32_t m = -1) {
     minX.push_back(cx - hx), minY.push_back(cy - hy), minZ.push_back(cz - hz);
     maxX.push_back(cx + hx), maxY.push_back(cy + hy), maxZ.push_back(cz + hz);
     group.push_back(g), mask.push_back(m), flags.push_back(flag);
@@ -62,14 +61,16 @@ void expectMatchesBruteForce(const Scene& scene, const std::string& what, std::u
           o.mappingSqrt = sqrtMode;
           std::vector<std::uint64_t> pairs;
           finder->findPairs(view, o, pairs);
-          ASSERT_EQ(pairs, reference) << what << " below=" << below << " rule=" << int(rule)
-                                      << " output=" << int(output) << " sqrt=" << int(sqrtMode)
-                                      << " grid=" << finder->stats().usedGrid;
+          ASSERT_EQ(pairs, reference)
+              << what << " below=" << below << " rule=" << int(rule) << " output=" << int(output)
+              << " sqrt=" << int(sqrtMode) << " grid=" << finder->stats().usedGrid;
           EXPECT_EQ(finder->stats().usedGrid, below == 0) << what;
         }
 }
 
-TEST(GridPairFinder, UniformCloud) { expectMatchesBruteForce(uniformCloud(4000, 20.0f, 0.8f, 1), "uniform"); }
+TEST(GridPairFinder, UniformCloud) {
+  expectMatchesBruteForce(uniformCloud(4000, 20.0f, 0.8f, 1), "uniform");
+}
 
 TEST(GridPairFinder, Clustered) {
   std::mt19937 rng(2);
@@ -98,14 +99,16 @@ TEST(GridPairFinder, MixedSizesWithHugeBoxes) {
   gpucol::PairFinderOptions o;
   o.bruteForceBelow = 0;
   finder->findPairs(s.view(), o, pairs);
-  EXPECT_GE(finder->stats().hugeProxies, 3u) << "the slab, pillar and the enclosing box are kept out of the grid";
+  EXPECT_GE(finder->stats().hugeProxies, 3u)
+      << "the slab, pillar and the enclosing box are kept out of the grid";
 }
 
 TEST(GridPairFinder, AllInOnePlane) {
   std::mt19937 rng(4);
   std::uniform_real_distribution<float> pos(-40.0f, 40.0f), size(0.2f, 1.0f);
   Scene s;
-  for (int i = 0; i < 3000; ++i) s.add(pos(rng), 0.0f, pos(rng), size(rng), 0.0f, size(rng));  // zero thickness
+  for (int i = 0; i < 3000; ++i)
+    s.add(pos(rng), 0.0f, pos(rng), size(rng), 0.0f, size(rng));  // zero thickness
   expectMatchesBruteForce(s, "plane");
 }
 
@@ -225,9 +228,13 @@ TEST(GridPairFinder, RestingProxiesAreNotRebinnedAndPairsStayExact) {
       const std::size_t i = rng() % s.flags.size();
       moved[i] = 1;
       switch (k % 6) {
-        case 0: s.flags[i] ^= gpucol::kProxyActive; break;                 // vanish or come back
-        case 1: s.group[i] = (s.group[i] == 1 ? 2 : 1), s.mask[i] = 1; break;  // filter change
-        case 2: {                                                           // jump far, even out of the grid
+        case 0:
+          s.flags[i] ^= gpucol::kProxyActive;
+          break;  // vanish or come back
+        case 1:
+          s.group[i] = (s.group[i] == 1 ? 2 : 1), s.mask[i] = 1;
+          break;   // filter change
+        case 2: {  // jump far, even out of the grid
           const float c[3] = {far(rng), far(rng), far(rng)};
           const float h = 0.5f * (s.maxX[i] - s.minX[i]);
           s.minX[i] = c[0] - h, s.maxX[i] = c[0] + h, s.minY[i] = c[1] - h, s.maxY[i] = c[1] + h;
@@ -236,7 +243,8 @@ TEST(GridPairFinder, RestingProxiesAreNotRebinnedAndPairsStayExact) {
         }
         default: {
           const float dx = step(rng), dy = step(rng), dz = step(rng);
-          s.minX[i] += dx, s.maxX[i] += dx, s.minY[i] += dy, s.maxY[i] += dy, s.minZ[i] += dz, s.maxZ[i] += dz;
+          s.minX[i] += dx, s.maxX[i] += dx, s.minY[i] += dy, s.maxY[i] += dy, s.minZ[i] += dz,
+              s.maxZ[i] += dz;
         }
       }
     }

@@ -2,9 +2,10 @@
 // appearing and vanishing; incremental maintenance (surviving pairs untouched, vanished ones removed through
 // the dispatcher); filters; user-supplied caches; rayTest/aabbTest against btDbvtBroadphase; and a world of
 // 1,000 falling boxes against btDbvtBroadphase.
-#include <gtest/gtest.h>
+#include "gpucol/grid_broadphase.h"
 
 #include <btBulletDynamicsCommon.h>
+#include <gtest/gtest.h>
 
 #include <algorithm>
 #include <cmath>
@@ -14,8 +15,6 @@
 #include <set>
 #include <utility>
 #include <vector>
-
-#include "gpucol/grid_broadphase.h"
 
 namespace {
 
@@ -30,7 +29,8 @@ IdPair idsOf(const btBroadphasePair& p) {
 
 std::set<IdPair> cachePairs(btOverlappingPairCache* cache) {
   std::set<IdPair> s;
-  for (int i = 0; i < cache->getNumOverlappingPairs(); ++i) s.insert(idsOf(cache->getOverlappingPairArray()[i]));
+  for (int i = 0; i < cache->getNumOverlappingPairs(); ++i)
+    s.insert(idsOf(cache->getOverlappingPairArray()[i]));
   return s;
 }
 
@@ -53,7 +53,8 @@ std::set<IdPair> bruteForce(const std::vector<Box>& boxes) {
     for (std::size_t j = i + 1; j < boxes.size(); ++j) {
       const Box &a = boxes[i], &b = boxes[j];
       if (!a.proxy || !b.proxy) continue;
-      const bool staticBoth = (a.group & btBroadphaseProxy::StaticFilter) && (b.group & btBroadphaseProxy::StaticFilter);
+      const bool staticBoth =
+          (a.group & btBroadphaseProxy::StaticFilter) && (b.group & btBroadphaseProxy::StaticFilter);
       if (overlap(a.lo, a.hi, b.lo, b.hi) && (a.group & b.mask) && (b.group & a.mask) && !staticBoth)
         s.insert({int(i), int(j)});
     }
@@ -88,10 +89,12 @@ void runSteps(gpucol::GridBroadphase& bp, btOverlappingPairCache* cache, int cou
   btCollisionDispatcher dispatcher(&configuration);
   for (int i = 0; i < count; ++i) {
     randomBox(rng, boxes[i], 12.0f);
-    if (i % 7 == 0) boxes[i].group = btBroadphaseProxy::StaticFilter, boxes[i].mask = btBroadphaseProxy::AllFilter;
+    if (i % 7 == 0)
+      boxes[i].group = btBroadphaseProxy::StaticFilter, boxes[i].mask = btBroadphaseProxy::AllFilter;
     if (i % 11 == 0) boxes[i].group = 64, boxes[i].mask = 64;
-    boxes[i].proxy = bp.createProxy(boxes[i].lo, boxes[i].hi, BOX_SHAPE_PROXYTYPE, reinterpret_cast<void*>(std::intptr_t(i)),
-                                    boxes[i].group, boxes[i].mask, &dispatcher);
+    boxes[i].proxy =
+        bp.createProxy(boxes[i].lo, boxes[i].hi, BOX_SHAPE_PROXYTYPE,
+                       reinterpret_cast<void*>(std::intptr_t(i)), boxes[i].group, boxes[i].mask, &dispatcher);
   }
   std::uniform_real_distribution<float> step(-0.4f, 0.4f);
   for (int t = 0; t < 8; ++t) {
@@ -99,7 +102,8 @@ void runSteps(gpucol::GridBroadphase& bp, btOverlappingPairCache* cache, int cou
     ASSERT_EQ(cachePairs(cache), bruteForce(boxes)) << "step " << t;
     ASSERT_EQ(std::size_t(cache->getNumOverlappingPairs()), bruteForce(boxes).size());
     // Mark every pair; survivors must keep the mark (the cache entry, hence algorithm and manifolds, kept).
-    for (int i = 0; i < cache->getNumOverlappingPairs(); ++i) cache->getOverlappingPairArray()[i].m_internalTmpValue = 777;
+    for (int i = 0; i < cache->getNumOverlappingPairs(); ++i)
+      cache->getOverlappingPairArray()[i].m_internalTmpValue = 777;
     const std::set<IdPair> before = cachePairs(cache);
     for (int i = 0; i < count; ++i) {
       Box& b = boxes[i];
@@ -109,8 +113,8 @@ void runSteps(gpucol::GridBroadphase& bp, btOverlappingPairCache* cache, int cou
           b.proxy = nullptr;
         } else {
           randomBox(rng, b, 12.0f);
-          b.proxy = bp.createProxy(b.lo, b.hi, BOX_SHAPE_PROXYTYPE, reinterpret_cast<void*>(std::intptr_t(i)), b.group,
-                                   b.mask, &dispatcher);
+          b.proxy = bp.createProxy(b.lo, b.hi, BOX_SHAPE_PROXYTYPE, reinterpret_cast<void*>(std::intptr_t(i)),
+                                   b.group, b.mask, &dispatcher);
         }
       } else if (b.proxy && !(b.group & btBroadphaseProxy::StaticFilter)) {
         const btVector3 d(step(rng), step(rng), step(rng));
@@ -171,8 +175,9 @@ TEST(GridBroadphase, StaticAndSleepingProxiesAreNotRebinned) {
   boxes[count].lo = btVector3(-16, -16.5f, -16), boxes[count].hi = btVector3(16, -15, 16);  // ground
   boxes[count].group = btBroadphaseProxy::StaticFilter;
   for (int i = 0; i <= count; ++i)
-    boxes[i].proxy = bp.createProxy(boxes[i].lo, boxes[i].hi, BOX_SHAPE_PROXYTYPE,
-                                    reinterpret_cast<void*>(std::intptr_t(i)), boxes[i].group, boxes[i].mask, &dispatcher);
+    boxes[i].proxy =
+        bp.createProxy(boxes[i].lo, boxes[i].hi, BOX_SHAPE_PROXYTYPE,
+                       reinterpret_cast<void*>(std::intptr_t(i)), boxes[i].group, boxes[i].mask, &dispatcher);
   std::uniform_real_distribution<float> step(-0.3f, 0.3f);
   for (int t = 0; t < 6; ++t) {
     for (int i = 0; i <= count; ++i) {
@@ -225,8 +230,8 @@ TEST(GridBroadphase, OnlyTheDifferenceReachesTheCache) {
   const btVector3 h(0.5f, 0.5f, 0.5f);
   for (int i = 0; i < 3; ++i)
     p[i] = bp.createProxy(btVector3(i * 0.9f, 0, 0) - h + btVector3(i == 2 ? 1.0f : 0, 0, 0),
-                          btVector3(i * 0.9f, 0, 0) + h + btVector3(i == 2 ? 1.0f : 0, 0, 0), BOX_SHAPE_PROXYTYPE,
-                          reinterpret_cast<void*>(std::intptr_t(i)), 1, -1, &dispatcher);
+                          btVector3(i * 0.9f, 0, 0) + h + btVector3(i == 2 ? 1.0f : 0, 0, 0),
+                          BOX_SHAPE_PROXYTYPE, reinterpret_cast<void*>(std::intptr_t(i)), 1, -1, &dispatcher);
   bp.calculateOverlappingPairs(&dispatcher);
   EXPECT_EQ(counter.added, 1);
   EXPECT_EQ(counter.removed, 0);
@@ -249,7 +254,9 @@ TEST(GridBroadphase, OnlyTheDifferenceReachesTheCache) {
 /// Rejects pairs whose client ids add up to an even number.
 struct OddSumFilter : btOverlapFilterCallback {
   bool needBroadphaseCollision(btBroadphaseProxy* a, btBroadphaseProxy* b) const override {
-    return (reinterpret_cast<std::intptr_t>(a->m_clientObject) + reinterpret_cast<std::intptr_t>(b->m_clientObject)) % 2;
+    return (reinterpret_cast<std::intptr_t>(a->m_clientObject) +
+            reinterpret_cast<std::intptr_t>(b->m_clientObject)) %
+           2;
   }
 };
 
@@ -287,8 +294,9 @@ struct Collect : btBroadphaseRayCallback {
   void setRay(const btVector3& from, const btVector3& to) {
     // As btSingleRayCallback does in btCollisionWorld.cpp.
     btVector3 dir = (to - from).normalized();
-    m_rayDirectionInverse = btVector3(dir[0] == 0 ? BT_LARGE_FLOAT : 1 / dir[0], dir[1] == 0 ? BT_LARGE_FLOAT : 1 / dir[1],
-                                      dir[2] == 0 ? BT_LARGE_FLOAT : 1 / dir[2]);
+    m_rayDirectionInverse =
+        btVector3(dir[0] == 0 ? BT_LARGE_FLOAT : 1 / dir[0], dir[1] == 0 ? BT_LARGE_FLOAT : 1 / dir[1],
+                  dir[2] == 0 ? BT_LARGE_FLOAT : 1 / dir[2]);
     for (int a = 0; a < 3; ++a) m_signs[a] = m_rayDirectionInverse[a] < 0.0;
     m_lambda_max = dir.dot(to - from);
   }
@@ -304,8 +312,10 @@ TEST(GridBroadphase, RayAndAabbTestsReportTheSameProxiesAsDbvt) {
   for (int i = 0; i < 3000; ++i) {
     Box b;
     randomBox(rng, b, 30.0f);
-    grid.createProxy(b.lo, b.hi, BOX_SHAPE_PROXYTYPE, reinterpret_cast<void*>(std::intptr_t(i)), 1, -1, nullptr);
-    dbvt.createProxy(b.lo, b.hi, BOX_SHAPE_PROXYTYPE, reinterpret_cast<void*>(std::intptr_t(i)), 1, -1, nullptr);
+    grid.createProxy(b.lo, b.hi, BOX_SHAPE_PROXYTYPE, reinterpret_cast<void*>(std::intptr_t(i)), 1, -1,
+                     nullptr);
+    dbvt.createProxy(b.lo, b.hi, BOX_SHAPE_PROXYTYPE, reinterpret_cast<void*>(std::intptr_t(i)), 1, -1,
+                     nullptr);
   }
   std::uniform_real_distribution<float> pos(-40.0f, 40.0f), ext(0.0f, 1.0f);
   std::size_t rayHits = 0, boxHits = 0;
@@ -356,17 +366,20 @@ struct FallingBoxes {
     // Two layers of a 25 × 20 lattice, slightly apart, each box dropped from its own height.
     for (int i = 0; i < count; ++i) {
       const int layer = i / 500, k = i % 500;
-      add(&boxShape, 1, btVector3(float(k % 25) * 1.3f - 15.0f, 1.0f + 1.6f * float(layer) + 0.01f * float(k % 7),
-                                  float(k / 25) * 1.3f - 13.0f),
+      add(&boxShape, 1,
+          btVector3(float(k % 25) * 1.3f - 15.0f, 1.0f + 1.6f * float(layer) + 0.01f * float(k % 7),
+                    float(k / 25) * 1.3f - 13.0f),
           i + 1, inertia);
     }
   }
-  void add(btCollisionShape* shape, float mass, const btVector3& at, int id, const btVector3& inertia = btVector3(0, 0, 0)) {
+  void add(btCollisionShape* shape, float mass, const btVector3& at, int id,
+           const btVector3& inertia = btVector3(0, 0, 0)) {
     btTransform t;
     t.setIdentity();
     t.setOrigin(at);
     states.push_back(std::make_unique<btDefaultMotionState>(t));
-    bodies.push_back(std::make_unique<btRigidBody>(btRigidBody::btRigidBodyConstructionInfo(mass, states.back().get(), shape, inertia)));
+    bodies.push_back(std::make_unique<btRigidBody>(
+        btRigidBody::btRigidBodyConstructionInfo(mass, states.back().get(), shape, inertia)));
     bodies.back()->setUserIndex(id);
     world->addRigidBody(bodies.back().get());
   }
@@ -397,7 +410,9 @@ TEST(GridBroadphase, FallingBoxesAgreeWithDbvt) {
     btOverlappingPairCache* cache = a.world->getPairCache();
     for (int i = 0; i < cache->getNumOverlappingPairs(); ++i) {
       const btBroadphasePair& p = cache->getOverlappingPairArray()[i];
-      if (!overlap(p.m_pProxy0->m_aabbMin, p.m_pProxy0->m_aabbMax, p.m_pProxy1->m_aabbMin, p.m_pProxy1->m_aabbMax)) continue;
+      if (!overlap(p.m_pProxy0->m_aabbMin, p.m_pProxy0->m_aabbMax, p.m_pProxy1->m_aabbMin,
+                   p.m_pProxy1->m_aabbMax))
+        continue;
       const int x = static_cast<btCollisionObject*>(p.m_pProxy0->m_clientObject)->getUserIndex();
       const int y = static_cast<btCollisionObject*>(p.m_pProxy1->m_clientObject)->getUserIndex();
       dbvtReal.insert({std::min(x, y), std::max(x, y)});
@@ -413,7 +428,8 @@ TEST(GridBroadphase, FallingBoxesAgreeWithDbvt) {
     btOverlappingPairCache* gcache = b.world->getPairCache();
     for (int i = 0; i < gcache->getNumOverlappingPairs(); ++i) {
       const btBroadphasePair& p = gcache->getOverlappingPairArray()[i];
-      ASSERT_TRUE(overlap(p.m_pProxy0->m_aabbMin, p.m_pProxy0->m_aabbMax, p.m_pProxy1->m_aabbMin, p.m_pProxy1->m_aabbMax));
+      ASSERT_TRUE(overlap(p.m_pProxy0->m_aabbMin, p.m_pProxy0->m_aabbMax, p.m_pProxy1->m_aabbMin,
+                          p.m_pProxy1->m_aabbMax));
     }
   }
   EXPECT_TRUE(grid.stats().usedGrid || !grid.stats().searched);
@@ -422,7 +438,8 @@ TEST(GridBroadphase, FallingBoxesAgreeWithDbvt) {
   // same resting height within 1 cm and the same horizontal place within 10 cm (a tenth of a box).
   float worstHeight = 0, worstSideways = 0;
   for (std::size_t i = 1; i < a.bodies.size(); ++i) {
-    const btVector3 d = a.bodies[i]->getWorldTransform().getOrigin() - b.bodies[i]->getWorldTransform().getOrigin();
+    const btVector3 d =
+        a.bodies[i]->getWorldTransform().getOrigin() - b.bodies[i]->getWorldTransform().getOrigin();
     worstHeight = std::max(worstHeight, std::fabs(d.y()));
     worstSideways = std::max(worstSideways, btVector3(d.x(), 0, d.z()).length());
   }

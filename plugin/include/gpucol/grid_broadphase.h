@@ -64,8 +64,9 @@ class GridBroadphase : public btBroadphaseInterface {
   GridBroadphase& operator=(const GridBroadphase&) = delete;
 
   /// Creates a proxy owned by the broad phase (its address stays valid until destroyProxy).
-  btBroadphaseProxy* createProxy(const btVector3& aabbMin, const btVector3& aabbMax, int shapeType, void* userPtr,
-                                 int collisionFilterGroup, int collisionFilterMask, btDispatcher* dispatcher) override;
+  btBroadphaseProxy* createProxy(const btVector3& aabbMin, const btVector3& aabbMax, int shapeType,
+                                 void* userPtr, int collisionFilterGroup, int collisionFilterMask,
+                                 btDispatcher* dispatcher) override;
   /// Removes the proxy's pairs from the pair cache (through `dispatcher`) and frees the proxy.
   void destroyProxy(btBroadphaseProxy* proxy, btDispatcher* dispatcher) override;
   /// Stores the proxy's new AABB; pairs follow at the next calculateOverlappingPairs.
@@ -76,9 +77,11 @@ class GridBroadphase : public btBroadphaseInterface {
   /// Reports every proxy whose AABB (grown by -aabbMax/-aabbMin, as btDbvtBroadphase does) the ray hits
   /// within [0, rayCallback.m_lambda_max], with Bullet's btRayAabb2 test.
   void rayTest(const btVector3& rayFrom, const btVector3& rayTo, btBroadphaseRayCallback& rayCallback,
-               const btVector3& aabbMin = btVector3(0, 0, 0), const btVector3& aabbMax = btVector3(0, 0, 0)) override;
+               const btVector3& aabbMin = btVector3(0, 0, 0),
+               const btVector3& aabbMax = btVector3(0, 0, 0)) override;
   /// Reports every proxy whose AABB overlaps [aabbMin, aabbMax] (touching counts).
-  void aabbTest(const btVector3& aabbMin, const btVector3& aabbMax, btBroadphaseAabbCallback& callback) override;
+  void aabbTest(const btVector3& aabbMin, const btVector3& aabbMax,
+                btBroadphaseAabbCallback& callback) override;
   /// Finds the overlapping pairs and adds/removes the difference to the last step in the pair cache.
   void calculateOverlappingPairs(btDispatcher* dispatcher) override;
   /// The pair cache (owned or user-supplied).

@@ -99,7 +99,8 @@ inline CellRange cellRange(const LocalBox& b, const Grid& g) {
 /// Stage 3's test: a box that covers more than `limit` cells of edge `cell` (estimated from its extents).
 inline bool isHuge(const ProxyArrays& p, std::uint32_t s, float cell, std::uint32_t limit) {
   const double inv = 1.0 / double(cell);
-  const double covered = (double(p.maxX[s] - p.minX[s]) * inv + 1.0) * (double(p.maxY[s] - p.minY[s]) * inv + 1.0) *
+  const double covered = (double(p.maxX[s] - p.minX[s]) * inv + 1.0) *
+                         (double(p.maxY[s] - p.minY[s]) * inv + 1.0) *
                          (double(p.maxZ[s] - p.minZ[s]) * inv + 1.0);
   return covered > double(limit);
 }
@@ -110,8 +111,8 @@ inline LocalBox boxOf(const ProxyArrays& p, std::uint32_t s) {
 
 /// Touching-counts overlap of two local boxes, without short-circuit branches (see testRuns).
 inline bool boxesOverlap(const LocalBox& a, const LocalBox& b) {
-  return int(a.lo[0] <= b.hi[0]) & int(b.lo[0] <= a.hi[0]) & int(a.lo[1] <= b.hi[1]) & int(b.lo[1] <= a.hi[1]) &
-         int(a.lo[2] <= b.hi[2]) & int(b.lo[2] <= a.hi[2]);
+  return int(a.lo[0] <= b.hi[0]) & int(b.lo[0] <= a.hi[0]) & int(a.lo[1] <= b.hi[1]) &
+         int(b.lo[1] <= a.hi[1]) & int(a.lo[2] <= b.hi[2]) & int(b.lo[2] <= a.hi[2]);
 }
 
 /// Stage 9: the cell that holds the min corner of the overlap of a and b.
@@ -173,7 +174,8 @@ inline std::uint32_t atomicAdd(std::uint32_t& counter, std::uint32_t value) {
 /// the 2 × slotBits significant bits in 11-bit digits, using `scratch` as the second buffer. Faster than a
 /// comparison sort here (a pair list is a few keys per proxy and slots are dense), and the result is the
 /// sorted list whatever the input order.
-void radixSortPairs(std::vector<std::uint64_t>& keys, std::vector<std::uint64_t>& scratch, std::uint32_t slotBits) {
+void radixSortPairs(std::vector<std::uint64_t>& keys, std::vector<std::uint64_t>& scratch,
+                    std::uint32_t slotBits) {
   constexpr int kDigitBits = 11;
   constexpr std::size_t kBuckets = std::size_t(1) << kDigitBits;
   const std::size_t n = keys.size();
@@ -204,25 +206,30 @@ inline std::uint32_t slotBitsFor(std::uint32_t count) {
 
 /// Parallel counting sort of items 0..items-1 into `cells` buckets; `buckets(i, f)` calls f(cell) for each
 /// bucket item i goes into, and place(i, position) stores item i at its position in the output. Afterwards
-/// start[c]..start[c+1] (start has cells + 1 entries) is bucket c's range of the output. Threads count with atomic increments, an inclusive scan turns counts into bucket ends,
-/// and threads place items by atomic decrements, which leaves start[c] at the bucket's begin. The order
-/// inside a bucket depends on thread timing; nothing downstream does: pairs are keyed by slot and the
-/// output is sorted (stage 10), so the result is the same whatever the threads did.
+/// start[c]..start[c+1] (start has cells + 1 entries) is bucket c's range of the output. Threads count with
+/// atomic increments, an inclusive scan turns counts into bucket ends, and threads place items by atomic
+/// decrements, which leaves start[c] at the bucket's begin. The order inside a bucket depends on thread
+/// timing; nothing downstream does: pairs are keyed by slot and the output is sorted (stage 10), so the
+/// result is the same whatever the threads did.
 template <typename Buckets, typename Place>
-void countingSort(std::size_t items, std::uint64_t cells, std::vector<std::uint32_t>& start, Buckets&& buckets,
-                  Place&& place) {
+void countingSort(std::size_t items, std::uint64_t cells, std::vector<std::uint32_t>& start,
+                  Buckets&& buckets, Place&& place) {
   start.resize(cells + 1);
-  tbb::parallel_for(tbb::blocked_range<std::size_t>(0, cells + 1, 1 << 18), [&](const tbb::blocked_range<std::size_t>& r) {
-    std::fill(start.begin() + std::ptrdiff_t(r.begin()), start.begin() + std::ptrdiff_t(r.end()), 0u);
-  });
-  tbb::parallel_for(tbb::blocked_range<std::size_t>(0, items, kGrain), [&](const tbb::blocked_range<std::size_t>& r) {
-    for (std::size_t i = r.begin(); i != r.end(); ++i) buckets(i, [&](std::uint32_t c) { atomicAdd(start[c], 1u); });
-  });
+  tbb::parallel_for(
+      tbb::blocked_range<std::size_t>(0, cells + 1, 1 << 18), [&](const tbb::blocked_range<std::size_t>& r) {
+        std::fill(start.begin() + std::ptrdiff_t(r.begin()), start.begin() + std::ptrdiff_t(r.end()), 0u);
+      });
+  tbb::parallel_for(tbb::blocked_range<std::size_t>(0, items, kGrain),
+                    [&](const tbb::blocked_range<std::size_t>& r) {
+                      for (std::size_t i = r.begin(); i != r.end(); ++i)
+                        buckets(i, [&](std::uint32_t c) { atomicAdd(start[c], 1u); });
+                    });
   inclusiveScan(start.data(), cells + 1);  // start[c] = end of bucket c; start[cells] = total
-  tbb::parallel_for(tbb::blocked_range<std::size_t>(0, items, kGrain), [&](const tbb::blocked_range<std::size_t>& r) {
-    for (std::size_t i = r.begin(); i != r.end(); ++i)
-      buckets(i, [&](std::uint32_t c) { place(i, atomicAdd(start[c], std::uint32_t(-1)) - 1); });
-  });
+  tbb::parallel_for(
+      tbb::blocked_range<std::size_t>(0, items, kGrain), [&](const tbb::blocked_range<std::size_t>& r) {
+        for (std::size_t i = r.begin(); i != r.end(); ++i)
+          buckets(i, [&](std::uint32_t c) { place(i, atomicAdd(start[c], std::uint32_t(-1)) - 1); });
+      });
 }
 
 class CpuPairFinder final : public PairFinder {
@@ -245,39 +252,39 @@ class CpuPairFinder final : public PairFinder {
   std::size_t scratchBytes() const;
 
   PairFinderStats m_stats;
-  std::vector<std::uint32_t> m_active;   // active slots, ascending
-  std::vector<std::uint32_t> m_binned;   // active slots that go into the grid
-  std::vector<std::uint32_t> m_huge;     // active slots kept out of the grid (stage 3)
-  std::vector<float> m_extent;           // scratch for the median extent
+  std::vector<std::uint32_t> m_active;     // active slots, ascending
+  std::vector<std::uint32_t> m_binned;     // active slots that go into the grid
+  std::vector<std::uint32_t> m_huge;       // active slots kept out of the grid (stage 3)
+  std::vector<float> m_extent;             // scratch for the median extent
   std::vector<std::uint32_t> m_cellStart;  // dense counting sort: first entry per cell (+1 sentinel)
-  std::vector<std::uint64_t> m_keys;     // sparse path: (cell << 32) | slot
-  std::vector<LocalBox> m_box;           // binned boxes ordered by (home cell, slot)
-  std::vector<std::uint64_t> m_homeKeys; // scratch for that order on a sparse grid
+  std::vector<std::uint64_t> m_keys;       // sparse path: (cell << 32) | slot
+  std::vector<LocalBox> m_box;             // binned boxes ordered by (home cell, slot)
+  std::vector<std::uint64_t> m_homeKeys;   // scratch for that order on a sparse grid
   std::vector<std::uint32_t> m_homeOrder;  // binned slots by home cell, as of the last home sort
   std::uint32_t m_homeOrderAge = 0;        // searches since that sort
   std::vector<std::uint8_t> m_isBinned;    // per slot: binned in this search
   // Stage 11: the last full grid search (m_cellStart, m_sorted, m_box of a dense grid) kept for later
   // searches while few proxies change.
-  bool m_kept = false;                   // m_cellStart/m_sorted/m_box/m_keptHuge describe m_keptGrid
-  bool m_denseBuilt = false;             // the last grid search filled m_cellStart (dense counting sort)
+  bool m_kept = false;        // m_cellStart/m_sorted/m_box/m_keptHuge describe m_keptGrid
+  bool m_denseBuilt = false;  // the last grid search filled m_cellStart (dense counting sort)
   Grid m_keptGrid;
   PairFinderOptions m_keptOptions;
-  std::vector<std::uint8_t> m_unchanged;  // per slot: active in the kept search and unchanged since
-  std::vector<std::uint32_t> m_keptHuge;  // huge proxies of the kept search
-  std::vector<std::uint64_t> m_lastPairs; // this finder's previous result
-  std::vector<std::uint32_t> m_moved;     // active slots changed since the kept search
-  std::vector<std::uint64_t> m_movedKeys; // (cell << 32) | index into m_moved, binned moved proxies
+  std::vector<std::uint8_t> m_unchanged;     // per slot: active in the kept search and unchanged since
+  std::vector<std::uint32_t> m_keptHuge;     // huge proxies of the kept search
+  std::vector<std::uint64_t> m_lastPairs;    // this finder's previous result
+  std::vector<std::uint32_t> m_moved;        // active slots changed since the kept search
+  std::vector<std::uint64_t> m_movedKeys;    // (cell << 32) | index into m_moved, binned moved proxies
   std::vector<std::uint64_t> m_sortScratch;  // second buffer of the pair radix sort
-  std::vector<std::uint32_t> m_sorted;   // m_box indices sorted by (cell, index)
-  std::vector<std::uint32_t> m_runCell;  // runs of >= 2 entries: cell index
-  std::vector<std::uint32_t> m_runStart; // first entry in m_sorted
+  std::vector<std::uint32_t> m_sorted;       // m_box indices sorted by (cell, index)
+  std::vector<std::uint32_t> m_runCell;      // runs of >= 2 entries: cell index
+  std::vector<std::uint32_t> m_runStart;     // first entry in m_sorted
   std::vector<std::uint32_t> m_runLength;
   std::vector<std::uint64_t> m_runPrefix;  // exclusive prefix sum of m(m-1)/2, plus the total at the end
   std::vector<std::uint32_t> m_blockRuns;  // runs per block of cells, scanned (dense run compaction)
   std::vector<std::uint32_t> m_offsets;    // sparse path: first key of each box (exclusive prefix sum)
-  std::vector<std::uint64_t> m_bits;     // bit mask output (stage 10)
+  std::vector<std::uint64_t> m_bits;       // bit mask output (stage 10)
   std::vector<std::vector<std::uint64_t>> m_chunkPairs;  // output per chunk (kept for its capacity)
-  std::size_t m_chunksUsed = 0;          // chunks of m_chunkPairs filled by this search
+  std::size_t m_chunksUsed = 0;                          // chunks of m_chunkPairs filled by this search
 
   /// Reserves `count` more output chunks and returns the index of the first.
   std::size_t takeChunks(std::size_t count) {
@@ -382,7 +389,8 @@ void CpuPairFinder::incremental(const ProxyArrays& p, const PairFinderOptions& o
           if (s == sm) continue;
           if (!m_unchanged[s]) {
             // Another moved proxy: a huge one's pair belongs to the lower slot's row; a binned one's to ours.
-            const std::size_t j = std::size_t(std::lower_bound(m_moved.begin(), m_moved.end(), s) - m_moved.begin());
+            const std::size_t j =
+                std::size_t(std::lower_bound(m_moved.begin(), m_moved.end(), s) - m_moved.begin());
             if (movedHuge[j] && s < sm) continue;
           }
           if (boxesOverlap(a, boxOf(p, s)) && passesFilter(p, sm, s)) out.push_back(makePairKey(sm, s));
@@ -397,7 +405,8 @@ void CpuPairFinder::incremental(const ProxyArrays& p, const PairFinderOptions& o
         }
       });
       for (std::uint32_t h : m_keptHuge)
-        if (m_unchanged[h] && boxesOverlap(a, boxOf(p, h)) && passesFilter(p, sm, h)) out.push_back(makePairKey(sm, h));
+        if (m_unchanged[h] && boxesOverlap(a, boxOf(p, h)) && passesFilter(p, sm, h))
+          out.push_back(makePairKey(sm, h));
     }
   });
   // Binned moved proxies among themselves: keys on the kept grid, sorted, runs tested pairwise.
@@ -485,8 +494,10 @@ Grid CpuPairFinder::chooseGrid(const ProxyArrays& p, const PairFinderOptions& op
   float cell = kSizeFactor * median;
   if (options.cellSizeRule == CellSizeRule::Density || !(cell > 0.0f)) {
     for (std::uint32_t s : m_active) {
-      lo[0] = std::min(lo[0], p.minX[s]), lo[1] = std::min(lo[1], p.minY[s]), lo[2] = std::min(lo[2], p.minZ[s]);
-      hi[0] = std::max(hi[0], p.maxX[s]), hi[1] = std::max(hi[1], p.maxY[s]), hi[2] = std::max(hi[2], p.maxZ[s]);
+      lo[0] = std::min(lo[0], p.minX[s]), lo[1] = std::min(lo[1], p.minY[s]),
+      lo[2] = std::min(lo[2], p.minZ[s]);
+      hi[0] = std::max(hi[0], p.maxX[s]), hi[1] = std::max(hi[1], p.maxY[s]),
+      hi[2] = std::max(hi[2], p.maxZ[s]);
     }
     // A flat scene has zero volume; count each axis at least one object thick so the rule stays finite.
     double volume = 1.0;
@@ -502,7 +513,8 @@ Grid CpuPairFinder::chooseGrid(const ProxyArrays& p, const PairFinderOptions& op
   m_isBinned.assign(p.count, 0);
   const double inv = 1.0 / double(cell);
   for (std::uint32_t s : m_active) {
-    const double covered = (double(p.maxX[s] - p.minX[s]) * inv + 1.0) * (double(p.maxY[s] - p.minY[s]) * inv + 1.0) *
+    const double covered = (double(p.maxX[s] - p.minX[s]) * inv + 1.0) *
+                           (double(p.maxY[s] - p.minY[s]) * inv + 1.0) *
                            (double(p.maxZ[s] - p.minZ[s]) * inv + 1.0);
     const bool huge = covered > double(options.hugeCellLimit);
     (huge ? m_huge : m_binned).push_back(s);
@@ -516,8 +528,10 @@ Grid CpuPairFinder::chooseGrid(const ProxyArrays& p, const PairFinderOptions& op
   float bmin[3] = {p.minX[f], p.minY[f], p.minZ[f]};
   float bmax[3] = {p.maxX[f], p.maxY[f], p.maxZ[f]};
   for (std::uint32_t s : m_binned) {
-    bmin[0] = std::min(bmin[0], p.minX[s]), bmin[1] = std::min(bmin[1], p.minY[s]), bmin[2] = std::min(bmin[2], p.minZ[s]);
-    bmax[0] = std::max(bmax[0], p.maxX[s]), bmax[1] = std::max(bmax[1], p.maxY[s]), bmax[2] = std::max(bmax[2], p.maxZ[s]);
+    bmin[0] = std::min(bmin[0], p.minX[s]), bmin[1] = std::min(bmin[1], p.minY[s]),
+    bmin[2] = std::min(bmin[2], p.minZ[s]);
+    bmax[0] = std::max(bmax[0], p.maxX[s]), bmax[1] = std::max(bmax[1], p.maxY[s]),
+    bmax[2] = std::max(bmax[2], p.maxZ[s]);
   }
   // Coarsen until the cell index fits 32 bits: exactness never depends on the cell size.
   for (;;) {
@@ -563,7 +577,8 @@ void CpuPairFinder::binSorted(const ProxyArrays& p, const Grid& g) {
     reuse = tbb::parallel_reduce(
         tbb::blocked_range<std::size_t>(0, n, kGrain), true,
         [&](const tbb::blocked_range<std::size_t>& r, bool ok) {
-          for (std::size_t i = r.begin(); ok && i != r.end(); ++i) ok = m_homeOrder[i] < p.count && m_isBinned[m_homeOrder[i]];
+          for (std::size_t i = r.begin(); ok && i != r.end(); ++i)
+            ok = m_homeOrder[i] < p.count && m_isBinned[m_homeOrder[i]];
           return ok;
         },
         [](bool a, bool b) { return a && b; });
@@ -586,13 +601,15 @@ void CpuPairFinder::binSorted(const ProxyArrays& p, const Grid& g) {
     });
     tbb::parallel_sort(m_homeKeys.begin(), m_homeKeys.end());
     m_homeOrder.resize(n);
-    tbb::parallel_for(std::size_t(0), n, [&](std::size_t i) { m_homeOrder[i] = std::uint32_t(m_homeKeys[i]); });
+    tbb::parallel_for(std::size_t(0), n,
+                      [&](std::size_t i) { m_homeOrder[i] = std::uint32_t(m_homeKeys[i]); });
     std::vector<std::uint64_t>().swap(m_homeKeys);  // scratch of a rare path: not kept
     m_homeOrderAge = 0;
   }
-  tbb::parallel_for(tbb::blocked_range<std::size_t>(0, n, 4096), [&](const tbb::blocked_range<std::size_t>& r) {
-    for (std::size_t i = r.begin(); i != r.end(); ++i) copyBox(i, m_homeOrder[i]);
-  });
+  tbb::parallel_for(tbb::blocked_range<std::size_t>(0, n, 4096),
+                    [&](const tbb::blocked_range<std::size_t>& r) {
+                      for (std::size_t i = r.begin(); i != r.end(); ++i) copyBox(i, m_homeOrder[i]);
+                    });
   // Stage 4: count cells per box; the total decides whether the keys fit (count, then allocate).
   const std::uint64_t keys = tbb::parallel_reduce(
       tbb::blocked_range<std::size_t>(0, n, 4096), std::uint64_t(0),
@@ -630,7 +647,8 @@ void CpuPairFinder::binSorted(const ProxyArrays& p, const Grid& g) {
     m_runLength.resize(runs);
     tbb::parallel_for(std::size_t(0), blocks, [&](std::size_t blk) {
       std::uint32_t r = m_blockRuns[blk];
-      for (std::uint64_t c = blk * kGrain, e = std::min<std::uint64_t>(cells, (blk + 1) * kGrain); c < e; ++c) {
+      for (std::uint64_t c = blk * kGrain, e = std::min<std::uint64_t>(cells, (blk + 1) * kGrain); c < e;
+           ++c) {
         const std::uint32_t m = m_cellStart[c + 1] - m_cellStart[c];
         if (m >= 2) {
           m_runCell[r] = std::uint32_t(c);
@@ -645,15 +663,19 @@ void CpuPairFinder::binSorted(const ProxyArrays& p, const Grid& g) {
     m_cellStart.clear();
     m_offsets.resize(n + 1);
     m_offsets[0] = 0;
-    tbb::parallel_for(std::size_t(0), n, [&](std::size_t i) { m_offsets[i + 1] = std::uint32_t(cellRange(m_box[i], g).count()); });
+    tbb::parallel_for(std::size_t(0), n, [&](std::size_t i) {
+      m_offsets[i + 1] = std::uint32_t(cellRange(m_box[i], g).count());
+    });
     inclusiveScan(m_offsets.data(), n + 1);
     m_keys.resize(keys);
-    tbb::parallel_for(tbb::blocked_range<std::size_t>(0, n, 4096), [&](const tbb::blocked_range<std::size_t>& r) {
-      for (std::size_t i = r.begin(); i != r.end(); ++i) {
-        std::uint64_t o = m_offsets[i];
-        forEachCell(cellRange(m_box[i], g), g, [&](std::uint32_t c) { m_keys[o++] = (std::uint64_t(c) << 32) | i; });
-      }
-    });
+    tbb::parallel_for(tbb::blocked_range<std::size_t>(0, n, 4096),
+                      [&](const tbb::blocked_range<std::size_t>& r) {
+                        for (std::size_t i = r.begin(); i != r.end(); ++i) {
+                          std::uint64_t o = m_offsets[i];
+                          forEachCell(cellRange(m_box[i], g), g,
+                                      [&](std::uint32_t c) { m_keys[o++] = (std::uint64_t(c) << 32) | i; });
+                        }
+                      });
     tbb::parallel_sort(m_keys.begin(), m_keys.end());
     for (std::uint64_t i = 0; i < keys;) {
       std::uint64_t j = i + 1;
@@ -673,7 +695,8 @@ void CpuPairFinder::binSorted(const ProxyArrays& p, const Grid& g) {
   const std::size_t runs = m_runCell.size();
   m_runPrefix.resize(runs + 1);
   m_runPrefix[0] = 0;
-  tbb::parallel_for(std::size_t(0), runs, [&](std::size_t r) { m_runPrefix[r + 1] = gpucol_pair_count(m_runLength[r]); });
+  tbb::parallel_for(std::size_t(0), runs,
+                    [&](std::size_t r) { m_runPrefix[r + 1] = gpucol_pair_count(m_runLength[r]); });
   inclusiveScan(m_runPrefix.data(), runs + 1);
 }
 
@@ -706,7 +729,8 @@ void CpuPairFinder::testRuns(const ProxyArrays& p, const PairFinderOptions& opti
     const std::uint32_t cx = cellOf(std::max(a.lo[0], b.lo[0]), g.origin[0], g.invCell, g.dims[0]);
     const std::uint32_t cy = cellOf(std::max(a.lo[1], b.lo[1]), g.origin[1], g.invCell, g.dims[1]);
     const std::uint32_t cz = cellOf(std::max(a.lo[2], b.lo[2]), g.origin[2], g.invCell, g.dims[2]);
-    return (std::uint64_t(cz) * g.dims[1] + cy) * g.dims[0] + cx == m_runCell[run] && passesFilter(p, a.slot, b.slot);
+    return (std::uint64_t(cz) * g.dims[1] + cy) * g.dims[0] + cx == m_runCell[run] &&
+           passesFilter(p, a.slot, b.slot);
   };
 
   tbb::parallel_for(std::uint64_t(0), chunks, [&](std::uint64_t c) {
@@ -723,7 +747,8 @@ void CpuPairFinder::testRuns(const ProxyArrays& p, const PairFinderOptions& opti
       const std::uint32_t* local = m_sorted.data() + m_runStart[run];
       while (i + 1 < m && k < k1) {
         const LocalBox ba = m_box[local[i]];
-        const std::uint64_t row = std::min<std::uint64_t>(m - j, k1 - k);  // this row's candidates in the chunk
+        const std::uint64_t row =
+            std::min<std::uint64_t>(m - j, k1 - k);  // this row's candidates in the chunk
         for (std::uint64_t t = 0; t < row; ++t) {
           const LocalBox& bb = m_box[local[j + t]];
           if (!accept(run, ba, bb)) continue;
@@ -811,7 +836,8 @@ void CpuPairFinder::gather(std::vector<std::uint64_t>& pairs) {
   });
 }
 
-void CpuPairFinder::grid(const ProxyArrays& p, const PairFinderOptions& options, std::vector<std::uint64_t>& pairs) {
+void CpuPairFinder::grid(const ProxyArrays& p, const PairFinderOptions& options,
+                         std::vector<std::uint64_t>& pairs) {
   m_stats.usedGrid = true;
   m_denseBuilt = false;
   const Grid g = chooseGrid(p, options);
@@ -830,14 +856,16 @@ void CpuPairFinder::grid(const ProxyArrays& p, const PairFinderOptions& options,
 
 std::size_t CpuPairFinder::scratchBytes() const {
   std::size_t bytes = 0;
-  bytes += m_active.capacity() * 4 + m_binned.capacity() * 4 + m_huge.capacity() * 4 + m_extent.capacity() * 4;
+  bytes +=
+      m_active.capacity() * 4 + m_binned.capacity() * 4 + m_huge.capacity() * 4 + m_extent.capacity() * 4;
   bytes += m_cellStart.capacity() * 4 + m_keys.capacity() * 8 + m_sorted.capacity() * 4;
   bytes += m_box.capacity() * sizeof(LocalBox) + m_homeKeys.capacity() * 8 + m_homeOrder.capacity() * 4 +
            m_isBinned.capacity();
-  bytes += m_unchanged.capacity() + m_keptHuge.capacity() * 4 + m_lastPairs.capacity() * 8 + m_moved.capacity() * 4 +
-           m_movedKeys.capacity() * 8 + m_sortScratch.capacity() * 8;
+  bytes += m_unchanged.capacity() + m_keptHuge.capacity() * 4 + m_lastPairs.capacity() * 8 +
+           m_moved.capacity() * 4 + m_movedKeys.capacity() * 8 + m_sortScratch.capacity() * 8;
   bytes += m_runCell.capacity() * 4 + m_runStart.capacity() * 4 + m_runLength.capacity() * 4;
-  bytes += m_runPrefix.capacity() * 8 + m_bits.capacity() * 8 + m_blockRuns.capacity() * 4 + m_offsets.capacity() * 4;
+  bytes += m_runPrefix.capacity() * 8 + m_bits.capacity() * 8 + m_blockRuns.capacity() * 4 +
+           m_offsets.capacity() * 4;
   for (const auto& c : m_chunkPairs) bytes += c.capacity() * 8;
   return bytes;
 }
@@ -849,9 +877,13 @@ PairFinderFactory& openClFactory() {
 
 }  // namespace
 
-std::unique_ptr<PairFinder> makeCpuPairFinder() { return std::make_unique<CpuPairFinder>(); }
+std::unique_ptr<PairFinder> makeCpuPairFinder() {
+  return std::make_unique<CpuPairFinder>();
+}
 
-void registerOpenClPairFinder(PairFinderFactory factory) { openClFactory() = std::move(factory); }
+void registerOpenClPairFinder(PairFinderFactory factory) {
+  openClFactory() = std::move(factory);
+}
 
 std::unique_ptr<PairFinder> makeOpenClPairFinder(const Config& config) {
   if (!openClFactory()) return nullptr;

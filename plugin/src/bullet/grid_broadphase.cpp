@@ -42,10 +42,10 @@ struct GridBroadphase::Impl {
   std::vector<float> minX, minY, minZ, maxX, maxY, maxZ;
   std::vector<std::int32_t> group, mask;
   std::vector<std::uint8_t> flags;
-  std::vector<std::uint8_t> moved;          // per slot: box, filter or life changed since the last search
-  const PairFinder* lastFinder = nullptr;   // the finder of the last search (moved is relative to it)
-  std::vector<std::uint32_t> freeSlots;     // reusable now
-  std::vector<std::uint32_t> pendingFree;   // freed since the last search: reused only after it
+  std::vector<std::uint8_t> moved;             // per slot: box, filter or life changed since the last search
+  const PairFinder* lastFinder = nullptr;      // the finder of the last search (moved is relative to it)
+  std::vector<std::uint32_t> freeSlots;        // reusable now
+  std::vector<std::uint32_t> pendingFree;      // freed since the last search: reused only after it
   std::vector<std::uint8_t> freedSinceSearch;  // per slot: its old pairs are already gone from the cache
   std::uint32_t liveCount = 0;
   int nextUniqueId = 0;
@@ -70,8 +70,8 @@ struct GridBroadphase::Impl {
   }
 
   static std::uint8_t flagsOf(int filterGroup) {
-    // Bullet gives static and kinematic objects the StaticFilter group (btCollisionWorld::addCollisionObject);
-    // those pairs are never generated.
+    // Bullet gives static and kinematic objects the StaticFilter group
+    // (btCollisionWorld::addCollisionObject); those pairs are never generated.
     return std::uint8_t(kProxyActive | ((filterGroup & btBroadphaseProxy::StaticFilter) ? kProxyStatic : 0));
   }
 
@@ -109,7 +109,8 @@ struct GridBroadphase::Impl {
   void removeDeferred(btDispatcher* dispatcher);
 
   std::size_t memoryBytes(const PairFinder& finder) const {
-    return proxies.size() * sizeof(GridProxy) + flags.capacity() * (6 * sizeof(float) + 2 * sizeof(std::int32_t) + 3) +
+    return proxies.size() * sizeof(GridProxy) +
+           flags.capacity() * (6 * sizeof(float) + 2 * sizeof(std::int32_t) + 3) +
            (freeSlots.capacity() + pendingFree.capacity()) * 4 +
            (accepted.capacity() + found.capacity() + next.capacity()) * 8 + finder.stats().scratchBytes;
   }
@@ -130,9 +131,9 @@ GridBroadphase::GridBroadphase(const Config& config, btOverlappingPairCache* pai
 
 GridBroadphase::~GridBroadphase() = default;
 
-btBroadphaseProxy* GridBroadphase::createProxy(const btVector3& aabbMin, const btVector3& aabbMax, int shapeType,
-                                               void* userPtr, int collisionFilterGroup, int collisionFilterMask,
-                                               btDispatcher* /*dispatcher*/) {
+btBroadphaseProxy* GridBroadphase::createProxy(const btVector3& aabbMin, const btVector3& aabbMax,
+                                               int shapeType, void* userPtr, int collisionFilterGroup,
+                                               int collisionFilterMask, btDispatcher* /*dispatcher*/) {
   Impl& d = *m_impl;
   std::uint32_t slot;
   if (!d.freeSlots.empty()) {
@@ -168,7 +169,8 @@ void GridBroadphase::destroyProxy(btBroadphaseProxy* proxy, btDispatcher* dispat
   GridProxy* p = static_cast<GridProxy*>(proxy);
   const std::uint32_t slot = p->slot;
   if (slot >= d.proxies.size() || &d.proxies[slot] != p || !(d.flags[slot] & kProxyActive))
-    throw std::invalid_argument("gpucol::GridBroadphase::destroyProxy: proxy does not belong to this broad phase");
+    throw std::invalid_argument(
+        "gpucol::GridBroadphase::destroyProxy: proxy does not belong to this broad phase");
   // Its pairs leave the cache now (algorithms and manifolds freed through the dispatcher); the keys in
   // `accepted` are dropped at the next search, and the slot is reused only after that search.
   d.pairCache->removeOverlappingPairsContainingProxy(proxy, dispatcher);
@@ -187,8 +189,8 @@ void GridBroadphase::setAabb(btBroadphaseProxy* proxy, const btVector3& aabbMin,
   proxy->m_aabbMax = aabbMax;
   // Unchanged boxes (Bullet re-sends every AABB by default, m_forceUpdateAllAabbs) leave the step clean,
   // so a scene at rest costs no search.
-  if (d.minX[s] != aabbMin.x() || d.minY[s] != aabbMin.y() || d.minZ[s] != aabbMin.z() || d.maxX[s] != aabbMax.x() ||
-      d.maxY[s] != aabbMax.y() || d.maxZ[s] != aabbMax.z()) {
+  if (d.minX[s] != aabbMin.x() || d.minY[s] != aabbMin.y() || d.minZ[s] != aabbMin.z() ||
+      d.maxX[s] != aabbMax.x() || d.maxY[s] != aabbMax.y() || d.maxZ[s] != aabbMax.z()) {
     d.store(s, aabbMin, aabbMax);
     d.moved[s] = 1;
     d.dirty = true;
@@ -200,8 +202,9 @@ void GridBroadphase::getAabb(btBroadphaseProxy* proxy, btVector3& aabbMin, btVec
   aabbMax = proxy->m_aabbMax;
 }
 
-void GridBroadphase::rayTest(const btVector3& rayFrom, const btVector3& /*rayTo*/, btBroadphaseRayCallback& rayCallback,
-                             const btVector3& aabbMin, const btVector3& aabbMax) {
+void GridBroadphase::rayTest(const btVector3& rayFrom, const btVector3& /*rayTo*/,
+                             btBroadphaseRayCallback& rayCallback, const btVector3& aabbMin,
+                             const btVector3& aabbMax) {
   Impl& d = *m_impl;
   // btDbvtBroadphase reads m_lambda_max once, before its traversal, and tests boxes grown by the ray's own
   // box (bounds = [min - aabbMax, max - aabbMin]) with btRayAabb2 from t = 0; so do we, in slot order.
@@ -211,18 +214,20 @@ void GridBroadphase::rayTest(const btVector3& rayFrom, const btVector3& /*rayTo*
     GridProxy& p = d.proxies[s];
     const btVector3 bounds[2] = {p.m_aabbMin - aabbMax, p.m_aabbMax - aabbMin};
     btScalar tmin = 0;
-    if (btRayAabb2(rayFrom, rayCallback.m_rayDirectionInverse, rayCallback.m_signs, bounds, tmin, 0, lambdaMax))
+    if (btRayAabb2(rayFrom, rayCallback.m_rayDirectionInverse, rayCallback.m_signs, bounds, tmin, 0,
+                   lambdaMax))
       rayCallback.process(&p);
   }
 }
 
-void GridBroadphase::aabbTest(const btVector3& aabbMin, const btVector3& aabbMax, btBroadphaseAabbCallback& callback) {
+void GridBroadphase::aabbTest(const btVector3& aabbMin, const btVector3& aabbMax,
+                              btBroadphaseAabbCallback& callback) {
   Impl& d = *m_impl;
   for (std::uint32_t s = 0; s < d.flags.size(); ++s) {
     if (!(d.flags[s] & kProxyActive)) continue;
     // Touching counts, as in btDbvtAabbMm's Intersect.
-    if (d.minX[s] <= aabbMax.x() && d.maxX[s] >= aabbMin.x() && d.minY[s] <= aabbMax.y() && d.maxY[s] >= aabbMin.y() &&
-        d.minZ[s] <= aabbMax.z() && d.maxZ[s] >= aabbMin.z())
+    if (d.minX[s] <= aabbMax.x() && d.maxX[s] >= aabbMin.x() && d.minY[s] <= aabbMax.y() &&
+        d.maxY[s] >= aabbMin.y() && d.minZ[s] <= aabbMax.z() && d.maxZ[s] >= aabbMin.z())
       callback.process(&d.proxies[s]);
   }
 }
@@ -324,9 +329,13 @@ void GridBroadphase::Impl::removeDeferred(btDispatcher* dispatcher) {
   pairs.resize(pairs.size() - invalid);
 }
 
-btOverlappingPairCache* GridBroadphase::getOverlappingPairCache() { return m_impl->pairCache; }
+btOverlappingPairCache* GridBroadphase::getOverlappingPairCache() {
+  return m_impl->pairCache;
+}
 
-const btOverlappingPairCache* GridBroadphase::getOverlappingPairCache() const { return m_impl->pairCache; }
+const btOverlappingPairCache* GridBroadphase::getOverlappingPairCache() const {
+  return m_impl->pairCache;
+}
 
 void GridBroadphase::getBroadphaseAabb(btVector3& aabbMin, btVector3& aabbMax) const {
   const Impl& d = *m_impl;
@@ -362,11 +371,12 @@ void GridBroadphase::resetPool(btDispatcher* /*dispatcher*/) {
 
 void GridBroadphase::printStats() {
   const GridBroadphaseStats& st = m_impl->stats;
-  std::printf("gpucol::GridBroadphase: %u proxies, %llu overlapping pairs (+%llu -%llu), %s%s, cell %g, %zu bytes\n",
-              st.proxies, static_cast<unsigned long long>(st.overlappingPairs),
-              static_cast<unsigned long long>(st.added), static_cast<unsigned long long>(st.removed),
-              st.usedGrid ? "grid" : "brute force", st.usedOpenCl ? " (OpenCL)" : "", double(st.cellSize),
-              st.memoryBytes);
+  std::printf(
+      "gpucol::GridBroadphase: %u proxies, %llu overlapping pairs (+%llu -%llu), %s%s, cell %g, %zu bytes\n",
+      st.proxies, static_cast<unsigned long long>(st.overlappingPairs),
+      static_cast<unsigned long long>(st.added), static_cast<unsigned long long>(st.removed),
+      st.usedGrid ? "grid" : "brute force", st.usedOpenCl ? " (OpenCL)" : "", double(st.cellSize),
+      st.memoryBytes);
 }
 
 void GridBroadphase::setTuning(const GridBroadphaseTuning& tuning) {
@@ -375,6 +385,8 @@ void GridBroadphase::setTuning(const GridBroadphaseTuning& tuning) {
   m_impl->lastFinder = nullptr;  // a full search with the new options
 }
 
-const GridBroadphaseStats& GridBroadphase::stats() const { return m_impl->stats; }
+const GridBroadphaseStats& GridBroadphase::stats() const {
+  return m_impl->stats;
+}
 
 }  // namespace gpucol
