@@ -308,14 +308,15 @@ TEST(GridBroadphase, RayAndAabbTestsReportTheSameProxiesAsDbvt) {
   // must report the same sets. Rays also carry a box (convex sweeps) half of the time.
   gpucol::GridBroadphase grid;
   btDbvtBroadphase dbvt;
+  std::vector<btBroadphaseProxy*> dbvtProxies;  // Dbvt frees its proxies only in destroyProxy.
   std::mt19937 rng(6);
   for (int i = 0; i < 3000; ++i) {
     Box b;
     randomBox(rng, b, 30.0f);
     grid.createProxy(b.lo, b.hi, BOX_SHAPE_PROXYTYPE, reinterpret_cast<void*>(std::intptr_t(i)), 1, -1,
                      nullptr);
-    dbvt.createProxy(b.lo, b.hi, BOX_SHAPE_PROXYTYPE, reinterpret_cast<void*>(std::intptr_t(i)), 1, -1,
-                     nullptr);
+    dbvtProxies.push_back(dbvt.createProxy(b.lo, b.hi, BOX_SHAPE_PROXYTYPE,
+                                           reinterpret_cast<void*>(std::intptr_t(i)), 1, -1, nullptr));
   }
   std::uniform_real_distribution<float> pos(-40.0f, 40.0f), ext(0.0f, 1.0f);
   std::size_t rayHits = 0, boxHits = 0;
@@ -344,6 +345,7 @@ TEST(GridBroadphase, RayAndAabbTestsReportTheSameProxiesAsDbvt) {
   dbvt.getBroadphaseAabb(dl, dh);
   EXPECT_EQ(gl, dl);
   EXPECT_EQ(gh, dh);
+  for (btBroadphaseProxy* proxy : dbvtProxies) dbvt.destroyProxy(proxy, nullptr);
 }
 
 /// A world of boxes falling onto a plane; `broadphase` is the world's.
