@@ -27,8 +27,8 @@ std::optional<TriangleContact> contactOf(const TriangleF& a, const TriangleF& b)
   return generateContact(pa, pb);
 }
 
-/// The near phase takes "intersects" from the contact generation instead of running trianglesIntersect as well:
-/// the two must agree on every pair, and the contact must be generateContact's, bit for bit.
+/// The near phase takes "intersects" from the contact generation instead of running trianglesIntersect as
+/// well: the two must agree on every pair, and the contact must be generateContact's, bit for bit.
 TEST(TriangleContact, ContactAndTestAgreesWithTrianglesIntersect) {
   std::mt19937_64 rng(11);
   long intersecting = 0, withContact = 0;

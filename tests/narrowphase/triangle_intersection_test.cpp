@@ -73,7 +73,8 @@ TEST(TriangleIntersection, AgreesWithDoubleReferenceOnRandomFamilies) {
 }
 
 /// What the double test of trianglesIntersect decides at Möller's two plane rejections (the same helpers, the
-/// same order): true when it answers "no" there or earlier, false when it goes on to the coplanar or interval test.
+/// same order): true when it answers "no" there or earlier, false when it goes on to the coplanar or interval
+/// test.
 bool doublePlaneStepsReject(const TriangleF& a, const TriangleF& b) {
   const test::TriangleD da = test::toDouble(a), db = test::toDouble(b);
   const detail::TrianglePlane planeA = detail::makePlane(da[0], da[1], da[2]);
@@ -89,10 +90,10 @@ bool doublePlaneStepsReject(const TriangleF& a, const TriangleF& b) {
   return detail::allOnOneSide(dA);
 }
 
-/// The float pre-test may only reject a pair the double test rejects too, so the answers stay the double test's;
-/// its branch-free form must agree with it exactly.
-/// Checked on every random family and on pairs built to sit at the pre-test's margin: B's vertices lifted off
-/// A's plane by 1e-9..1e-3 of the size (the margin is about 3e-6), at scales from 1e-6 to 1e6.
+/// The float pre-test may only reject a pair the double test rejects too, so the answers stay the double
+/// test's; its branch-free form must agree with it exactly. Checked on every random family and on pairs built
+/// to sit at the pre-test's margin: B's vertices lifted off A's plane by 1e-9..1e-3 of the size (the margin
+/// is about 3e-6), at scales from 1e-6 to 1e6.
 TEST(TriangleIntersection, FloatPreTestRejectsOnlyWhatTheDoubleTestRejects) {
   std::mt19937_64 rng(20240612);
   long checked = 0, rejected = 0, keptNearMargin = 0, rejectedNearMargin = 0;
@@ -106,8 +107,9 @@ TEST(TriangleIntersection, FloatPreTestRejectsOnlyWhatTheDoubleTestRejects) {
     }
     ++rejected;
     rejectedNearMargin += nearMargin;
-    EXPECT_TRUE(doublePlaneStepsReject(a, b)) << "float rejected a pair the double test does not reject: "
-                                              << a[0].transpose() << " / " << b[0].transpose();
+    EXPECT_TRUE(doublePlaneStepsReject(a, b))
+        << "float rejected a pair the double test does not reject: " << a[0].transpose() << " / "
+        << b[0].transpose();
   };
   for (int f = 0; f < static_cast<int>(PairFamily::Count); ++f) {
     for (int i = 0; i < 20000; ++i) {
@@ -133,8 +135,8 @@ TEST(TriangleIntersection, FloatPreTestRejectsOnlyWhatTheDoubleTestRejects) {
     check(a, b, true);
     check(b, a, true);
   }
-  std::cout << "  " << checked << " pairs, " << rejected << " rejected in float; at the margin " << rejectedNearMargin
-            << " rejected, " << keptNearMargin << " left to the double test\n";
+  std::cout << "  " << checked << " pairs, " << rejected << " rejected in float; at the margin "
+            << rejectedNearMargin << " rejected, " << keptNearMargin << " left to the double test\n";
   // The margin pairs reach both outcomes, so the comparison above really ran at the pre-test's edge.
   EXPECT_GT(rejectedNearMargin, 1000);
   EXPECT_GT(keptNearMargin, 1000);

@@ -45,13 +45,13 @@ bool isFinite(const btTransform& t) {
 // per-axis scale. B's triangles are carried in by one affine map computed once per pair (in double, so the
 // relative transform adds no rounding of its own to Bullet's float transforms).
 struct PairFrame {
-  Eigen::Vector3f scaleA;       // A's local scaling.
-  bool flipA = false;           // A's scaling mirrors the mesh: swap two vertices to keep the winding outward.
-  bool flipB = false;           // The same for B.
-  Eigen::Matrix3f bLinear;      // B's mesh coordinates into A's scaled frame: R_rel * S_B ...
+  Eigen::Vector3f scaleA;   // A's local scaling.
+  bool flipA = false;       // A's scaling mirrors the mesh: swap two vertices to keep the winding outward.
+  bool flipB = false;       // The same for B.
+  Eigen::Matrix3f bLinear;  // B's mesh coordinates into A's scaled frame: R_rel * S_B ...
   Eigen::Vector3f bTranslation;  // ... + t_rel.
-  AffineMap treeMap;            // B's mesh coordinates into A's unscaled mesh frame, for the traversal.
-  btTransform worldFromA;       // A's rigid transform: from A's scaled frame to the world.
+  AffineMap treeMap;             // B's mesh coordinates into A's unscaled mesh frame, for the traversal.
+  btTransform worldFromA;        // A's rigid transform: from A's scaled frame to the world.
 };
 
 PairFrame makePairFrame(const MeshShape& a, const btTransform& transformA, const MeshShape& b,
@@ -102,27 +102,31 @@ Eigen::Vector3f meshVertex(const TriangleMesh& mesh, std::uint32_t vertex) {
 }
 
 // Triangle `t` of A in A's scaled frame.
-void triangleOfA(const TriangleMesh& mesh, std::uint32_t t, const PairFrame& frame, Eigen::Vector3f (&out)[3]) {
+void triangleOfA(const TriangleMesh& mesh, std::uint32_t t, const PairFrame& frame,
+                 Eigen::Vector3f (&out)[3]) {
   const std::uint32_t* corner = mesh.indices().data() + 3 * std::size_t(t);
   for (int i = 0; i < 3; ++i) out[i] = frame.scaleA.cwiseProduct(meshVertex(mesh, corner[i]));
   if (frame.flipA) std::swap(out[1], out[2]);
 }
 
 // Triangle `t` of B carried into A's scaled frame.
-void triangleOfB(const TriangleMesh& mesh, std::uint32_t t, const PairFrame& frame, Eigen::Vector3f (&out)[3]) {
+void triangleOfB(const TriangleMesh& mesh, std::uint32_t t, const PairFrame& frame,
+                 Eigen::Vector3f (&out)[3]) {
   const std::uint32_t* corner = mesh.indices().data() + 3 * std::size_t(t);
   for (int i = 0; i < 3; ++i) out[i] = frame.bLinear * meshVertex(mesh, corner[i]) + frame.bTranslation;
   if (frame.flipB) std::swap(out[1], out[2]);
 }
 
-// One candidate pair whose triangles intersect, by its index among the candidates, with its contact if one is kept.
+// One candidate pair whose triangles intersect, by its index among the candidates, with its contact if one is
+// kept.
 struct NearHit {
   std::size_t candidate;
   bool hasContact;
   TriangleContact contact;
 };
 
-// Candidates per task of the near phase: enough to amortise a task, small enough to balance two to eight cores.
+// Candidates per task of the near phase: enough to amortise a task, small enough to balance two to eight
+// cores.
 constexpr std::size_t kNearChunk = 512;
 
 // How far ahead the near phase prefetches B's indices and vertices, in candidates.
@@ -139,12 +143,13 @@ inline void prefetch(const void* p) {
 }
 
 // Distance in floats between two coordinates' rows of ChunkTriangles: not a power of two, so that the 18 rows
-// written together do not all fall into the same few sets of the L1 cache (a 2 KiB stride put 9 rows per set).
+// written together do not all fall into the same few sets of the L1 cache (a 2 KiB stride put 9 rows per
+// set).
 constexpr std::size_t kNearRow = kNearChunk + 16;
 
-// One chunk's triangles, coordinate by coordinate (structure of arrays): value k (0..8 A's vertices, 9..17 B's,
-// x y z per vertex) of the chunk's j-th candidate is at [k * kNearRow + j], so the float pre-test runs over the
-// chunk as vector code.
+// One chunk's triangles, coordinate by coordinate (structure of arrays): value k (0..8 A's vertices, 9..17
+// B's, x y z per vertex) of the chunk's j-th candidate is at [k * kNearRow + j], so the float pre-test runs
+// over the chunk as vector code.
 class ChunkTriangles {
  public:
   ChunkTriangles() : m_values(18 * kNearRow) {}
@@ -177,16 +182,16 @@ class ChunkTriangles {
 };
 
 // Exact test and contact generation for every candidate (thesis §5.3.4: the cheap test first, contacts only
-// for intersecting pairs), in parallel. Each chunk of candidates keeps its own hits, and the chunks are joined in
-// order, so the output follows the candidates' order whatever the threads do.
+// for intersecting pairs), in parallel. Each chunk of candidates keeps its own hits, and the chunks are
+// joined in order, so the output follows the candidates' order whatever the threads do.
 //
-// A chunk runs in three passes: fetch the triangles (A's once per run of equal triangleA: candidates come sorted
-// by it), run the float pre-test of triangle_plane.h over all of them without branches, then run the double
-// test and the contact generation on the pairs it could not reject. The pre-test only rejects what the double
-// test rejects, so the result is the double test's; it removes about two thirds of the candidates of the thesis
-// scene, and without a branch per pair (its outcome is close to a coin toss).
-std::vector<NearHit> runNearPhase(const TriangleMesh& meshA, const TriangleMesh& meshB, const PairFrame& frame,
-                                  const std::vector<TrianglePair>& candidates) {
+// A chunk runs in three passes: fetch the triangles (A's once per run of equal triangleA: candidates come
+// sorted by it), run the float pre-test of triangle_plane.h over all of them without branches, then run the
+// double test and the contact generation on the pairs it could not reject. The pre-test only rejects what the
+// double test rejects, so the result is the double test's; it removes about two thirds of the candidates of
+// the thesis scene, and without a branch per pair (its outcome is close to a coin toss).
+std::vector<NearHit> runNearPhase(const TriangleMesh& meshA, const TriangleMesh& meshB,
+                                  const PairFrame& frame, const std::vector<TrianglePair>& candidates) {
   const std::size_t chunks = (candidates.size() + kNearChunk - 1) / kNearChunk;
   std::vector<std::vector<NearHit>> chunkHits(chunks);
   tbb::parallel_for(std::size_t(0), chunks, [&](std::size_t chunk) {
@@ -195,19 +200,22 @@ std::vector<NearHit> runNearPhase(const TriangleMesh& meshA, const TriangleMesh&
     ChunkTriangles triangles;
     Eigen::Vector3f a[3], b[3];
     // B's triangles are read in no useful order, so each costs a cache miss for its indices and then one per
-    // vertex; prefetching the indices kIndexAhead candidates ahead and the vertices kVertexAhead ahead overlaps
-    // those misses instead of paying them one after the other.
+    // vertex; prefetching the indices kIndexAhead candidates ahead and the vertices kVertexAhead ahead
+    // overlaps those misses instead of paying them one after the other.
     const std::uint32_t* const indicesB = meshB.indices().data();
     const float* const positionsB = meshB.positions().data();
     for (std::size_t j = 0; j < count; ++j) {
       const std::size_t i = begin + j;
-      if (i + kIndexAhead < candidates.size()) prefetch(indicesB + 3 * std::size_t(candidates[i + kIndexAhead].triangleB));
+      if (i + kIndexAhead < candidates.size()) {
+        prefetch(indicesB + 3 * std::size_t(candidates[i + kIndexAhead].triangleB));
+      }
       if (i + kVertexAhead < candidates.size()) {
         const std::uint32_t* corner = indicesB + 3 * std::size_t(candidates[i + kVertexAhead].triangleB);
         for (int k = 0; k < 3; ++k) prefetch(positionsB + 3 * std::size_t(corner[k]));
       }
       const TrianglePair& pair = candidates[i];
-      if (j == 0 || pair.triangleA != candidates[i - 1].triangleA) triangleOfA(meshA, pair.triangleA, frame, a);
+      if (j == 0 || pair.triangleA != candidates[i - 1].triangleA)
+        triangleOfA(meshA, pair.triangleA, frame, a);
       triangleOfB(meshB, pair.triangleB, frame, b);
       triangles.store(j, a, b);
     }
@@ -256,7 +264,8 @@ MeshPairResult collidePair(const MeshShape& shapeA, const btTransform& transform
                            const btTransform& transformB, const Config& config) {
   if (!isFinite(transformA) || !isFinite(transformB)) {
     throw std::invalid_argument("collideMeshes: the transform of shape " +
-                                std::string(isFinite(transformA) ? "B" : "A") + " has a NaN or infinite component");
+                                std::string(isFinite(transformA) ? "B" : "A") +
+                                " has a NaN or infinite component");
   }
   MeshPairResult result;
   result.stats.backendUsed = Backend::Cpu;
@@ -307,7 +316,8 @@ MeshPairResult collideMeshes(const MeshShape& shapeA, const btTransform& transfo
   return collidePair(shapeA, transformA, shapeB, transformB, config);
 }
 
-std::vector<MeshPairResult> collideMeshesBatch(const std::vector<MeshPairQuery>& queries, const Config& config) {
+std::vector<MeshPairResult> collideMeshesBatch(const std::vector<MeshPairQuery>& queries,
+                                               const Config& config) {
   for (std::size_t i = 0; i < queries.size(); ++i) {
     if (queries[i].shapeA == nullptr || queries[i].shapeB == nullptr) {
       throw std::invalid_argument("collideMeshesBatch: query " + std::to_string(i) + " has a null shape");

@@ -32,12 +32,14 @@ struct NodePair {
 
 // The box code reads a node's or a leaf entry's corner as 4 floats: min[0..2] + max[0], max[0..2] + the index
 // that follows. Both reads stay inside the struct.
-static_assert(offsetof(AabbNode, max) == 12 && sizeof(AabbNode) >= 28, "AabbNode corners must be 4-float readable");
+static_assert(offsetof(AabbNode, max) == 12 && sizeof(AabbNode) >= 28,
+              "AabbNode corners must be 4-float readable");
 static_assert(offsetof(AabbLeafEntry, max) == 12 && sizeof(AabbLeafEntry) >= 28,
               "AabbLeafEntry corners must be 4-float readable");
 
 /// Front size at which the breadth-first expansion stops and the parallel depth-first traversal starts:
-/// a few thousand independent subproblems keep every core busy even when most of them die after a test or two.
+/// a few thousand independent subproblems keep every core busy even when most of them die after a test or
+/// two.
 constexpr std::size_t kParallelFront = 4096;
 
 /// Front pairs per parallel_for chunk.
@@ -51,8 +53,8 @@ inline __m128 splat(__m128 v) {
 }
 #endif
 
-/// The map of one call, prepared once (thesis §3.3.3: with non-updated AABBs the rotation is set up once for the
-/// two hierarchies and reused by every box test), with |M| and the inflation.
+/// The map of one call, prepared once (thesis §3.3.3: with non-updated AABBs the rotation is set up once for
+/// the two hierarchies and reused by every box test), with |M| and the inflation.
 ///
 /// With SSE (every x86-64 CPU) a box is carried as three column products of 4 lanes, the same operations in
 /// the same order as the scalar code (((M_i0 c_0 + M_i1 c_1) + M_i2 c_2) + t_i), so both give the same bits.
@@ -95,10 +97,10 @@ class BoxCarrier {
         _mm_add_ps(_mm_add_ps(_mm_mul_ps(m_column[0], splat<0>(c)), _mm_mul_ps(m_column[1], splat<1>(c))),
                    _mm_mul_ps(m_column[2], splat<2>(c))),
         m_translation);
-    const __m128 extent = _mm_add_ps(
-        _mm_add_ps(_mm_add_ps(_mm_mul_ps(m_absColumn[0], splat<0>(e)), _mm_mul_ps(m_absColumn[1], splat<1>(e))),
-                   _mm_mul_ps(m_absColumn[2], splat<2>(e))),
-        m_inflationLanes);
+    const __m128 extent = _mm_add_ps(_mm_add_ps(_mm_add_ps(_mm_mul_ps(m_absColumn[0], splat<0>(e)),
+                                                           _mm_mul_ps(m_absColumn[1], splat<1>(e))),
+                                                _mm_mul_ps(m_absColumn[2], splat<2>(e))),
+                                     m_inflationLanes);
     _mm_storeu_ps(out.min, _mm_sub_ps(centre, extent));
     _mm_storeu_ps(out.max, _mm_add_ps(centre, extent));
 #else
@@ -133,8 +135,8 @@ class BoxCarrier {
 
 /// Touching counts as overlapping: the comparisons are exact on float, all rounding went into the inflation.
 /// `lo` and `hi` are 4-float readable corners as in BoxCarrier::carry. Free of branches (with SSE one compare
-/// per corner, else `&` rather than `&&`): the result feeds a branch-free push (Traverser::expand), and the tests
-/// come out about half and half, so a branch would be mispredicted half the time.
+/// per corner, else `&` rather than `&&`): the result feeds a branch-free push (Traverser::expand), and the
+/// tests come out about half and half, so a branch would be mispredicted half the time.
 inline bool overlaps(const float* lo, const float* hi, const CarriedBox& b) {
 #if defined(__SSE2__)
   // Lane 3 compares padding and is ignored; comparisons take any bits without a slow path.
@@ -156,44 +158,52 @@ inline void prefetch(const void* p) {
 #endif
 }
 
-/// Stack entries one depth-first descent below one start pair can need: each expansion pops one pair and pushes
-/// at most four, and descends at least one of the trees by a level, so at most depthA + depthB expansions lie on
-/// one path and the stack never holds more than 3 per expansion on the path, plus the start pair.
+/// Stack entries one depth-first descent below one start pair can need: each expansion pops one pair and
+/// pushes at most four, and descends at least one of the trees by a level, so at most depthA + depthB
+/// expansions lie on one path and the stack never holds more than 3 per expansion on the path, plus the start
+/// pair.
 std::size_t stackBound(const AabbTree& a, const AabbTree& b) {
   return 3 * (static_cast<std::size_t>(a.depth()) + static_cast<std::size_t>(b.depth())) + 1;
 }
 
-/// Depth-first simultaneous descent from a set of overlapping node pairs (thesis Alg. 5.1), with an explicit stack.
+/// Depth-first simultaneous descent from a set of overlapping node pairs (thesis Alg. 5.1), with an explicit
+/// stack.
 ///
 /// The stack is a plain array of stackBound() entries, and children are pushed without a branch: the entry is
-/// written at the top in any case and the top moves up by the outcome of the box test. The tests come out about
-/// half and half, so a branch per test is mispredicted about half the time, which cost more than the test itself.
+/// written at the top in any case and the top moves up by the outcome of the box test. The tests come out
+/// about half and half, so a branch per test is mispredicted about half the time, which cost more than the
+/// test itself.
 class Traverser {
  public:
   Traverser(const AabbTree& a, const AabbTree& b, const BoxCarrier& carrier)
-      : m_nodesA(a.nodes().data()), m_nodesB(b.nodes().data()), m_entriesA(a.leafEntries().data()),
-        m_entriesB(b.leafEntries().data()), m_carrier(carrier) {}
+      : m_nodesA(a.nodes().data()),
+        m_nodesB(b.nodes().data()),
+        m_entriesA(a.leafEntries().data()),
+        m_entriesB(b.leafEntries().data()),
+        m_carrier(carrier) {}
 
-  /// Expands one overlapping pair by one level: children pairs that overlap are written from `top` on (room for
-  /// four is needed), leaf pairs go to `out`. Returns the new top.
-  NodePair* expand(const NodePair& pair, NodePair* top, std::vector<TrianglePair>& out, std::uint64_t& tests) const {
+  /// Expands one overlapping pair by one level: children pairs that overlap are written from `top` on (room
+  /// for four is needed), leaf pairs go to `out`. Returns the new top.
+  NodePair* expand(const NodePair& pair, NodePair* top, std::vector<TrianglePair>& out,
+                   std::uint64_t& tests) const {
     const AabbNode& na = m_nodesA[pair.a];
     const AabbNode& nb = m_nodesB[pair.b];
     const bool leafA = na.isLeaf();
     const bool leafB = nb.isLeaf();
     if (!leafA && !leafB) {
-      // Node against node: both descend at once, four tests (thesis Alg. 5.1); each of B's children is carried
-      // once for two tests. "Descend the larger box" (thesis §3.3.2) was measured on the thesis scene
-      // (armadillo-27674 twice, 0.3 x size apart, 0.5 rad): 92485 tests against 87657 for simultaneous descent,
-      // and no faster, since it pays a size comparison per pair and carries a child of B for each single test
-      // where B descends, while here each carried child serves two tests.
+      // Node against node: both descend at once, four tests (thesis Alg. 5.1); each of B's children is
+      // carried once for two tests. "Descend the larger box" (thesis §3.3.2) was measured on the thesis scene
+      // (armadillo-27674 twice, 0.3 x size apart, 0.5 rad): 92485 tests against 87657 for simultaneous
+      // descent, and no faster, since it pays a size comparison per pair and carries a child of B for each
+      // single test where B descends, while here each carried child serves two tests.
       const std::uint32_t a0 = pair.a + 1, a1 = na.first;
       const AabbNode& childA0 = m_nodesA[a0];
       const AabbNode& childA1 = m_nodesA[a1];
       const std::uint32_t childrenB[2] = {pair.b + 1, nb.first};
       // The children's far children (the near one is the next node in the array) are what the pairs pushed
       // now will read when popped; asking for them now overlaps those cache misses with this expansion. For a
-      // leaf child `first` is a triangle index and the hint reads an unrelated node: harmless, it never faults.
+      // leaf child `first` is a triangle index and the hint reads an unrelated node: harmless, it never
+      // faults.
       prefetch(m_nodesA + childA0.first);
       prefetch(m_nodesA + childA1.first);
       prefetch(m_nodesB + m_nodesB[childrenB[0]].first);
@@ -235,7 +245,8 @@ class Traverser {
 
   /// Runs the depth-first descent below `start` (already known to overlap) to the end; `stack` holds at least
   /// stackBound() entries.
-  void run(const NodePair& start, NodePair* stack, std::vector<TrianglePair>& out, std::uint64_t& tests) const {
+  void run(const NodePair& start, NodePair* stack, std::vector<TrianglePair>& out,
+           std::uint64_t& tests) const {
     NodePair* top = stack;
     *top++ = start;
     while (top != stack) {
@@ -246,11 +257,11 @@ class Traverser {
   }
 
  private:
-  /// Two overlapping leaves. Leaves of one triangle are the thesis's case: the leaf box is the triangle box, so the
-  /// pair is a candidate. Leaves of several triangles test their triangles' boxes, so that every leaf size gives
-  /// the same candidates as one triangle per leaf.
-  void emitLeafPair(const AabbNode& na, const AabbNode& nb, const CarriedBox& boxB, std::vector<TrianglePair>& out,
-                    std::uint64_t& tests) const {
+  /// Two overlapping leaves. Leaves of one triangle are the thesis's case: the leaf box is the triangle box,
+  /// so the pair is a candidate. Leaves of several triangles test their triangles' boxes, so that every leaf
+  /// size gives the same candidates as one triangle per leaf.
+  void emitLeafPair(const AabbNode& na, const AabbNode& nb, const CarriedBox& boxB,
+                    std::vector<TrianglePair>& out, std::uint64_t& tests) const {
     if (na.count == 1 && nb.count == 1) {
       out.push_back({na.first, nb.first});
       return;
@@ -325,10 +336,10 @@ constexpr int kRadixBits = 11;
 /// Below this many pairs a comparison sort is cheaper than clearing the radix counters.
 constexpr std::size_t kRadixMinimum = 256;
 
-/// Sorts pairs by (triangleA, triangleB). Each pair is packed into one integer key, triangleA above the bits that
-/// triangleB needs, so the key order is the pair order; an LSD radix sort on kRadixBits digits then costs a few
-/// linear passes instead of n log n comparisons (the pairs of one query are tens of thousands, the comparison
-/// sort was a sixth of the query). Digits that are the same in every key are skipped.
+/// Sorts pairs by (triangleA, triangleB). Each pair is packed into one integer key, triangleA above the bits
+/// that triangleB needs, so the key order is the pair order; an LSD radix sort on kRadixBits digits then
+/// costs a few linear passes instead of n log n comparisons (the pairs of one query are tens of thousands,
+/// the comparison sort was a sixth of the query). Digits that are the same in every key are skipped.
 void sortPairs(std::vector<TrianglePair>& pairs, std::size_t trianglesA, std::size_t trianglesB) {
   const std::size_t n = pairs.size();
   if (n < kRadixMinimum) {
@@ -378,8 +389,8 @@ Eigen::Vector3f carriedBoxInflation(const AabbTree& b, const AffineMap& bToA) {
   return kCarryRelativeEpsilon * (rowAbsSum * radius + bToA.translation.cwiseAbs());
 }
 
-void findCandidatePairs(const AabbTree& a, const AabbTree& b, const AffineMap& bToA, std::vector<TrianglePair>& out,
-                        TraversalStats* stats, bool parallel) {
+void findCandidatePairs(const AabbTree& a, const AabbTree& b, const AffineMap& bToA,
+                        std::vector<TrianglePair>& out, TraversalStats* stats, bool parallel) {
   out.clear();
   const BoxCarrier carrier(b, bToA);
   const Traverser traverser(a, b, carrier);
@@ -398,8 +409,8 @@ void findCandidatePairs(const AabbTree& a, const AabbTree& b, const AffineMap& b
     std::vector<NodePair> stack(bound);
     traverser.run(root, stack.data(), out, tests);
   } else {
-    // Breadth-first until the front holds enough independent pairs (thesis §5.4.2 expands level by level too),
-    // then each worker finishes its share depth first with its own stack and output.
+    // Breadth-first until the front holds enough independent pairs (thesis §5.4.2 expands level by level
+    // too), then each worker finishes its share depth first with its own stack and output.
     PairBuffer frontBuffer, nextBuffer;
     frontBuffer.reserve(1)[0] = root;
     std::size_t frontSize = 1;

@@ -15,8 +15,8 @@ std::optional<TriangleContact> generateContact(const Eigen::Vector3f (&a)[3], co
 
 namespace detail {
 
-std::optional<TriangleContact> generateContactAndTest(const Eigen::Vector3f (&af)[3], const Eigen::Vector3f (&bf)[3],
-                                                      bool& intersects) {
+std::optional<TriangleContact> generateContactAndTest(const Eigen::Vector3f (&af)[3],
+                                                      const Eigen::Vector3f (&bf)[3], bool& intersects) {
   intersects = false;
   // Double arithmetic on the float input, as in trianglesIntersect (see triangle_plane.h).
   const Eigen::Vector3d a[3] = {af[0].cast<double>(), af[1].cast<double>(), af[2].cast<double>()};

@@ -8,15 +8,17 @@ namespace gpucol {
 bool trianglesIntersect(const Eigen::Vector3f& a0f, const Eigen::Vector3f& a1f, const Eigen::Vector3f& a2f,
                         const Eigen::Vector3f& b0f, const Eigen::Vector3f& b1f, const Eigen::Vector3f& b2f) {
   // Most candidates of the middle phase fail Möller's first plane tests by a wide margin; float proves that
-  // for them at a fraction of the cost, and says nothing otherwise, so the answer is always the double test's.
+  // for them at a fraction of the cost, and says nothing otherwise, so the answer is always the double
+  // test's.
   if (detail::floatCertainlyApart(a0f, a1f, a2f, b0f, b1f, b2f)) return false;
   return detail::trianglesIntersectDouble(a0f, a1f, a2f, b0f, b1f, b2f);
 }
 
 namespace detail {
 
-bool trianglesIntersectDouble(const Eigen::Vector3f& a0f, const Eigen::Vector3f& a1f, const Eigen::Vector3f& a2f,
-                              const Eigen::Vector3f& b0f, const Eigen::Vector3f& b1f, const Eigen::Vector3f& b2f) {
+bool trianglesIntersectDouble(const Eigen::Vector3f& a0f, const Eigen::Vector3f& a1f,
+                              const Eigen::Vector3f& a2f, const Eigen::Vector3f& b0f,
+                              const Eigen::Vector3f& b1f, const Eigen::Vector3f& b2f) {
   // Double arithmetic on the float input: see triangle_plane.h for why.
   const Eigen::Vector3d a0 = a0f.cast<double>(), a1 = a1f.cast<double>(), a2 = a2f.cast<double>();
   const Eigen::Vector3d b0 = b0f.cast<double>(), b1 = b1f.cast<double>(), b2 = b2f.cast<double>();

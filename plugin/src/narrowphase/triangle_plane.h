@@ -139,23 +139,25 @@ inline double orient2d(double ax, double ay, double bx, double by, double cx, do
   return (bx - ax) * (cy - ay) - (by - ay) * (cx - ax);
 }
 
-/// Margin of the float pre-test below, in units of the scale max|e1| * max|e2| * max_i max|q_i - v0| (infinity
-/// norms of the plane triangle's edges and of the other triangle's vertices taken from v0): 64 float ulps.
+/// Margin of the float pre-test below, in units of the scale max|e1| * max|e2| * max_i max|q_i - v0|
+/// (infinity norms of the plane triangle's edges and of the other triangle's vertices taken from v0): 64
+/// float ulps.
 ///
 /// Why it is enough (u = 2^-24; gamma_k = k u / (1 - k u); E1, E2, R the three factors of the scale, exact):
 /// the float edges e = fl(v - v0) and offsets r = fl(q - v0) have relative error u per component; a normal
 /// component fl(fl(x y) - fl(z w)) of rounded edges is within gamma_4 (|x y| + |z w|) <= 2 gamma_4 E1 E2 of
 /// the exact one; the dot product adds a rounding per product and per sum (gamma_3). Summed over the three
-/// terms, |d_float - d_exact| <= (gamma_4 * 6 + gamma_4 (1 + gamma_4) * 6) E1 E2 R < 48.1 u E1 E2 R. The double
-/// test computes the same distance to within 1e-15 E1 E2 R and snaps it to 0 when within kSnapRelative (1e-12)
-/// of errorScale * extent = E1 E2 R. So |d_float| > 48.2 u E1 E2 R (48.2 u = 2.9e-6 >> 1e-12) proves that the
-/// double distance is non-zero after snapping and has d_float's sign. The margin is computed in float from the
-/// rounded factors, which costs at most five more roundings of 64 u: still above 63.9 u, with room to spare.
+/// terms, |d_float - d_exact| <= (gamma_4 * 6 + gamma_4 (1 + gamma_4) * 6) E1 E2 R < 48.1 u E1 E2 R. The
+/// double test computes the same distance to within 1e-15 E1 E2 R and snaps it to 0 when within kSnapRelative
+/// (1e-12) of errorScale * extent = E1 E2 R. So |d_float| > 48.2 u E1 E2 R (48.2 u = 2.9e-6 >> 1e-12) proves
+/// that the double distance is non-zero after snapping and has d_float's sign. The margin is computed in
+/// float from the rounded factors, which costs at most five more roundings of 64 u: still above 63.9 u, with
+/// room to spare.
 inline constexpr float kFloatSideMargin = 64.0f / 16777216.0f;
 
 /// Range of each factor E1, E2, R inside which the float pre-test is valid: no intermediate overflows
-/// (6 E1 E2 R < 2^123), and the absolute error of underflowing products (2^-149 each) stays below 2^-10 of the
-/// margin (which is at least 2^-138). Outside it the pre-test abstains and the double test decides.
+/// (6 E1 E2 R < 2^123), and the absolute error of underflowing products (2^-149 each) stays below 2^-10 of
+/// the margin (which is at least 2^-138). Outside it the pre-test abstains and the double test decides.
 inline constexpr float kFloatSideMinFactor = 0x1p-40f;
 /// Upper end of that range.
 inline constexpr float kFloatSideMaxFactor = 0x1p40f;
@@ -165,11 +167,12 @@ struct FloatPlane {
   Eigen::Vector3f origin;  ///< v0.
   Eigen::Vector3f normal;  ///< fl((v1 - v0) x (v2 - v0)).
   float marginScale;       ///< kFloatSideMargin * max|e1| * max|e2|: the margin per unit of extent.
-  bool inRange;            ///< Both edge factors within [kFloatSideMinFactor, kFloatSideMaxFactor] (false for NaN).
+  bool inRange;  ///< Both edge factors within [kFloatSideMinFactor, kFloatSideMaxFactor] (false for NaN).
 };
 
 /// The float plane of triangle (v0, v1, v2).
-inline FloatPlane makeFloatPlane(const Eigen::Vector3f& v0, const Eigen::Vector3f& v1, const Eigen::Vector3f& v2) {
+inline FloatPlane makeFloatPlane(const Eigen::Vector3f& v0, const Eigen::Vector3f& v1,
+                                 const Eigen::Vector3f& v2) {
   const Eigen::Vector3f e1 = v1 - v0;
   const Eigen::Vector3f e2 = v2 - v0;
   const float edge1 = e1.cwiseAbs().maxCoeff();
@@ -179,14 +182,15 @@ inline FloatPlane makeFloatPlane(const Eigen::Vector3f& v0, const Eigen::Vector3
   plane.normal = e1.cross(e2);
   plane.marginScale = kFloatSideMargin * edge1 * edge2;
   // `&` rather than `&&`: comparisons are cheaper than the branches; NaN fails every one of them.
-  plane.inRange = (edge1 >= kFloatSideMinFactor) & (edge1 <= kFloatSideMaxFactor) & (edge2 >= kFloatSideMinFactor) &
-                  (edge2 <= kFloatSideMaxFactor);
+  plane.inRange = (edge1 >= kFloatSideMinFactor) & (edge1 <= kFloatSideMaxFactor) &
+                  (edge2 >= kFloatSideMinFactor) & (edge2 <= kFloatSideMaxFactor);
   return plane;
 }
 
 /// What float arithmetic can prove about the signed distances of q0, q1, q2 to a triangle's plane as
-/// signedDistances computes them in double: bits of floatPlaneSide's result. (Bits rather than a struct of two
-/// bools: the compiler keeps such a struct in memory, which stops it from making vector code of the loops.)
+/// signedDistances computes them in double: bits of floatPlaneSide's result. (Bits rather than a struct of
+/// two bools: the compiler keeps such a struct in memory, which stops it from making vector code of the
+/// loops.)
 enum FloatSideBits : unsigned {
   kAllOneSide = 1,  ///< All three are non-zero with one sign: allOnOneSide() will hold.
   kSomeOff = 2,     ///< At least one is non-zero: allInPlane() will not hold.
@@ -215,8 +219,9 @@ inline unsigned floatPlaneSide(const FloatPlane& plane, const Eigen::Vector3f& q
 /// test before or instead of these steps, so it answers "no" in every branch this function can prove.
 /// `planeA` is makeFloatPlane(a[0], a[1], a[2]), so a caller can reuse it for many b.
 /// Several times cheaper than the double test, and most candidate pairs of the middle phase end here.
-inline bool floatCertainlyApart(const FloatPlane& planeA, const Eigen::Vector3f& a0, const Eigen::Vector3f& a1,
-                                const Eigen::Vector3f& a2, const Eigen::Vector3f& b0, const Eigen::Vector3f& b1,
+inline bool floatCertainlyApart(const FloatPlane& planeA, const Eigen::Vector3f& a0,
+                                const Eigen::Vector3f& a1, const Eigen::Vector3f& a2,
+                                const Eigen::Vector3f& b0, const Eigen::Vector3f& b1,
                                 const Eigen::Vector3f& b2) {
   const unsigned sideB = floatPlaneSide(planeA, b0, b1, b2);
   if (sideB & kAllOneSide) return true;
@@ -224,32 +229,35 @@ inline bool floatCertainlyApart(const FloatPlane& planeA, const Eigen::Vector3f&
   return floatPlaneSide(makeFloatPlane(b0, b1, b2), a0, a1, a2) & kAllOneSide;
 }
 
-/// floatCertainlyApart computed without branches (both plane tests always run), for loops over many pairs that
-/// the compiler can turn into vector code: a data-dependent branch per pair is mispredicted about half the time.
-/// Returns 1 for "certainly apart", else 0 (an integer: a conversion to bool also stops the vectoriser).
+/// floatCertainlyApart computed without branches (both plane tests always run), for loops over many pairs
+/// that the compiler can turn into vector code: a data-dependent branch per pair is mispredicted about half
+/// the time. Returns 1 for "certainly apart", else 0 (an integer: a conversion to bool also stops the
+/// vectoriser).
 inline unsigned floatCertainlyApartBranchFree(const Eigen::Vector3f& a0, const Eigen::Vector3f& a1,
-                                          const Eigen::Vector3f& a2, const Eigen::Vector3f& b0,
-                                          const Eigen::Vector3f& b1, const Eigen::Vector3f& b2) {
+                                              const Eigen::Vector3f& a2, const Eigen::Vector3f& b0,
+                                              const Eigen::Vector3f& b1, const Eigen::Vector3f& b2) {
   const unsigned sideB = floatPlaneSide(makeFloatPlane(a0, a1, a2), b0, b1, b2);
   const unsigned sideA = floatPlaneSide(makeFloatPlane(b0, b1, b2), a0, a1, a2);
   return (sideB | ((sideB >> 1) & sideA)) & kAllOneSide;
 }
 
-/// trianglesIntersect without its float pre-test (defined in triangle_intersection.cpp), for callers that have
-/// run floatCertainlyApart themselves: Möller's test in double, as documented there.
+/// trianglesIntersect without its float pre-test (defined in triangle_intersection.cpp), for callers that
+/// have run floatCertainlyApart themselves: Möller's test in double, as documented there.
 bool trianglesIntersectDouble(const Eigen::Vector3f& a0, const Eigen::Vector3f& a1, const Eigen::Vector3f& a2,
-                              const Eigen::Vector3f& b0, const Eigen::Vector3f& b1, const Eigen::Vector3f& b2);
+                              const Eigen::Vector3f& b0, const Eigen::Vector3f& b1,
+                              const Eigen::Vector3f& b2);
 
-/// generateContact that also says whether the pair intersects (defined in triangle_contact.cpp). generateContact
-/// runs Möller's test in the same arithmetic as trianglesIntersectDouble before it makes a contact, so
-/// `intersects` is exactly trianglesIntersectDouble's answer, and a caller that needs both (the near phase keeps
-/// intersecting pairs whose contact is dropped) runs the test once instead of twice.
-std::optional<TriangleContact> generateContactAndTest(const Eigen::Vector3f (&a)[3], const Eigen::Vector3f (&b)[3],
-                                                      bool& intersects);
+/// generateContact that also says whether the pair intersects (defined in triangle_contact.cpp).
+/// generateContact runs Möller's test in the same arithmetic as trianglesIntersectDouble before it makes a
+/// contact, so `intersects` is exactly trianglesIntersectDouble's answer, and a caller that needs both (the
+/// near phase keeps intersecting pairs whose contact is dropped) runs the test once instead of twice.
+std::optional<TriangleContact> generateContactAndTest(const Eigen::Vector3f (&a)[3],
+                                                      const Eigen::Vector3f (&b)[3], bool& intersects);
 
 /// floatCertainlyApart for one pair.
-inline bool floatCertainlyApart(const Eigen::Vector3f& a0, const Eigen::Vector3f& a1, const Eigen::Vector3f& a2,
-                                const Eigen::Vector3f& b0, const Eigen::Vector3f& b1, const Eigen::Vector3f& b2) {
+inline bool floatCertainlyApart(const Eigen::Vector3f& a0, const Eigen::Vector3f& a1,
+                                const Eigen::Vector3f& a2, const Eigen::Vector3f& b0,
+                                const Eigen::Vector3f& b1, const Eigen::Vector3f& b2) {
   return floatCertainlyApart(makeFloatPlane(a0, a1, a2), a0, a1, a2, b0, b1, b2);
 }
 
