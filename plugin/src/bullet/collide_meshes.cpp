@@ -14,6 +14,7 @@
 #include <string>
 
 #include "bvh/aabb_tree.h"
+#include "bvh/prefetch.h"
 #include "bvh/tree_traversal.h"
 #include "gpucol/mesh_shape.h"
 #include "narrowphase/contact_reduction.h"
@@ -133,14 +134,6 @@ constexpr std::size_t kNearChunk = 512;
 constexpr std::size_t kIndexAhead = 16;
 constexpr std::size_t kVertexAhead = 8;
 
-// A hint to bring the line holding `p` into the cache; nothing where the compiler has no such builtin.
-inline void prefetch(const void* p) {
-#if defined(__GNUC__)
-  __builtin_prefetch(p);
-#else
-  (void)p;
-#endif
-}
 
 // Distance in floats between two coordinates' rows of ChunkTriangles: not a power of two, so that the 18 rows
 // written together do not all fall into the same few sets of the L1 cache (a 2 KiB stride put 9 rows per

@@ -1,5 +1,7 @@
 #include "bvh/tree_traversal.h"
 
+#include "bvh/prefetch.h"
+
 #include <tbb/blocked_range.h>
 #include <tbb/enumerable_thread_specific.h>
 #include <tbb/parallel_for.h>
@@ -149,14 +151,6 @@ inline bool overlaps(const float* lo, const float* hi, const CarriedBox& b) {
 #endif
 }
 
-/// A hint to bring the line holding `p` into the cache; nothing where the compiler has no such builtin.
-inline void prefetch(const void* p) {
-#if defined(__GNUC__)
-  __builtin_prefetch(p);
-#else
-  (void)p;
-#endif
-}
 
 /// Stack entries one depth-first descent below one start pair can need: each expansion pops one pair and
 /// pushes at most four, and descends at least one of the trees by a level, so at most depthA + depthB
