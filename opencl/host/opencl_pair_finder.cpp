@@ -1,6 +1,7 @@
 // OpenCL implementation of the grid pair finder; stage numbers are those of grid_pair_finder.h.
 #include "opencl/host/opencl_pair_finder.h"
 
+#include "broadphase/grid_choice.h"
 #include "broadphase/pair_mapping.h"
 
 #include "gpucol_kernels/kernels.h"
@@ -26,13 +27,6 @@ static_assert(GPUCOL_PROXY_ACTIVE == kProxyActive && GPUCOL_PROXY_STATIC == kPro
               "proxy flag bits differ between grid_params.h and grid_pair_finder.h");
 
 namespace {
-
-/// Cell size rules of grid_pair_finder.h stage 2 (same constants as the CPU finder, whose measurements
-/// chose them). The grid only decides the speed: whatever the grid, the pairs found are exactly the
-/// overlapping ones, because binning and the dedupe rule use the same cell function on the device.
-constexpr float kSizeFactor = 2.0f;
-constexpr float kObjectsPerCell = 4.0f;
-constexpr std::uint64_t kMaxCells = (std::uint64_t(1) << 32) - 1;
 
 /// A device buffer that grows on demand and is reused between searches.
 struct DeviceArray {
@@ -115,88 +109,24 @@ OpenClPairFinder::Kernels& OpenClPairFinder::kernels(bool newton) {
 }
 
 void OpenClPairFinder::chooseGrid(const ProxyArrays& p, const PairFinderOptions& options, GpucolGridParams& g) {
-  // Stage 2: cell size from the median largest extent (robust to a few huge boxes), or the paper's density.
-  const std::size_t n = m_active.size();
-  m_extent.resize(n);
-  float lo[3] = {p.minX[m_active[0]], p.minY[m_active[0]], p.minZ[m_active[0]]};
-  float hi[3] = {p.maxX[m_active[0]], p.maxY[m_active[0]], p.maxZ[m_active[0]]};
-  for (std::size_t i = 0; i < n; ++i) {
-    const std::uint32_t s = m_active[i];
-    m_extent[i] = std::max({p.maxX[s] - p.minX[s], p.maxY[s] - p.minY[s], p.maxZ[s] - p.minZ[s]});
-  }
-  std::nth_element(m_extent.begin(), m_extent.begin() + std::ptrdiff_t(n / 2), m_extent.end());
-  const float median = m_extent[n / 2];
-  float cell = kSizeFactor * median;
-  if (options.cellSizeRule == CellSizeRule::Density || !(cell > 0.0f)) {
-    for (std::uint32_t s : m_active) {
-      lo[0] = std::min(lo[0], p.minX[s]), lo[1] = std::min(lo[1], p.minY[s]), lo[2] = std::min(lo[2], p.minZ[s]);
-      hi[0] = std::max(hi[0], p.maxX[s]), hi[1] = std::max(hi[1], p.maxY[s]), hi[2] = std::max(hi[2], p.maxZ[s]);
-    }
-    double volume = 1.0;
-    for (int a = 0; a < 3; ++a) {
-      volume *= std::max(double(hi[a]) - double(lo[a]), double(median));
-    }
-    const float density = float(std::cbrt(double(kObjectsPerCell) * volume / double(n)));
-    if (density > 0.0f && std::isfinite(density)) {
-      cell = std::max(density, median);
-    }
-  }
-  if (!(cell > 0.0f) || !std::isfinite(cell)) {
-    cell = 1.0f;  // every box is a point at one spot
-  }
-  // Stage 3: boxes covering more than hugeCellLimit cells stay out of the grid.
-  m_binned.clear();
-  m_huge.clear();
-  m_isHuge.assign(n, 0);
-  const double inv = 1.0 / double(cell);
-  for (std::size_t i = 0; i < n; ++i) {
-    const std::uint32_t s = m_active[i];
-    const double covered = (double(p.maxX[s] - p.minX[s]) * inv + 1.0) *
-                           (double(p.maxY[s] - p.minY[s]) * inv + 1.0) *
-                           (double(p.maxZ[s] - p.minZ[s]) * inv + 1.0);
-    if (covered > double(options.hugeCellLimit)) {
-      m_huge.push_back(s);
-      m_isHuge[i] = 1;
-    } else {
-      m_binned.push_back(s);
-    }
-  }
+  // Stages 2-3, the same grid as the CPU finder's (broadphase/grid_choice.h). The grid only decides the
+  // speed: whatever the grid, the pairs found are exactly the overlapping ones, because binning and the
+  // dedupe rule use the same cell function on the device.
+  const Grid grid = gpucol::chooseGrid(p, m_active, options, m_extent, m_binned, m_huge);
   m_stats.hugeProxies = std::uint32_t(m_huge.size());
-  g = GpucolGridParams{0, 0, 0, 1, 1, 1, 1, 0};
-  if (m_binned.empty()) {
-    return;
-  }
-  const std::uint32_t f = m_binned[0];
-  float bmin[3] = {p.minX[f], p.minY[f], p.minZ[f]};
-  float bmax[3] = {p.maxX[f], p.maxY[f], p.maxZ[f]};
-  for (std::uint32_t s : m_binned) {
-    bmin[0] = std::min(bmin[0], p.minX[s]), bmin[1] = std::min(bmin[1], p.minY[s]), bmin[2] = std::min(bmin[2], p.minZ[s]);
-    bmax[0] = std::max(bmax[0], p.maxX[s]), bmax[1] = std::max(bmax[1], p.maxY[s]), bmax[2] = std::max(bmax[2], p.maxZ[s]);
-  }
-  std::uint32_t dims[3] = {1, 1, 1};
-  // Coarsen until the cell index fits 32 bits: exactness never depends on the cell size.
-  for (;;) {
-    std::uint64_t total = 1;
-    bool fits = true;
-    for (int a = 0; a < 3 && fits; ++a) {
-      const double d = std::floor((double(bmax[a]) - double(bmin[a])) / double(cell)) + 1.0;
-      fits = d <= double(kMaxCells);
-      if (fits) {
-        dims[a] = std::uint32_t(d);
-        total *= dims[a];
-        fits = total <= kMaxCells;
-      }
+  // Per active index: huge or not (m_huge is in m_active order, each slot once).
+  m_isHuge.assign(m_active.size(), 0);
+  for (std::size_t i = 0, h = 0; i < m_active.size() && h < m_huge.size(); ++i) {
+    if (m_active[i] == m_huge[h]) {
+      m_isHuge[i] = 1;
+      ++h;
     }
-    if (fits) {
-      break;
-    }
-    cell *= 2.0f;
   }
-  g = GpucolGridParams{bmin[0], bmin[1], bmin[2], 1.0f / cell, dims[0], dims[1], dims[2], 0};
-  m_stats.cellSize = cell;
-  for (int a = 0; a < 3; ++a) {
-    m_stats.dims[a] = dims[a];
-  }
+  g = GpucolGridParams{grid.origin[0], grid.origin[1], grid.origin[2], grid.invCell,
+                       grid.dims[0],   grid.dims[1],   grid.dims[2],   0};
+  if (m_binned.empty()) return;
+  m_stats.cellSize = grid.cell;
+  for (int a = 0; a < 3; ++a) m_stats.dims[a] = grid.dims[a];
 }
 
 void OpenClPairFinder::upload(const ProxyArrays& p) {

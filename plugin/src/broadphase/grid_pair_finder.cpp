@@ -14,19 +14,12 @@
 #include <stdexcept>
 #include <utility>
 
+#include "broadphase/grid_choice.h"
 #include "broadphase/pair_mapping.h"
 
 namespace gpucol {
 namespace {
 
-/// Size rule: cell edge = this × median largest extent. 2 was measured best of {1, 1.5, 2, 3} on the
-/// benchmark scenes (gpucol-bench broadphase --cell-factor): smaller cells mean more keys per box,
-/// larger ones more candidate pairs per cell.
-constexpr float kSizeFactor = 2.0f;
-/// Density rule (paper §4.1): the cell volume that holds this many objects on average.
-constexpr float kObjectsPerCell = 4.0f;
-/// Cell coordinates must fit the 32-bit cell index of a key (dims product < 2^32).
-constexpr std::uint64_t kMaxCells = (std::uint64_t(1) << 32) - 1;
 /// Candidates per parallel chunk at least (a multiple of 64 so bit-mask words are never shared).
 constexpr std::uint64_t kMinChunk = 16384;
 /// The home-cell order of the binned boxes (for locality only) is renewed after this many searches.
@@ -61,14 +54,6 @@ inline std::uint32_t cellOf(float x, float origin, float invCell, std::uint32_t 
   if (t >= float(dim - 1)) return dim - 1;
   return std::min(std::uint32_t(t), dim - 1);
 }
-
-struct Grid {
-  float origin[3] = {0, 0, 0};
-  float cell = 1.0f;
-  float invCell = 1.0f;
-  std::uint32_t dims[3] = {1, 1, 1};
-  std::uint64_t cells() const { return std::uint64_t(dims[0]) * dims[1] * dims[2]; }
-};
 
 /// Cell ranges [lo, hi] of one box on the three axes.
 struct CellRange {
@@ -242,7 +227,6 @@ class CpuPairFinder final : public PairFinder {
  private:
   void bruteForce(const ProxyArrays& p, const PairFinderOptions& options, std::vector<std::uint64_t>& pairs);
   void grid(const ProxyArrays& p, const PairFinderOptions& options, std::vector<std::uint64_t>& pairs);
-  Grid chooseGrid(const ProxyArrays& p, const PairFinderOptions& options);
   void binSorted(const ProxyArrays& p, const Grid& g);
   void testRuns(const ProxyArrays& p, const PairFinderOptions& options, const Grid& g);
   void testHuge(const ProxyArrays& p, const Grid& g);
@@ -477,86 +461,6 @@ void CpuPairFinder::bruteForce(const ProxyArrays& p, const PairFinderOptions& op
   });
   // Row-major order over ascending slots is key order, and chunks are in k order: no sort needed.
   gather(pairs);
-}
-
-Grid CpuPairFinder::chooseGrid(const ProxyArrays& p, const PairFinderOptions& options) {
-  const std::size_t n = m_active.size();
-  // Stage 2: the median of the largest extent, robust to a few huge boxes (a mean would follow them).
-  m_extent.resize(n);
-  float lo[3] = {p.minX[m_active[0]], p.minY[m_active[0]], p.minZ[m_active[0]]};
-  float hi[3] = {p.maxX[m_active[0]], p.maxY[m_active[0]], p.maxZ[m_active[0]]};
-  for (std::size_t i = 0; i < n; ++i) {
-    const std::uint32_t s = m_active[i];
-    m_extent[i] = std::max({p.maxX[s] - p.minX[s], p.maxY[s] - p.minY[s], p.maxZ[s] - p.minZ[s]});
-  }
-  std::nth_element(m_extent.begin(), m_extent.begin() + n / 2, m_extent.end());
-  const float median = m_extent[n / 2];
-  float cell = kSizeFactor * median;
-  if (options.cellSizeRule == CellSizeRule::Density || !(cell > 0.0f)) {
-    for (std::uint32_t s : m_active) {
-      lo[0] = std::min(lo[0], p.minX[s]), lo[1] = std::min(lo[1], p.minY[s]),
-      lo[2] = std::min(lo[2], p.minZ[s]);
-      hi[0] = std::max(hi[0], p.maxX[s]), hi[1] = std::max(hi[1], p.maxY[s]),
-      hi[2] = std::max(hi[2], p.maxZ[s]);
-    }
-    // A flat scene has zero volume; count each axis at least one object thick so the rule stays finite.
-    double volume = 1.0;
-    for (int a = 0; a < 3; ++a) volume *= std::max(double(hi[a]) - double(lo[a]), double(median));
-    const float density = float(std::cbrt(double(kObjectsPerCell) * volume / double(n)));
-    if (density > 0.0f && std::isfinite(density)) cell = std::max(density, median);
-  }
-  if (!(cell > 0.0f) || !std::isfinite(cell)) cell = 1.0f;  // all boxes are points at one spot
-
-  // Stage 3: huge boxes (estimated from extents, independent of the grid's origin).
-  m_binned.clear();
-  m_huge.clear();
-  m_isBinned.assign(p.count, 0);
-  const double inv = 1.0 / double(cell);
-  for (std::uint32_t s : m_active) {
-    const double covered = (double(p.maxX[s] - p.minX[s]) * inv + 1.0) *
-                           (double(p.maxY[s] - p.minY[s]) * inv + 1.0) *
-                           (double(p.maxZ[s] - p.minZ[s]) * inv + 1.0);
-    const bool huge = covered > double(options.hugeCellLimit);
-    (huge ? m_huge : m_binned).push_back(s);
-    m_isBinned[s] = !huge;
-  }
-  m_stats.hugeProxies = std::uint32_t(m_huge.size());
-
-  Grid g;
-  if (m_binned.empty()) return g;
-  const std::uint32_t f = m_binned[0];
-  float bmin[3] = {p.minX[f], p.minY[f], p.minZ[f]};
-  float bmax[3] = {p.maxX[f], p.maxY[f], p.maxZ[f]};
-  for (std::uint32_t s : m_binned) {
-    bmin[0] = std::min(bmin[0], p.minX[s]), bmin[1] = std::min(bmin[1], p.minY[s]),
-    bmin[2] = std::min(bmin[2], p.minZ[s]);
-    bmax[0] = std::max(bmax[0], p.maxX[s]), bmax[1] = std::max(bmax[1], p.maxY[s]),
-    bmax[2] = std::max(bmax[2], p.maxZ[s]);
-  }
-  // Coarsen until the cell index fits 32 bits: exactness never depends on the cell size.
-  for (;;) {
-    std::uint64_t total = 1;
-    bool fits = true;
-    for (int a = 0; a < 3; ++a) {
-      const double d = std::floor((double(bmax[a]) - double(bmin[a])) / double(cell)) + 1.0;
-      if (d > double(kMaxCells)) {
-        fits = false;
-        break;
-      }
-      g.dims[a] = std::uint32_t(d);
-      total *= g.dims[a];
-      if (total > kMaxCells) {
-        fits = false;
-        break;
-      }
-    }
-    if (fits) break;
-    cell *= 2.0f;
-  }
-  for (int a = 0; a < 3; ++a) g.origin[a] = bmin[a];
-  g.cell = cell;
-  g.invCell = 1.0f / cell;
-  return g;
 }
 
 void CpuPairFinder::binSorted(const ProxyArrays& p, const Grid& g) {
@@ -840,7 +744,10 @@ void CpuPairFinder::grid(const ProxyArrays& p, const PairFinderOptions& options,
                          std::vector<std::uint64_t>& pairs) {
   m_stats.usedGrid = true;
   m_denseBuilt = false;
-  const Grid g = chooseGrid(p, options);
+  const Grid g = chooseGrid(p, m_active, options, m_extent, m_binned, m_huge);
+  m_stats.hugeProxies = std::uint32_t(m_huge.size());
+  m_isBinned.assign(p.count, 0);
+  for (std::uint32_t s : m_binned) m_isBinned[s] = 1;
   m_keptGrid = g;
   m_stats.cellSize = g.cell;
   for (int a = 0; a < 3; ++a) m_stats.dims[a] = g.dims[a];

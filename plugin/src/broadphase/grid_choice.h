@@ -1,0 +1,32 @@
+#pragma once
+
+// Stages 2–3 of the grid search (grid_pair_finder.h): the one grid choice shared by the CPU finder and the
+// OpenCL finder, so both bin boxes into the same grid.
+
+#include <cstdint>
+#include <vector>
+
+#include "broadphase/grid_pair_finder.h"
+
+namespace gpucol {
+
+/// The uniform grid of one search: origin, cell edge and cells per axis (their product fits 32 bits).
+struct Grid {
+  float origin[3] = {0, 0, 0};    ///< Lower corner: the min corner of all binned boxes.
+  float cell = 1.0f;              ///< Cell edge length.
+  float invCell = 1.0f;           ///< 1 / cell.
+  std::uint32_t dims[3] = {1, 1, 1};  ///< Cells per axis.
+  /// Number of cells.
+  std::uint64_t cells() const { return std::uint64_t(dims[0]) * dims[1] * dims[2]; }
+};
+
+/// Chooses the grid for the `active` proxies (not empty): stage 2, the cell edge from the median largest
+/// extent (size rule) or the paper's density (§4.1); stage 3, proxies whose boxes would cover more than
+/// `options.hugeCellLimit` cells go to `huge`, the others to `binned` (both in `active` order); then the
+/// grid spans the binned boxes, its cells doubled until their count fits 32 bits (the pairs found never
+/// depend on the cell size). `extentScratch` is working memory kept by the caller between searches.
+Grid chooseGrid(const ProxyArrays& p, const std::vector<std::uint32_t>& active, const PairFinderOptions& options,
+                std::vector<float>& extentScratch, std::vector<std::uint32_t>& binned,
+                std::vector<std::uint32_t>& huge);
+
+}  // namespace gpucol
