@@ -1,5 +1,6 @@
 #pragma once
 
+#include <BulletCollision/CollisionShapes/btConcaveShape.h>
 #include <LinearMath/btVector3.h>
 
 #include <memory>
@@ -11,22 +12,50 @@ namespace gpucol {
 
 class AabbTree;
 
-/// A triangle mesh as a collision shape: the shared, immutable mesh, its tree of non-updated AABBs
-/// (built once, in the mesh's own frame) and a local scaling.
-class MeshShape {
+/// A triangle mesh as a Bullet collision shape (a btConcaveShape of type CUSTOM_CONCAVE_SHAPE_TYPE): the shared,
+/// immutable mesh, its tree of non-updated AABBs (built once, in the mesh's own frame) and a local scaling.
+///
+/// Dynamic bodies may use it. Boxes, spheres and hulls collide with it through Bullet's own convex-concave
+/// algorithm (processAllTriangles answers from the tree); mesh pairs, and a mesh against btStaticPlaneShape or
+/// btBvhTriangleMeshShape, go through MeshMeshAlgorithm. The margin is 0 by default, as for Bullet's other
+/// concave shapes; a margin m makes contacts report a distance m smaller, so bodies rest m apart.
+ATTRIBUTE_ALIGNED16(class) MeshShape : public btConcaveShape {
  public:
-  /// Builds the tree of `mesh` with `config.trianglesPerLeaf` triangles per leaf.
+  BT_DECLARE_ALIGNED_ALLOCATOR();
+
+  /// Builds the tree of `mesh` with `config.trianglesPerLeaf` triangles per leaf; throws MeshError for a null mesh.
   explicit MeshShape(std::shared_ptr<const TriangleMesh> mesh, const Config& config = Config());
-  ~MeshShape();
+  ~MeshShape() override;
 
   /// The mesh this shape collides with.
   const TriangleMesh& mesh() const { return *m_mesh; }
+  /// The shared mesh, for building another shape over it.
+  const std::shared_ptr<const TriangleMesh>& sharedMesh() const { return m_mesh; }
   /// The tree of non-updated AABBs of the mesh.
   const AabbTree& tree() const { return *m_tree; }
-  /// Per-axis scale applied to the mesh (1,1,1 by default); each component must be finite and non-zero.
-  void setLocalScaling(const btVector3& scaling);
+
+  /// Per-axis scale applied to the mesh (1,1,1 by default). Each component must be finite and non-zero: anything
+  /// else throws MeshError and keeps the previous scaling.
+  void setLocalScaling(const btVector3& scaling) override;
   /// The current local scaling.
-  const btVector3& getLocalScaling() const { return m_localScaling; }
+  const btVector3& getLocalScaling() const override { return m_localScaling; }
+
+  /// World box of the scaled mesh under `t`: the tree's root box carried by |R|, widened by the margin.
+  void getAabb(const btTransform& t, btVector3& aabbMin, btVector3& aabbMax) const override;
+  /// Calls `callback` with every triangle (in the shape's scaled local frame) whose box overlaps the given box
+  /// (also in that frame), found through the tree; triangles come in ascending tree order.
+  void processAllTriangles(btTriangleCallback* callback, const btVector3& aabbMin,
+                           const btVector3& aabbMax) const override;
+  /// Diagonal inertia of a solid of uniform density with this closed mesh as its surface (scaled), from the
+  /// mass properties. The body frame must be the mesh's principal frame for this to be the full tensor (see
+  /// TriangleMesh::inPrincipalFrame); otherwise the tensor's diagonal is used and a warning is printed once.
+  /// An open mesh has no volume: the inertia of its bounding box is used, with a warning printed once.
+  void calculateLocalInertia(btScalar mass, btVector3& inertia) const override;
+  /// "gpucol::MeshShape".
+  const char* getName() const override { return "gpucol::MeshShape"; }
+
+  /// True when `shape` is a gpucol MeshShape.
+  static bool isMeshShape(const btCollisionShape* shape);
 
  private:
   std::shared_ptr<const TriangleMesh> m_mesh;

@@ -1,9 +1,12 @@
 #include "gpucol/mesh_shape.h"
 
+#include <algorithm>
 #include <cmath>
 #include <sstream>
 
+#include "bullet/warn_once.h"
 #include "bvh/aabb_tree.h"
+#include "bvh/tree_query.h"
 #include "gpucol/mesh_error.h"
 
 namespace gpucol {
@@ -11,9 +14,15 @@ namespace gpucol {
 MeshShape::MeshShape(std::shared_ptr<const TriangleMesh> mesh, const Config& config) : m_mesh(std::move(mesh)) {
   if (!m_mesh) throw MeshError("MeshShape: the mesh pointer is null");
   m_tree = std::make_shared<const AabbTree>(AabbTree::build(*m_mesh, config.trianglesPerLeaf));
+  m_shapeType = CUSTOM_CONCAVE_SHAPE_TYPE;
 }
 
 MeshShape::~MeshShape() = default;
+
+bool MeshShape::isMeshShape(const btCollisionShape* shape) {
+  return shape != nullptr && shape->getShapeType() == CUSTOM_CONCAVE_SHAPE_TYPE &&
+         dynamic_cast<const MeshShape*>(shape) != nullptr;
+}
 
 void MeshShape::setLocalScaling(const btVector3& scaling) {
   for (int axis = 0; axis < 3; ++axis) {
@@ -26,6 +35,89 @@ void MeshShape::setLocalScaling(const btVector3& scaling) {
     }
   }
   m_localScaling = scaling;
+}
+
+void MeshShape::getAabb(const btTransform& t, btVector3& aabbMin, btVector3& aabbMax) const {
+  const AabbNode& root = m_tree->node(0);
+  // The scaled root box, then carried by the body's rotation: centre by R, half extents by |R| (an exact box
+  // of the rotated box).
+  const btVector3 lo = btVector3(root.min[0], root.min[1], root.min[2]) * m_localScaling;
+  const btVector3 hi = btVector3(root.max[0], root.max[1], root.max[2]) * m_localScaling;
+  const btVector3 centre = btScalar(0.5) * (lo + hi);
+  const btVector3 halfExtent = (btScalar(0.5) * (hi - lo)).absolute() + btVector3(getMargin(), getMargin(), getMargin());
+  const btMatrix3x3 absBasis = t.getBasis().absolute();
+  const btVector3 worldCentre = t(centre);
+  const btVector3 worldExtent(absBasis[0].dot(halfExtent), absBasis[1].dot(halfExtent), absBasis[2].dot(halfExtent));
+  aabbMin = worldCentre - worldExtent;
+  aabbMax = worldCentre + worldExtent;
+}
+
+void MeshShape::processAllTriangles(btTriangleCallback* callback, const btVector3& aabbMin,
+                                    const btVector3& aabbMax) const {
+  // The query box comes in the scaled frame; the tree lives in the unscaled one. Dividing by the scale maps the
+  // box over (a negative scale swaps its corners).
+  float queryMin[3], queryMax[3];
+  for (int axis = 0; axis < 3; ++axis) {
+    const float a = float(aabbMin[axis] / m_localScaling[axis]);
+    const float b = float(aabbMax[axis] / m_localScaling[axis]);
+    queryMin[axis] = std::min(a, b);
+    queryMax[axis] = std::max(a, b);
+  }
+  const auto overlaps = [&](const float* min, const float* max) {
+    return min[0] <= queryMax[0] && max[0] >= queryMin[0] && min[1] <= queryMax[1] && max[1] >= queryMin[1] &&
+           min[2] <= queryMax[2] && max[2] >= queryMin[2];
+  };
+  const float* positions = m_mesh->positions().data();
+  const std::uint32_t* indices = m_mesh->indices().data();
+  visitTreeTriangles(*m_tree, overlaps, [&](std::uint32_t t) {
+    btVector3 corners[3];
+    for (int i = 0; i < 3; ++i) {
+      const float* p = positions + 3 * std::size_t(indices[3 * std::size_t(t) + i]);
+      corners[i] = btVector3(p[0], p[1], p[2]) * m_localScaling;
+    }
+    callback->processTriangle(corners, 0, int(t));
+  });
+}
+
+void MeshShape::calculateLocalInertia(btScalar mass, btVector3& inertia) const {
+  // Mass properties of the scaled mesh, for a density giving `mass`. A mirroring scale turns the winding
+  // inward, so two corners are swapped back to keep the volume positive.
+  const btVector3& s = m_localScaling;
+  const bool mirrored = s.x() * s.y() * s.z() < 0;
+  std::vector<float> xyz = m_mesh->positions();
+  for (std::size_t i = 0; i < xyz.size(); ++i) xyz[i] *= float(s[int(i % 3)]);
+  std::vector<std::uint32_t> indices = m_mesh->indices();
+  if (mirrored) {
+    for (std::size_t t = 0; t < indices.size(); t += 3) std::swap(indices[t + 1], indices[t + 2]);
+  }
+  try {
+    const TriangleMesh scaled = TriangleMesh::fromArrays(std::move(xyz), std::move(indices), m_mesh->name());
+    const MassProperties unitDensity = scaled.massProperties(1.0);
+    const double density = double(mass) / unitDensity.volume;
+    const auto& I = unitDensity.inertia;
+    inertia.setValue(btScalar(I[0] * density), btScalar(I[4] * density), btScalar(I[8] * density));
+    const double offDiagonal = std::max({std::abs(I[1]), std::abs(I[2]), std::abs(I[5])});
+    const double diagonal = std::max({I[0], I[4], I[8]});
+    const auto& c = unitDensity.centerOfMass;
+    const double size = (btVector3(m_tree->rootMax().x(), m_tree->rootMax().y(), m_tree->rootMax().z()) -
+                         btVector3(m_tree->rootMin().x(), m_tree->rootMin().y(), m_tree->rootMin().z()))
+                            .length();
+    // 1e-3 relative: far above the rounding of the double integrals, far below an inertia that matters.
+    if (offDiagonal > 1e-3 * diagonal || std::sqrt(c[0] * c[0] + c[1] * c[1] + c[2] * c[2]) > 1e-3 * size) {
+      warnOnce("inertia frame " + m_mesh->name(),
+               "MeshShape '" + m_mesh->name() +
+                   "': the mesh is not in its principal frame (centre of mass off the origin or a non-diagonal "
+                   "inertia tensor); the body gets the tensor's diagonal. Use TriangleMesh::inPrincipalFrame.");
+    }
+  } catch (const MeshError& e) {
+    // No volume to integrate: the box of the scaled mesh stands in, as btCollisionShape's default would.
+    warnOnce("inertia box " + m_mesh->name(), std::string(e.what()) + "; using the inertia of its bounding box");
+    btVector3 lo, hi;
+    getAabb(btTransform::getIdentity(), lo, hi);
+    const btVector3 d = hi - lo;
+    inertia.setValue(mass / 12 * (d.y() * d.y() + d.z() * d.z()), mass / 12 * (d.x() * d.x() + d.z() * d.z()),
+                     mass / 12 * (d.x() * d.x() + d.y() * d.y()));
+  }
 }
 
 }  // namespace gpucol

@@ -1,0 +1,59 @@
+#pragma once
+
+#include <BulletCollision/CollisionDispatch/btActivatingCollisionAlgorithm.h>
+#include <BulletCollision/CollisionDispatch/btCollisionCreateFunc.h>
+#include <BulletCollision/CollisionDispatch/btCollisionDispatcher.h>
+
+#include <memory>
+#include <optional>
+
+#include "gpucol/collide_meshes.h"
+#include "gpucol/config.h"
+
+namespace gpucol {
+
+class ContactManifoldSet;
+class TriangleMeshPatch;
+
+/// Bullet's collision algorithm for a MeshShape against another MeshShape, a btStaticPlaneShape or a
+/// btBvhTriangleMeshShape (either order). Contacts go into persistent manifolds that live as long as the pair
+/// (refreshed every step, so the solver warm starts), one manifold per direction of contact normal.
+class MeshMeshAlgorithm : public btActivatingCollisionAlgorithm {
+ public:
+  /// Made by the create function registered through registerWith().
+  MeshMeshAlgorithm(const btCollisionAlgorithmConstructionInfo& info, const btCollisionObjectWrapper* body0,
+                    const btCollisionObjectWrapper* body1, const Config& config);
+  ~MeshMeshAlgorithm() override;
+
+  /// Collides the pair and writes the reduced contacts into the pair's manifolds. Never throws: a pair that
+  /// cannot be collided (NaN transform) is skipped with a warning printed once.
+  void processCollision(const btCollisionObjectWrapper* body0, const btCollisionObjectWrapper* body1,
+                        const btDispatcherInfo& dispatchInfo, btManifoldResult* resultOut) override;
+  /// Continuous collision is not supported for meshes: returns 1 (no time of impact), as GImpact does.
+  btScalar calculateTimeOfImpact(btCollisionObject* body0, btCollisionObject* body1,
+                                 const btDispatcherInfo& dispatchInfo, btManifoldResult* resultOut) override;
+  /// Appends this pair's manifolds.
+  void getAllContactManifolds(btManifoldArray& manifolds) override;
+
+  /// Registers the create function for every shape pair this algorithm handles on `dispatcher`. Pairs it does
+  /// not handle (a foreign CUSTOM_CONCAVE shape) go to the create function the dispatcher's collision
+  /// configuration gives, as before the call.
+  static void registerWith(btCollisionDispatcher& dispatcher, const Config& config = Config());
+
+  /// For gpucol::CollisionDispatcher: the result of this pair for this step, computed in a batch with the
+  /// other mesh pairs. processCollision uses it when the shapes and transforms are the ones given here.
+  void setPrecomputedResult(const MeshPairQuery& query, MeshPairResult result);
+
+  /// The query this pair would run between two mesh shapes; std::nullopt when it is not a mesh-mesh pair.
+  std::optional<MeshPairQuery> meshPairQuery(const btCollisionObjectWrapper* body0,
+                                             const btCollisionObjectWrapper* body1) const;
+
+ private:
+  struct Precomputed;
+  Config m_config;
+  std::unique_ptr<ContactManifoldSet> m_manifolds;
+  std::unique_ptr<Precomputed> m_precomputed;
+  std::unique_ptr<TriangleMeshPatch> m_patch;  // triangles of a btBvhTriangleMeshShape near the mesh, kept
+};
+
+}  // namespace gpucol

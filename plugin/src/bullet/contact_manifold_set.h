@@ -1,0 +1,59 @@
+#pragma once
+
+#include <BulletCollision/BroadphaseCollision/btCollisionAlgorithm.h>
+#include <BulletCollision/BroadphaseCollision/btDispatcher.h>
+#include <BulletCollision/CollisionDispatch/btCollisionObjectWrapper.h>
+#include <BulletCollision/CollisionDispatch/btManifoldResult.h>
+#include <BulletCollision/NarrowPhaseCollision/btPersistentManifold.h>
+
+#include <vector>
+
+namespace gpucol {
+
+/// One contact of a pair as Bullet's manifolds take it, with "B" the pair's second body (body1).
+struct PairContact {
+  btVector3 pointOnB;   ///< World point on body1's surface (margin included).
+  btVector3 normalOnB;  ///< Unit world normal on body1 pointing towards body0.
+  btScalar distance;    ///< Signed distance along the normal, negative when penetrating (margins included).
+};
+
+/// The same contacts seen from the other side: body0 and body1 swap roles.
+std::vector<PairContact> swapSides(std::vector<PairContact> contacts);
+
+/// The persistent manifolds of one pair, one per direction of contact normal. Bullet keeps at most 4 points in
+/// a manifold, chosen for the largest area around the deepest point; contacts whose normals point different
+/// ways (a body in a corner, a peg in a hole) would fight over those 4 places, so each direction gets its
+/// own manifold. A contact joins the manifold whose reference normal (the first contact's normal, kept in
+/// body1's frame so that it turns with the body) is within kSameManifoldAngle of its own; otherwise it starts
+/// a new one. Manifolds live across steps: Bullet matches each new contact with a point already held (within
+/// the breaking threshold) and keeps that point's impulse, so the solver warm starts; refreshContactPoints
+/// drops points that drifted apart. A manifold left with no point at the end of a step is released.
+class ContactManifoldSet {
+ public:
+  /// Manifolds come from and go back to `dispatcher`.
+  explicit ContactManifoldSet(btDispatcher* dispatcher) : m_dispatcher(dispatcher) {}
+  ~ContactManifoldSet();
+  ContactManifoldSet(const ContactManifoldSet&) = delete;
+  ContactManifoldSet& operator=(const ContactManifoldSet&) = delete;
+
+  /// Writes this step's contacts into the manifolds through `result` (whose body wrappers are body0 and body1),
+  /// refreshes every manifold, releases the empty ones. `result`'s own manifold pointer is restored after.
+  void write(const std::vector<PairContact>& contacts, const btCollisionObjectWrapper* body0,
+             const btCollisionObjectWrapper* body1, btManifoldResult* result);
+
+  /// Appends the pair's manifolds.
+  void appendTo(btManifoldArray& manifolds) const;
+
+  /// Number of manifolds held now.
+  int size() const { return int(m_groups.size()); }
+
+ private:
+  struct Group {
+    btPersistentManifold* manifold;
+    btVector3 normalInBody1;  // reference normal, in body1's frame
+  };
+  btDispatcher* m_dispatcher;
+  std::vector<Group> m_groups;
+};
+
+}  // namespace gpucol

@@ -1,0 +1,196 @@
+// MeshMeshAlgorithm: a MeshShape against a MeshShape, a btStaticPlaneShape or a btBvhTriangleMeshShape, with the
+// contacts in persistent manifolds (contact_manifold_set.h).
+#include "gpucol/mesh_mesh_algorithm.h"
+
+#include <BulletCollision/CollisionDispatch/btCollisionConfiguration.h>
+#include <BulletCollision/CollisionDispatch/btManifoldResult.h>
+#include <BulletCollision/CollisionShapes/btStaticPlaneShape.h>
+
+#include <list>
+#include <mutex>
+#include <string>
+
+#include "bullet/contact_manifold_set.h"
+#include "bullet/mesh_plane_contacts.h"
+#include "bullet/triangle_mesh_patch.h"
+#include "bullet/warn_once.h"
+#include "gpucol/mesh_shape.h"
+
+namespace gpucol {
+
+struct MeshMeshAlgorithm::Precomputed {
+  MeshPairQuery query;
+  MeshPairResult result;
+};
+
+namespace {
+
+bool sameTransform(const btTransform& a, const btTransform& b) {
+  return a.getOrigin() == b.getOrigin() && a.getBasis()[0] == b.getBasis()[0] &&
+         a.getBasis()[1] == b.getBasis()[1] && a.getBasis()[2] == b.getBasis()[2];
+}
+
+bool isOtherConcave(const btCollisionShape* shape) {
+  return shape->getShapeType() == STATIC_PLANE_PROXYTYPE || shape->getShapeType() == TRIANGLE_MESH_SHAPE_PROXYTYPE;
+}
+
+// The pairs the algorithm takes: two meshes, or a mesh and one of the concave shapes it knows.
+bool handles(const btCollisionShape* s0, const btCollisionShape* s1) {
+  const bool mesh0 = MeshShape::isMeshShape(s0), mesh1 = MeshShape::isMeshShape(s1);
+  return (mesh0 && mesh1) || (mesh0 && isOtherConcave(s1)) || (mesh1 && isOtherConcave(s0));
+}
+
+// The distance within which Bullet keeps a manifold point: the one btCollisionDispatcher gives a new manifold
+// of these two shapes (relative to their size, its default).
+btScalar breakingThreshold(const btCollisionShape* s0, const btCollisionShape* s1) {
+  return btMin(s0->getContactBreakingThreshold(gContactBreakingThreshold),
+               s1->getContactBreakingThreshold(gContactBreakingThreshold));
+}
+
+// Reduced mesh contacts as manifold contacts: the point moves onto B's margin surface and the distance counts
+// both margins, so that bodies with margins rest that far apart (as Bullet's convex shapes do).
+std::vector<PairContact> toPairContacts(const std::vector<MeshContact>& reduced, btScalar marginA,
+                                        btScalar marginB) {
+  std::vector<PairContact> out;
+  out.reserve(reduced.size());
+  for (const MeshContact& c : reduced) {
+    out.push_back({c.pointWorld + c.normalWorldOnB * marginB, c.normalWorldOnB, c.depth - marginA - marginB});
+  }
+  return out;
+}
+
+std::string pairName(const btCollisionShape* s0, const btCollisionShape* s1) {
+  const auto name = [](const btCollisionShape* s) {
+    return MeshShape::isMeshShape(s) ? "mesh '" + static_cast<const MeshShape*>(s)->mesh().name() + "'"
+                                     : std::string(s->getName());
+  };
+  return name(s0) + " against " + name(s1);
+}
+
+// The create function registered on a dispatcher: the algorithm for the pairs it handles, else what the
+// dispatcher's collision configuration gave for that pair of shape types before.
+class MeshMeshCreateFunc : public btCollisionAlgorithmCreateFunc {
+ public:
+  MeshMeshCreateFunc(const Config& config, btCollisionAlgorithmCreateFunc* fallback)
+      : m_config(config), m_fallback(fallback) {}
+
+  btCollisionAlgorithm* CreateCollisionAlgorithm(btCollisionAlgorithmConstructionInfo& info,
+                                                 const btCollisionObjectWrapper* body0,
+                                                 const btCollisionObjectWrapper* body1) override {
+    if (!handles(body0->getCollisionShape(), body1->getCollisionShape())) {
+      return m_fallback ? m_fallback->CreateCollisionAlgorithm(info, body0, body1) : nullptr;
+    }
+    void* memory = info.m_dispatcher1->allocateCollisionAlgorithm(sizeof(MeshMeshAlgorithm));
+    return new (memory) MeshMeshAlgorithm(info, body0, body1, m_config);
+  }
+
+ private:
+  Config m_config;
+  btCollisionAlgorithmCreateFunc* m_fallback;
+};
+
+}  // namespace
+
+MeshMeshAlgorithm::MeshMeshAlgorithm(const btCollisionAlgorithmConstructionInfo& info,
+                                     const btCollisionObjectWrapper* body0, const btCollisionObjectWrapper* body1,
+                                     const Config& config)
+    : btActivatingCollisionAlgorithm(info, body0, body1),
+      m_config(config),
+      m_manifolds(std::make_unique<ContactManifoldSet>(info.m_dispatcher1)),
+      m_patch(std::make_unique<TriangleMeshPatch>()) {}
+
+MeshMeshAlgorithm::~MeshMeshAlgorithm() = default;
+
+std::optional<MeshPairQuery> MeshMeshAlgorithm::meshPairQuery(const btCollisionObjectWrapper* body0,
+                                                              const btCollisionObjectWrapper* body1) const {
+  if (!MeshShape::isMeshShape(body0->getCollisionShape()) || !MeshShape::isMeshShape(body1->getCollisionShape())) {
+    return std::nullopt;
+  }
+  MeshPairQuery query;
+  query.shapeA = static_cast<const MeshShape*>(body0->getCollisionShape());
+  query.transformA = body0->getWorldTransform();
+  query.shapeB = static_cast<const MeshShape*>(body1->getCollisionShape());
+  query.transformB = body1->getWorldTransform();
+  return query;
+}
+
+void MeshMeshAlgorithm::setPrecomputedResult(const MeshPairQuery& query, MeshPairResult result) {
+  m_precomputed = std::make_unique<Precomputed>(Precomputed{query, std::move(result)});
+}
+
+void MeshMeshAlgorithm::processCollision(const btCollisionObjectWrapper* body0, const btCollisionObjectWrapper* body1,
+                                         const btDispatcherInfo& /*dispatchInfo*/, btManifoldResult* resultOut) {
+  const btCollisionShape* s0 = body0->getCollisionShape();
+  const btCollisionShape* s1 = body1->getCollisionShape();
+  std::unique_ptr<Precomputed> precomputed = std::move(m_precomputed);
+  std::vector<PairContact> contacts;
+  try {
+    if (const std::optional<MeshPairQuery> query = meshPairQuery(body0, body1)) {
+      // The batch's result is used only for the very shapes and transforms it was computed with: a compound's
+      // child or a user calling processCollision again gets its own query.
+      const bool batched = precomputed && precomputed->query.shapeA == query->shapeA &&
+                           precomputed->query.shapeB == query->shapeB &&
+                           sameTransform(precomputed->query.transformA, query->transformA) &&
+                           sameTransform(precomputed->query.transformB, query->transformB);
+      const MeshPairResult result =
+          batched ? std::move(precomputed->result)
+                  : collideMeshes(*query->shapeA, query->transformA, *query->shapeB, query->transformB, m_config);
+      contacts = toPairContacts(result.reducedContacts, s0->getMargin(), s1->getMargin());
+    } else if (handles(s0, s1)) {
+      // A mesh against a plane or a triangle mesh: computed with the mesh as body0, then turned round if the
+      // mesh is body1.
+      const bool meshFirst = MeshShape::isMeshShape(s0);
+      const btCollisionObjectWrapper* meshBody = meshFirst ? body0 : body1;
+      const btCollisionObjectWrapper* otherBody = meshFirst ? body1 : body0;
+      const MeshShape& mesh = *static_cast<const MeshShape*>(meshBody->getCollisionShape());
+      const btCollisionShape* other = otherBody->getCollisionShape();
+      if (other->getShapeType() == STATIC_PLANE_PROXYTYPE) {
+        contacts = meshPlaneContacts(mesh, meshBody->getWorldTransform(), *static_cast<const btStaticPlaneShape*>(other),
+                                     otherBody->getWorldTransform(), breakingThreshold(s0, s1),
+                                     m_config.reductionResolution);
+      } else if (const MeshShape* patch = m_patch->update(*static_cast<const btConcaveShape*>(other),
+                                                          otherBody->getWorldTransform(), mesh,
+                                                          meshBody->getWorldTransform())) {
+        const MeshPairResult result =
+            collideMeshes(mesh, meshBody->getWorldTransform(), *patch, otherBody->getWorldTransform(), m_config);
+        contacts = toPairContacts(result.reducedContacts, mesh.getMargin(), other->getMargin());
+      }
+      if (!meshFirst) contacts = swapSides(std::move(contacts));
+    }
+  } catch (const std::exception& e) {
+    // Never through Bullet: the pair is skipped this step, its manifolds emptied so that no stale or NaN point
+    // reaches the solver, and the reason said once.
+    warnOnce("pair " + pairName(s0, s1), "skipping the collision of " + pairName(s0, s1) + ": " + e.what());
+    m_manifolds = std::make_unique<ContactManifoldSet>(m_dispatcher);
+    return;
+  }
+  m_manifolds->write(contacts, body0, body1, resultOut);
+}
+
+btScalar MeshMeshAlgorithm::calculateTimeOfImpact(btCollisionObject*, btCollisionObject*, const btDispatcherInfo&,
+                                                  btManifoldResult*) {
+  return 1;
+}
+
+void MeshMeshAlgorithm::getAllContactManifolds(btManifoldArray& manifolds) { m_manifolds->appendTo(manifolds); }
+
+void MeshMeshAlgorithm::registerWith(btCollisionDispatcher& dispatcher, const Config& config) {
+  // Create functions must outlive the dispatcher's use of them; like GImpact's static one, they live until the
+  // process ends.
+  static std::mutex mutex;
+  static std::list<MeshMeshCreateFunc> functions;
+  const std::lock_guard<std::mutex> lock(mutex);
+  btCollisionConfiguration* configuration = dispatcher.getCollisionConfiguration();
+  const int kinds[] = {CUSTOM_CONCAVE_SHAPE_TYPE, STATIC_PLANE_PROXYTYPE, TRIANGLE_MESH_SHAPE_PROXYTYPE};
+  for (int a : kinds) {
+    for (int b : kinds) {
+      if (a != CUSTOM_CONCAVE_SHAPE_TYPE && b != CUSTOM_CONCAVE_SHAPE_TYPE) continue;
+      functions.emplace_back(config, configuration->getCollisionAlgorithmCreateFunc(a, b));
+      dispatcher.registerCollisionCreateFunc(a, b, &functions.back());
+      functions.emplace_back(config, configuration->getClosestPointsAlgorithmCreateFunc(a, b));
+      dispatcher.registerClosestPointsCreateFunc(a, b, &functions.back());
+    }
+  }
+}
+
+}  // namespace gpucol

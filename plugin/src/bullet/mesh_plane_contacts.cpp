@@ -1,0 +1,58 @@
+#include "bullet/mesh_plane_contacts.h"
+
+#include <algorithm>
+
+#include "bvh/aabb_tree.h"
+#include "bvh/tree_query.h"
+#include "narrowphase/contact_reduction.h"
+
+namespace gpucol {
+
+std::vector<PairContact> meshPlaneContacts(const MeshShape& mesh, const btTransform& meshTransform,
+                                           const btStaticPlaneShape& plane, const btTransform& planeTransform,
+                                           btScalar threshold, int reductionResolution) {
+  const btScalar margins = mesh.getMargin() + plane.getMargin();
+  // The plane in the mesh's unscaled frame, where the tree lives: a point p of the mesh is at world
+  // T(S p), and its distance to the plane is nWorld . T(S p) - cWorld = (S R^T nWorld) . p + (nWorld . t - cWorld).
+  const btVector3 normalWorld = planeTransform.getBasis() * plane.getPlaneNormal();
+  const btScalar constantWorld = normalWorld.dot(planeTransform(plane.getPlaneNormal() * plane.getPlaneConstant()));
+  const btVector3 normalInMesh = (meshTransform.getBasis().transpose() * normalWorld) * mesh.getLocalScaling();
+  const btScalar offset = normalWorld.dot(meshTransform.getOrigin()) - constantWorld;
+  const btScalar reach = threshold + margins;
+
+  // A box can hold a vertex within reach only if its lowest corner along the plane normal is within reach.
+  const auto boxNearPlane = [&](const float* min, const float* max) {
+    btScalar lowest = offset;
+    for (int axis = 0; axis < 3; ++axis) lowest += normalInMesh[axis] * (normalInMesh[axis] > 0 ? min[axis] : max[axis]);
+    return lowest <= reach;
+  };
+  const std::uint32_t* indices = mesh.mesh().indices().data();
+  const float* positions = mesh.mesh().positions().data();
+  std::vector<std::uint32_t> vertices;
+  visitTreeTriangles(mesh.tree(), boxNearPlane, [&](std::uint32_t t) {
+    for (int i = 0; i < 3; ++i) vertices.push_back(indices[3 * std::size_t(t) + i]);
+  });
+  // A vertex is shared by several triangles: each gives one contact.
+  std::sort(vertices.begin(), vertices.end());
+  vertices.erase(std::unique(vertices.begin(), vertices.end()), vertices.end());
+
+  std::vector<PairContact> contacts;
+  std::vector<ReductionInput> binned;
+  for (std::uint32_t v : vertices) {
+    const float* p = positions + 3 * std::size_t(v);
+    const btScalar distance = normalInMesh.dot(btVector3(p[0], p[1], p[2])) + offset;
+    if (distance > reach) continue;
+    const btVector3 world = meshTransform(btVector3(p[0], p[1], p[2]) * mesh.getLocalScaling());
+    // On the plane's margin surface; the distance counts both margins, so bodies rest `margins` apart.
+    const btVector3 onPlane = world - normalWorld * (distance - plane.getMargin());
+    contacts.push_back({onPlane, normalWorld, distance - margins});
+    binned.push_back({Eigen::Vector3f(float(world.x()), float(world.y()), float(world.z())),
+                      Eigen::Vector3f(float(normalWorld.x()), float(normalWorld.y()), float(normalWorld.z())),
+                      float(distance - margins)});
+  }
+  std::vector<PairContact> reduced;
+  for (std::uint32_t kept : reduceContacts(binned, reductionResolution)) reduced.push_back(contacts[kept]);
+  return reduced;
+}
+
+}  // namespace gpucol

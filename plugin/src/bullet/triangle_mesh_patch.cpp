@@ -1,0 +1,45 @@
+#include "bullet/triangle_mesh_patch.h"
+
+#include <BulletCollision/CollisionShapes/btTriangleCallback.h>
+
+namespace gpucol {
+namespace {
+
+class TriangleCollector : public btTriangleCallback {
+ public:
+  void processTriangle(btVector3* triangle, int partId, int triangleIndex) override {
+    ids.push_back((std::uint64_t(std::uint32_t(partId)) << 32) | std::uint32_t(triangleIndex));
+    for (int i = 0; i < 3; ++i) {
+      for (int axis = 0; axis < 3; ++axis) xyz.push_back(float(triangle[i][axis]));
+    }
+  }
+  std::vector<std::uint64_t> ids;
+  std::vector<float> xyz;
+};
+
+}  // namespace
+
+const MeshShape* TriangleMeshPatch::update(const btConcaveShape& other, const btTransform& otherTransform,
+                                           const MeshShape& mesh, const btTransform& meshTransform) {
+  btVector3 lo, hi;
+  mesh.getAabb(otherTransform.inverseTimes(meshTransform), lo, hi);
+  TriangleCollector collector;
+  other.processAllTriangles(&collector, lo, hi);
+  if (collector.ids.empty()) {
+    m_triangleIds.clear();
+    m_shape.reset();
+    return nullptr;
+  }
+  if (collector.ids != m_triangleIds || !m_shape) {
+    // Each triangle gets its own three vertices: the patch needs no welding, only the triangles' positions.
+    std::vector<std::uint32_t> indices(collector.xyz.size() / 3);
+    for (std::size_t i = 0; i < indices.size(); ++i) indices[i] = std::uint32_t(i);
+    auto patch = std::make_shared<const TriangleMesh>(
+        TriangleMesh::fromArrays(std::move(collector.xyz), std::move(indices), "triangles of a concave shape"));
+    m_shape = std::make_unique<MeshShape>(std::move(patch));
+    m_triangleIds = std::move(collector.ids);
+  }
+  return m_shape.get();
+}
+
+}  // namespace gpucol

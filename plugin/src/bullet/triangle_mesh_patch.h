@@ -1,0 +1,29 @@
+#pragma once
+
+#include <BulletCollision/CollisionShapes/btConcaveShape.h>
+#include <LinearMath/btTransform.h>
+
+#include <cstdint>
+#include <memory>
+#include <vector>
+
+#include "gpucol/mesh_shape.h"
+
+namespace gpucol {
+
+/// The triangles of a foreign concave shape (a btBvhTriangleMeshShape) near a mesh, as a MeshShape of their own,
+/// so that the mesh-vs-mesh query collides the two. The patch is rebuilt only when the set of triangles near the
+/// mesh changes: a mesh resting on a floor reuses the same patch step after step.
+class TriangleMeshPatch {
+ public:
+  /// The patch of `other`'s triangles (in `other`'s scaled local frame) whose boxes overlap `mesh`'s box; null
+  /// when there are none. `other` must stay the same shape across calls.
+  const MeshShape* update(const btConcaveShape& other, const btTransform& otherTransform, const MeshShape& mesh,
+                          const btTransform& meshTransform);
+
+ private:
+  std::vector<std::uint64_t> m_triangleIds;  // (part, index) of the patch's triangles, in the order collected
+  std::unique_ptr<MeshShape> m_shape;
+};
+
+}  // namespace gpucol
