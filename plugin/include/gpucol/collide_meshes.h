@@ -30,6 +30,9 @@ struct MeshContact {
   std::uint32_t triangleA = 0;  ///< Triangle of mesh A that generated the contact.
   std::uint32_t triangleB = 0;  ///< Triangle of mesh B that generated the contact.
   btVector3 pointWorld;         ///< A point shared by both triangles, in world space.
+  /// Bullet's point on B: the deepest point of B when B is pushed out of A's face, else pointWorld (on B's face).
+  /// Bullet's point on A is pointOnBWorld + normalWorldOnB * depth.
+  btVector3 pointOnBWorld;
   btVector3 normalWorldOnB;     ///< Unit normal on B pointing towards A, in world space.
   btScalar depth = 0;           ///< Signed distance along the normal: negative when penetrating.
 };

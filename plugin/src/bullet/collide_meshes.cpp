@@ -250,6 +250,7 @@ MeshContact toWorld(const TrianglePair& pair, const TriangleContact& contact, co
   out.normalWorldOnB =
       worldFromA.getBasis() * btVector3(contact.normalOnB.x(), contact.normalOnB.y(), contact.normalOnB.z());
   out.depth = contact.depth;
+  out.pointOnBWorld = contact.onFaceOfB ? out.pointWorld : out.pointWorld - out.normalWorldOnB * out.depth;
   return out;
 }
 

@@ -54,7 +54,7 @@ std::vector<PairContact> toPairContacts(const std::vector<MeshContact>& reduced,
   std::vector<PairContact> out;
   out.reserve(reduced.size());
   for (const MeshContact& c : reduced) {
-    out.push_back({c.pointWorld + c.normalWorldOnB * marginB, c.normalWorldOnB, c.depth - marginA - marginB});
+    out.push_back({c.pointOnBWorld + c.normalWorldOnB * marginB, c.normalWorldOnB, c.depth - marginA - marginB});
   }
   return out;
 }

@@ -51,7 +51,7 @@ std::optional<TriangleContact> generateContactAndTest(const Eigen::Vector3f (&af
     const int dropAxis = dominantAxis(coplanarB ? planeA.normal : planeB.normal);
     if (!coplanarTrianglesOverlap(pa, pb, dropAxis, &point)) return std::nullopt;
     intersects = true;
-    return TriangleContact{point.cast<float>(), nB.cast<float>(), 0.0f};
+    return TriangleContact{point.cast<float>(), nB.cast<float>(), 0.0f, true};
   }
 
   // Möller's interval test on the intersection line L, with the crossing points kept in 3-D: the same
@@ -91,7 +91,7 @@ std::optional<TriangleContact> generateContactAndTest(const Eigen::Vector3f (&af
   const Eigen::Vector3d normalOnB = aMoves ? nB : Eigen::Vector3d(-nA);
   // 0 - 0 is +0, so touching contacts do not print as -0.
   return TriangleContact{(0.5 * (low + high)).cast<float>(), normalOnB.cast<float>(),
-                         static_cast<float>(0.0 - move)};
+                         static_cast<float>(0.0 - move), aMoves};
 }
 
 }  // namespace detail

@@ -14,6 +14,10 @@ struct TriangleContact {
   Eigen::Vector3f normalOnB;
   /// Signed distance along normalOnB: <= 0; negative when penetrating, 0 when touching.
   float depth;
+  /// True when normalOnB is B's face normal (A is pushed out of B's face, so A's deepest point is |depth| from
+  /// `point` against the normal); false when it is minus A's (B is pushed out of A's face, and B's deepest point
+  /// is |depth| from `point` along the normal).
+  bool onFaceOfB = true;
 };
 
 /// Contact of two intersecting triangles (thesis §5.3.4); std::nullopt when none is kept.
