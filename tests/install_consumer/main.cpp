@@ -1,23 +1,60 @@
-// Uses the installed gpucol: builds two meshes from arrays, collides them, and checks the answer.
+// Uses the installed gpucol the way the README shows: a world with gpucol's dispatcher and broad phase, a mesh box
+// dropped on a static mesh ground; checks that it comes to rest on it. Also runs the direct query.
+#include <btBulletDynamicsCommon.h>
 #include <gpucol/gpucol.h>
 
+#include <cmath>
 #include <iostream>
 #include <memory>
 
+namespace {
+
+// A closed box mesh of half extents (hx, hy, hz), counter-clockwise seen from outside.
+std::shared_ptr<const gpucol::TriangleMesh> boxMesh(float hx, float hy, float hz) {
+  std::vector<float> xyz;
+  for (int i = 0; i < 8; ++i) xyz.insert(xyz.end(), {i & 1 ? hx : -hx, i & 2 ? hy : -hy, i & 4 ? hz : -hz});
+  const std::vector<std::uint32_t> indices = {0, 2, 3, 0, 3, 1, 4, 5, 7, 4, 7, 6, 0, 1, 5, 0, 5, 4,
+                                              2, 6, 7, 2, 7, 3, 0, 4, 6, 0, 6, 2, 1, 3, 7, 1, 7, 5};
+  return std::make_shared<const gpucol::TriangleMesh>(gpucol::TriangleMesh::fromArrays(xyz, indices, "box"));
+}
+
+}  // namespace
+
 int main() {
-  // A unit tetrahedron, counter-clockwise seen from outside.
-  std::vector<float> xyz = {0, 0, 0, 1, 0, 0, 0, 1, 0, 0, 0, 1};
-  std::vector<std::uint32_t> indices = {0, 2, 1, 0, 1, 3, 0, 3, 2, 1, 2, 3};
-  auto mesh = std::make_shared<const gpucol::TriangleMesh>(gpucol::TriangleMesh::fromArrays(xyz, indices));
-  gpucol::MeshShape a(mesh), b(mesh);
-  btTransform ta = btTransform::getIdentity(), tb = btTransform::getIdentity();
-  tb.setOrigin(btVector3(0.2f, 0.2f, 0.2f));
-  const gpucol::MeshPairResult result = gpucol::collideMeshes(a, ta, b, tb);
-  if (result.intersectingPairs.empty()) {
-    std::cerr << "install check: overlapping tetrahedra gave no intersecting triangle pair\n";
+  gpucol::Config config;
+  btDefaultCollisionConfiguration collisionConfiguration;
+  gpucol::CollisionDispatcher dispatcher(&collisionConfiguration, config);
+  gpucol::GridBroadphase broadphase(config);
+  btSequentialImpulseConstraintSolver solver;
+  btDiscreteDynamicsWorld world(&dispatcher, &broadphase, &solver, &collisionConfiguration);
+  world.setGravity(btVector3(0, -10, 0));
+
+  gpucol::MeshShape groundShape(boxMesh(5, 0.5f, 5)), boxShape(boxMesh(0.5f, 0.5f, 0.5f));
+  btRigidBody ground(0, nullptr, &groundShape);
+  ground.setWorldTransform(btTransform(btQuaternion::getIdentity(), btVector3(0, -0.5f, 0)));
+  btVector3 inertia;
+  boxShape.calculateLocalInertia(1, inertia);
+  btRigidBody box(1, nullptr, &boxShape, inertia);
+  box.setWorldTransform(btTransform(btQuaternion::getIdentity(), btVector3(0, 1, 0)));
+  world.addRigidBody(&ground);
+  world.addRigidBody(&box);
+  for (int step = 0; step < 240; ++step) world.stepSimulation(1.0f / 60);
+  const float y = box.getWorldTransform().getOrigin().y();
+  world.removeRigidBody(&box);
+  world.removeRigidBody(&ground);
+  if (!(std::abs(y - 0.5f) < 0.01f)) {
+    std::cerr << "install check: the mesh box should rest at y = 0.5 on the mesh ground, it is at " << y << "\n";
     return 1;
   }
-  std::cout << "install check: find_package(gpucol) works; " << result.intersectingPairs.size()
-            << " intersecting triangle pairs, " << result.reducedContacts.size() << " reduced contacts\n";
+
+  const gpucol::MeshPairResult result = gpucol::collideMeshes(
+      boxShape, btTransform::getIdentity(), boxShape, btTransform(btQuaternion::getIdentity(), btVector3(0.5f, 0.5f, 0.5f)));
+  if (result.intersectingPairs.empty()) {
+    std::cerr << "install check: overlapping boxes gave no intersecting triangle pair\n";
+    return 1;
+  }
+  std::cout << "install check: find_package(gpucol) works; a mesh box rests at y = " << y << " in a world with "
+            << "gpucol::CollisionDispatcher and gpucol::GridBroadphase; the direct query finds "
+            << result.intersectingPairs.size() << " intersecting triangle pairs\n";
   return 0;
 }
