@@ -1,0 +1,146 @@
+#include "scenes/world_scenes.h"
+
+#include <gpucol/mass_properties.h>
+
+#include <algorithm>
+#include <array>
+#include <cmath>
+#include <cstdint>
+#include <memory>
+#include <random>
+#include <stdexcept>
+#include <utility>
+#include <vector>
+
+#include "scenes/procedural_meshes.h"
+
+namespace gpucol::scenes {
+namespace {
+
+constexpr std::array<double, 9> kIdentity = {1, 0, 0, 0, 1, 0, 0, 0, 1};
+constexpr double kPi = 3.14159265358979323846;
+
+btTransform at(float x, float y, float z, const btQuaternion& rotation = btQuaternion::getIdentity()) {
+  return btTransform(rotation, btVector3(x, y, z));
+}
+
+// A rotation drawn uniformly (Shoemake's method) from raw mt19937 words, so the scene is the same with every
+// standard library (std::uniform_real_distribution's algorithm is implementation-defined).
+btQuaternion randomRotation(std::mt19937& random) {
+  auto unit = [&random] { return double(random()) / 4294967296.0; };
+  const double u1 = unit(), u2 = 2 * kPi * unit(), u3 = 2 * kPi * unit();
+  const double a = std::sqrt(1 - u1), b = std::sqrt(u1);
+  return btQuaternion(btScalar(a * std::sin(u2)), btScalar(a * std::cos(u2)), btScalar(b * std::sin(u3)),
+                      btScalar(b * std::cos(u3)));
+}
+
+// Several closed meshes, each moved by a translation, as one mesh (a static body made of parts).
+TriangleMesh merged(const std::vector<std::pair<TriangleMesh, btVector3>>& parts, const std::string& name) {
+  std::vector<float> xyz;
+  std::vector<std::uint32_t> indices;
+  for (const auto& [part, offset] : parts) {
+    const TriangleMesh moved = part.transformed(kIdentity, {offset.x(), offset.y(), offset.z()});
+    const auto base = static_cast<std::uint32_t>(xyz.size() / 3);
+    xyz.insert(xyz.end(), moved.positions().begin(), moved.positions().end());
+    for (std::uint32_t index : moved.indices()) indices.push_back(base + index);
+  }
+  return TriangleMesh::fromArrays(std::move(xyz), std::move(indices), name);
+}
+
+// Largest distance of a vertex from the mesh's origin.
+float boundingRadius(const TriangleMesh& mesh) {
+  float radius2 = 0;
+  const std::vector<float>& xyz = mesh.positions();
+  for (std::size_t i = 0; i < xyz.size(); i += 3) {
+    radius2 = std::max(radius2, xyz[i] * xyz[i] + xyz[i + 1] * xyz[i + 1] + xyz[i + 2] * xyz[i + 2]);
+  }
+  return std::sqrt(radius2);
+}
+
+float massOf(const TriangleMesh& mesh) {
+  return float(mesh.massProperties(kSceneDensity).mass);
+}
+
+}  // namespace
+
+SceneDescription makeStackScene(int boxes, float gap) {
+  if (boxes < 1) throw std::invalid_argument("stack scene: at least one box");
+  SceneDescription scene;
+  scene.name = "stack";
+  scene.meshes.push_back(std::make_shared<const TriangleMesh>(makeBox(10.0f, 0.5f, 10.0f)));
+  scene.meshes.push_back(std::make_shared<const TriangleMesh>(makeBox(0.5f, 0.5f, 0.5f)));
+  scene.bodies.push_back({0, 0.0f, at(0, -0.5f, 0)});
+  const float mass = massOf(*scene.meshes[1]);
+  for (int i = 0; i < boxes; ++i) {
+    scene.bodies.push_back({1, mass, at(0, 0.5f + gap + float(i) * (1.0f + gap), 0)});
+  }
+  scene.groundTop = 0;
+  scene.extent = std::max(10.0f, float(boxes) * (1.0f + gap));
+  scene.trackedBody = boxes - 1;
+  return scene;
+}
+
+SceneDescription makePileScene(int bodies, unsigned seed) {
+  if (bodies < 0) throw std::invalid_argument("pile scene: negative body count");
+  SceneDescription scene;
+  scene.name = "pile";
+  // The bin: the floor spans the walls' footprint; the x walls run the full length, the z walls fit between
+  // them.
+  scene.meshes.push_back(std::make_shared<const TriangleMesh>(
+      merged({{makeBox(3.5f, 0.25f, 3.5f), btVector3(0, -0.25f, 0)},
+              {makeBox(0.25f, 1.25f, 3.5f), btVector3(3.25f, 1.25f, 0)},
+              {makeBox(0.25f, 1.25f, 3.5f), btVector3(-3.25f, 1.25f, 0)},
+              {makeBox(3.0f, 1.25f, 0.25f), btVector3(0, 1.25f, 3.25f)},
+              {makeBox(3.0f, 1.25f, 0.25f), btVector3(0, 1.25f, -3.25f)}},
+             "bin")));
+  scene.meshes.push_back(std::make_shared<const TriangleMesh>(makeBox(0.35f, 0.35f, 0.35f)));
+  scene.meshes.push_back(std::make_shared<const TriangleMesh>(makeIcosphere(0.4f, 2)));
+  scene.meshes.push_back(std::make_shared<const TriangleMesh>(makeTorus(0.3f, 0.12f, 24, 12)));
+  // The L is not symmetric about its origin: its principal frame puts the centre of mass at the body's
+  // origin.
+  scene.meshes.push_back(
+      std::make_shared<const TriangleMesh>(makeLShape(0.8f, 0.3f).inPrincipalFrame(kSceneDensity)));
+  std::array<float, 4> masses{};
+  for (std::size_t kind = 0; kind < 4; ++kind) masses[kind] = massOf(*scene.meshes[kind + 1]);
+
+  scene.bodies.push_back({0, 0.0f, at(0, 0, 0)});
+  std::mt19937 random(seed);
+  constexpr int kPerRow = 4;
+  constexpr float kCell = 1.5f;  // Above the largest body's bounding diameter (the L's, 1.4 m).
+  for (int i = 0; i < bodies; ++i) {
+    const int layer = i / (kPerRow * kPerRow), row = (i / kPerRow) % kPerRow, column = i % kPerRow;
+    const float x = (float(column) - 1.5f) * kCell, z = (float(row) - 1.5f) * kCell;
+    const float y = 1.0f + float(layer) * kCell;
+    const std::size_t kind = std::size_t(i) % 4;
+    scene.bodies.push_back({kind + 1, masses[kind], at(x, y, z, randomRotation(random))});
+  }
+  scene.groundTop = 0;
+  scene.extent = 10.0f + float(bodies / (kPerRow * kPerRow)) * kCell;
+  return scene;
+}
+
+SceneDescription makeMeshDropScene(const TriangleMesh& mesh, int count, unsigned seed) {
+  if (count < 1) throw std::invalid_argument("mesh scene: at least one copy");
+  SceneDescription scene;
+  scene.name = mesh.name();
+  auto body = std::make_shared<const TriangleMesh>(mesh.inPrincipalFrame(kSceneDensity));
+  const float radius = boundingRadius(*body);
+  const float spacing = 2.4f * radius;
+  const int perRow = int(std::ceil(std::sqrt(double(count))));
+  const float halfWidth = 0.5f * float(perRow) * spacing + 2 * radius;
+  scene.meshes.push_back(std::make_shared<const TriangleMesh>(makeBox(halfWidth, 0.5f * radius, halfWidth)));
+  scene.meshes.push_back(body);
+  scene.bodies.push_back({0, 0.0f, at(0, -0.5f * radius, 0)});
+  const float mass = massOf(*body);
+  std::mt19937 random(seed);
+  for (int i = 0; i < count; ++i) {
+    const float x = (float(i % perRow) - 0.5f * float(perRow - 1)) * spacing;
+    const float z = (float(i / perRow) - 0.5f * float(perRow - 1)) * spacing;
+    scene.bodies.push_back({1, mass, at(x, 2 * radius, z, randomRotation(random))});
+  }
+  scene.groundTop = 0;
+  scene.extent = 2 * halfWidth;
+  return scene;
+}
+
+}  // namespace gpucol::scenes

@@ -1,0 +1,29 @@
+#pragma once
+
+#include <gpucol/triangle_mesh.h>
+
+#include "scenes/scene_description.h"
+
+namespace gpucol::scenes {
+
+/// Density of every dynamic body of the built-in scenes (kg/m^3, water), so masses follow volumes.
+inline constexpr double kSceneDensity = 1000.0;
+
+/// `boxes` unit cubes (makeBox, 12 triangles each) stacked on a static 20 m × 1 m × 20 m box whose top face
+/// is at y = 0; box i starts with its bottom face `gap` metres above the top of box i - 1 (0: exactly
+/// resting). The top box is the tracked body.
+SceneDescription makeStackScene(int boxes = 10, float gap = 0.0f);
+
+/// `bodies` procedural meshes, cycling box, icosphere, torus, L-shape, about 0.8 m across, in random
+/// orientations (fixed seed) on a 4 × 4 grid of 1.5 m cells, layer after layer 1.5 m apart, above a static
+/// bin: one mesh made of a 7 m × 0.5 m × 7 m floor (top face at y = 0) and four 0.5 m thick, 2.5 m high walls
+/// around a 6 m × 6 m inside.
+SceneDescription makePileScene(int bodies = 50, unsigned seed = 1);
+
+/// `count` copies of `mesh`, moved to its principal frame (throws MeshError for a mesh without mass
+/// properties: open, non-manifold, inward winding), in random orientations (fixed seed) on a square grid
+/// spaced 1.2 bounding diameters apart, their lowest points half a diameter above a static ground box whose
+/// size follows the grid's.
+SceneDescription makeMeshDropScene(const TriangleMesh& mesh, int count, unsigned seed = 1);
+
+}  // namespace gpucol::scenes
