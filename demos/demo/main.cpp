@@ -107,6 +107,7 @@ int run(const DemoOptions& options) {
                 double(summary.trackedHeightDrift));
   }
   if (summary.failure != RunFailure::None) {
+    std::fflush(stdout);
     std::fprintf(stderr, "gpucol-demo: simulation failed (%s) at %s\n", failureName(summary.failure),
                  summary.failureMessage.c_str());
     return kExitSimulationFailed;

@@ -81,10 +81,14 @@ RunSummary runScene(WorldScene& scene, const RunOptions& options,
       break;
     }
     if (const int below = scene.bodiesBelowGround()) {
+      const std::vector<btVector3> now = scene.positions();
+      std::size_t first = 0;
+      while (first + 1 < now.size() && now[first].y() >= scene.description().groundTop) ++first;
       std::ostringstream what;
       what << below
            << " bodies have their centre of mass below the ground's top face (through the ground or off "
-           << "its edge)";
+           << "its edge); the first, dynamic body " << first << ", is at (" << now[first].x() << ", "
+           << now[first].y() << ", " << now[first].z() << ")";
       fail(RunFailure::FellThrough, step, what.str());
       break;
     }
