@@ -172,14 +172,6 @@ int WorldScene::contactCount() const {
   return contacts;
 }
 
-int WorldScene::touchingManifoldCount() const {
-  int touching = 0;
-  const int manifolds = m_dispatcher->getNumManifolds();
-  for (int i = 0; i < manifolds; ++i)
-    touching += m_dispatcher->getManifoldByIndexInternal(i)->getNumContacts() > 0;
-  return touching;
-}
-
 int WorldScene::movingBodyCount(float linearSpeed, float angularSpeed) const {
   int moving = 0;
   for (const btRigidBody* body : m_dynamicBodies) {
