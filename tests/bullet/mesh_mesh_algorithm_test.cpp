@@ -215,11 +215,11 @@ TEST(MeshMeshAlgorithm, BatchedDispatchMatchesPairByPair) {
   for (std::size_t i = 0; i < positions[0].size(); ++i) EXPECT_EQ(positions[0][i], positions[1][i]) << "body " << i;
 }
 
-// A concave shape of type CUSTOM_CONCAVE that is not a MeshShape goes to Bullet's default (an empty algorithm for
-// two concave shapes), while two MeshShapes get MeshMeshAlgorithm.
+// A concave shape that is not a MeshShape goes to Bullet's default (an empty algorithm for two concave shapes),
+// whether it has MeshShape's Bullet type or CUSTOM_CONCAVE_SHAPE_TYPE, while two MeshShapes get MeshMeshAlgorithm.
 class ForeignConcave : public btConcaveShape {
  public:
-  ForeignConcave() { m_shapeType = CUSTOM_CONCAVE_SHAPE_TYPE; }
+  explicit ForeignConcave(int type) { m_shapeType = type; }
   void processAllTriangles(btTriangleCallback*, const btVector3&, const btVector3&) const override {}
   void getAabb(const btTransform& t, btVector3& lo, btVector3& hi) const override {
     lo = t.getOrigin() - btVector3(1, 1, 1);
@@ -234,29 +234,34 @@ class ForeignConcave : public btConcaveShape {
   btVector3 m_scaling{1, 1, 1};
 };
 
-TEST(MeshMeshAlgorithm, ForeignCustomConcaveFallsBackToBulletsDefault) {
+TEST(MeshMeshAlgorithm, ForeignConcaveShapesFallBackToBulletsDefault) {
   btDefaultCollisionConfiguration configuration;
   btCollisionDispatcher dispatcher(&configuration);
   MeshMeshAlgorithm::registerWith(dispatcher);
   auto mesh = meshShape(scenes::makeBox(0.5f, 0.5f, 0.5f));
-  ForeignConcave foreign;
   btCollisionObject meshObject, foreignObject;
   meshObject.setCollisionShape(mesh.get());
-  foreignObject.setCollisionShape(&foreign);
   const btCollisionObjectWrapper meshWrap(nullptr, mesh.get(), &meshObject, meshObject.getWorldTransform(), -1, -1);
-  const btCollisionObjectWrapper foreignWrap(nullptr, &foreign, &foreignObject, foreignObject.getWorldTransform(), -1, -1);
-  for (auto [w0, w1] : {std::pair{&meshWrap, &foreignWrap}, std::pair{&foreignWrap, &meshWrap}}) {
-    btCollisionAlgorithm* algorithm = dispatcher.findAlgorithm(w0, w1, nullptr, BT_CONTACT_POINT_ALGORITHMS);
-    ASSERT_NE(algorithm, nullptr);
-    EXPECT_EQ(dynamic_cast<MeshMeshAlgorithm*>(algorithm), nullptr);
-    EXPECT_NE(dynamic_cast<btEmptyAlgorithm*>(algorithm), nullptr);
+  const auto release = [&](btCollisionAlgorithm* algorithm) {
     algorithm->~btCollisionAlgorithm();
     dispatcher.freeCollisionAlgorithm(algorithm);
+  };
+  for (int type : {MeshShape::kMeshShapeType, int(CUSTOM_CONCAVE_SHAPE_TYPE)}) {
+    ForeignConcave foreign(type);
+    foreignObject.setCollisionShape(&foreign);
+    const btCollisionObjectWrapper foreignWrap(nullptr, &foreign, &foreignObject, foreignObject.getWorldTransform(),
+                                               -1, -1);
+    for (auto [w0, w1] : {std::pair{&meshWrap, &foreignWrap}, std::pair{&foreignWrap, &meshWrap}}) {
+      btCollisionAlgorithm* algorithm = dispatcher.findAlgorithm(w0, w1, nullptr, BT_CONTACT_POINT_ALGORITHMS);
+      ASSERT_NE(algorithm, nullptr);
+      EXPECT_EQ(dynamic_cast<MeshMeshAlgorithm*>(algorithm), nullptr) << "type " << type;
+      EXPECT_NE(dynamic_cast<btEmptyAlgorithm*>(algorithm), nullptr) << "type " << type;
+      release(algorithm);
+    }
   }
   btCollisionAlgorithm* algorithm = dispatcher.findAlgorithm(&meshWrap, &meshWrap, nullptr, BT_CONTACT_POINT_ALGORITHMS);
   EXPECT_NE(dynamic_cast<MeshMeshAlgorithm*>(algorithm), nullptr);
-  algorithm->~btCollisionAlgorithm();
-  dispatcher.freeCollisionAlgorithm(algorithm);
+  release(algorithm);
 }
 
 // A body whose transform turns NaN: its pairs are skipped (no exception through Bullet, no point left in a

@@ -138,6 +138,27 @@ TEST(TriangleContact, BoxTopFacePenetratedByDepthD) {
   }
 }
 
+/// The sides of two stacked boxes when the upper one tilts a little: the faces face the same way and cross in a
+/// thin wedge; their contact is marked sameFacing. Flush coplanar sides give none.
+TEST(TriangleContact, SameFacingTrianglesAreMarkedOrGiveNoContact) {
+  const Eigen::Vector3f lowerSide[3] = {{1, 0, 0}, {1, 1, 0}, {1, 1, 1}};  // outward +x
+  for (float tilt : {0.0f, 0.01f, 0.1f}) {
+    // Outward +x turned by about `tilt` about z, crossing the plane x = 1 at y = 0.975, where the lower side is.
+    const Eigen::Vector3f upperSide[3] = {{1 + tilt, 0.9f, 0.3f}, {1 - tilt, 1.05f, 0.3f}, {1 - tilt, 1.05f, 0.8f}};
+    EXPECT_TRUE(trianglesIntersect(upperSide[0], upperSide[1], upperSide[2], lowerSide[0], lowerSide[1],
+                                   lowerSide[2]))
+        << "tilt " << tilt;
+    for (const auto& c : {generateContact(upperSide, lowerSide), generateContact(lowerSide, upperSide)}) {
+      if (tilt == 0) {
+        EXPECT_FALSE(c.has_value());
+      } else {
+        ASSERT_TRUE(c.has_value()) << "tilt " << tilt;
+        EXPECT_TRUE(c->sameFacing) << "tilt " << tilt;
+      }
+    }
+  }
+}
+
 /// Two faces resting on each other (coplanar, opposite normals): depth 0 along B's normal, the point in the
 /// overlap.
 TEST(TriangleContact, CoplanarRestingFaces) {
@@ -203,6 +224,9 @@ TEST(TriangleContact, MatchesDoubleReferenceAndIsInvariantUnderRigidMotion) {
     if (nAnB > 1 - 1e-6) continue;  // (nearly) parallel planes: no line, covered by the coplanar tests
     const ReferenceContact r = referenceContact(da, db);
     if (std::fabs(r.slide - std::min(r.moveA, r.moveB)) < margin) continue;
+    // Pairs within rounding of a right angle may be called same-facing either way.
+    const double facing = (da[1] - da[0]).cross(da[2] - da[0]).normalized().dot((db[1] - db[0]).cross(db[2] - db[0]).normalized());
+    if (std::fabs(facing) < 1e-5) continue;
     const bool expectKept = r.slide >= std::min(r.moveA, r.moveB);
     if (-test::signedSeparation(da, db) < margin) continue;  // touching: the float input may miss it
     ++compared;
@@ -213,6 +237,7 @@ TEST(TriangleContact, MatchesDoubleReferenceAndIsInvariantUnderRigidMotion) {
       continue;
     }
     ++kept;
+    EXPECT_EQ(c->sameFacing, facing > 0) << "pair " << i;
     EXPECT_NEAR(c->depth, r.depth, margin) << "pair " << i;
     if (std::fabs(r.moveA - r.moveB) > margin) {
       EXPECT_LT((c->normalOnB.cast<double>() - r.normalOnB).norm(), 1e-5) << "pair " << i;

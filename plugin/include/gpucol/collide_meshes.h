@@ -30,8 +30,9 @@ struct MeshContact {
   std::uint32_t triangleA = 0;  ///< Triangle of mesh A that generated the contact.
   std::uint32_t triangleB = 0;  ///< Triangle of mesh B that generated the contact.
   btVector3 pointWorld;         ///< A point shared by both triangles, in world space.
-  /// Bullet's point on B: the deepest point of B when B is pushed out of A's face, else pointWorld (on B's face).
-  /// Bullet's point on A is pointOnBWorld + normalWorldOnB * depth.
+  /// Bullet's point on B. The triangle pushed out of the other's face contributes its deepest vertex: when it is
+  /// B's, that vertex is this point; when it is A's, this point is that vertex moved out along the normal by the
+  /// depth (onto B's face plane). Bullet's point on A is pointOnBWorld + normalWorldOnB * depth.
   btVector3 pointOnBWorld;
   btVector3 normalWorldOnB;     ///< Unit normal on B pointing towards A, in world space.
   btScalar depth = 0;           ///< Signed distance along the normal: negative when penetrating.
@@ -52,7 +53,9 @@ struct MeshPairStats {
 struct MeshPairResult {
   std::vector<TrianglePair> candidatePairs;     ///< Middle phase output: triangle boxes overlap.
   std::vector<TrianglePair> intersectingPairs;  ///< Candidates whose triangles really intersect.
-  std::vector<MeshContact> contacts;            ///< One contact per kept intersecting pair (thesis §5.3.4).
+  /// One contact per kept intersecting pair (thesis §5.3.4). Pairs of triangles facing the same way give
+  /// contacts only when no pair facing each other does: flush faces side by side push sideways for nothing.
+  std::vector<MeshContact> contacts;
   std::vector<MeshContact> reducedContacts;     ///< What the 6-D binning kept (thesis §5.3.5).
   MeshPairStats stats;                          ///< Counters and timings.
 };

@@ -36,7 +36,7 @@ class MeshMeshAlgorithm : public btActivatingCollisionAlgorithm {
   void getAllContactManifolds(btManifoldArray& manifolds) override;
 
   /// Registers the create function for every shape pair this algorithm handles on `dispatcher`. Pairs it does
-  /// not handle (a foreign CUSTOM_CONCAVE shape) go to the create function the dispatcher's collision
+  /// not handle (another shape of MeshShape's Bullet type) go to the create function the dispatcher's collision
   /// configuration gives, as before the call.
   static void registerWith(btCollisionDispatcher& dispatcher, const Config& config = Config());
 

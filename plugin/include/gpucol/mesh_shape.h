@@ -12,7 +12,7 @@ namespace gpucol {
 
 class AabbTree;
 
-/// A triangle mesh as a Bullet collision shape (a btConcaveShape of type CUSTOM_CONCAVE_SHAPE_TYPE): the shared,
+/// A triangle mesh as a Bullet collision shape (a btConcaveShape of type kMeshShapeType): the shared,
 /// immutable mesh, its tree of non-updated AABBs (built once, in the mesh's own frame) and a local scaling.
 ///
 /// Dynamic bodies may use it. Boxes, spheres and hulls collide with it through Bullet's own convex-concave
@@ -53,6 +53,10 @@ ATTRIBUTE_ALIGNED16(class) MeshShape : public btConcaveShape {
   void calculateLocalInertia(btScalar mass, btVector3& inertia) const override;
   /// "gpucol::MeshShape".
   const char* getName() const override { return "gpucol::MeshShape"; }
+
+  /// The Bullet shape type of every MeshShape: FAST_CONCAVE_MESH_PROXYTYPE, a concave type Bullet itself never
+  /// uses (CUSTOM_CONCAVE_SHAPE_TYPE is Bullet 3's SDF type, which its convex-concave algorithm special-cases).
+  static constexpr int kMeshShapeType = FAST_CONCAVE_MESH_PROXYTYPE;
 
   /// True when `shape` is a gpucol MeshShape.
   static bool isMeshShape(const btCollisionShape* shape);

@@ -250,7 +250,11 @@ MeshContact toWorld(const TrianglePair& pair, const TriangleContact& contact, co
   out.normalWorldOnB =
       worldFromA.getBasis() * btVector3(contact.normalOnB.x(), contact.normalOnB.y(), contact.normalOnB.z());
   out.depth = contact.depth;
-  out.pointOnBWorld = contact.onFaceOfB ? out.pointWorld : out.pointWorld - out.normalWorldOnB * out.depth;
+  // Bullet's pair of points: the moving triangle's deepest vertex on its own body, and that vertex moved out by
+  // the depth on the other (pointOnA = pointOnB + normal * depth).
+  const btVector3 deepest =
+      worldFromA * btVector3(contact.deepestPoint.x(), contact.deepestPoint.y(), contact.deepestPoint.z());
+  out.pointOnBWorld = contact.onFaceOfB ? deepest - out.normalWorldOnB * out.depth : deepest;
   return out;
 }
 
@@ -284,10 +288,14 @@ MeshPairResult collidePair(const MeshShape& shapeA, const btTransform& transform
   result.intersectingPairs.reserve(hits.size());
   result.contacts.reserve(hits.size());
   localContacts.reserve(hits.size());
+  // Same-facing contacts count only when the pair has no other (TriangleContact::sameFacing).
+  const bool anyFacingEachOther = std::any_of(hits.begin(), hits.end(), [](const NearHit& hit) {
+    return hit.hasContact && !hit.contact.sameFacing;
+  });
   for (const NearHit& hit : hits) {
     const TrianglePair& pair = result.candidatePairs[hit.candidate];
     result.intersectingPairs.push_back(pair);
-    if (!hit.hasContact) continue;
+    if (!hit.hasContact || (anyFacingEachOther && hit.contact.sameFacing)) continue;
     result.contacts.push_back(toWorld(pair, hit.contact, frame.worldFromA));
     localContacts.push_back({hit.contact.point, hit.contact.normalOnB, hit.contact.depth});
   }

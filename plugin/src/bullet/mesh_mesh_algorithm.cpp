@@ -40,13 +40,6 @@ bool handles(const btCollisionShape* s0, const btCollisionShape* s1) {
   return (mesh0 && mesh1) || (mesh0 && isOtherConcave(s1)) || (mesh1 && isOtherConcave(s0));
 }
 
-// The distance within which Bullet keeps a manifold point: the one btCollisionDispatcher gives a new manifold
-// of these two shapes (relative to their size, its default).
-btScalar breakingThreshold(const btCollisionShape* s0, const btCollisionShape* s1) {
-  return btMin(s0->getContactBreakingThreshold(gContactBreakingThreshold),
-               s1->getContactBreakingThreshold(gContactBreakingThreshold));
-}
-
 // Reduced mesh contacts as manifold contacts: the point moves onto B's margin surface and the distance counts
 // both margins, so that bodies with margins rest that far apart (as Bullet's convex shapes do).
 std::vector<PairContact> toPairContacts(const std::vector<MeshContact>& reduced, btScalar marginA,
@@ -146,8 +139,7 @@ void MeshMeshAlgorithm::processCollision(const btCollisionObjectWrapper* body0, 
       const btCollisionShape* other = otherBody->getCollisionShape();
       if (other->getShapeType() == STATIC_PLANE_PROXYTYPE) {
         contacts = meshPlaneContacts(mesh, meshBody->getWorldTransform(), *static_cast<const btStaticPlaneShape*>(other),
-                                     otherBody->getWorldTransform(), breakingThreshold(s0, s1),
-                                     m_config.reductionResolution);
+                                     otherBody->getWorldTransform(), m_config.reductionResolution);
       } else if (const MeshShape* patch = m_patch->update(*static_cast<const btConcaveShape*>(other),
                                                           otherBody->getWorldTransform(), mesh,
                                                           meshBody->getWorldTransform())) {
@@ -181,10 +173,10 @@ void MeshMeshAlgorithm::registerWith(btCollisionDispatcher& dispatcher, const Co
   static std::list<MeshMeshCreateFunc> functions;
   const std::lock_guard<std::mutex> lock(mutex);
   btCollisionConfiguration* configuration = dispatcher.getCollisionConfiguration();
-  const int kinds[] = {CUSTOM_CONCAVE_SHAPE_TYPE, STATIC_PLANE_PROXYTYPE, TRIANGLE_MESH_SHAPE_PROXYTYPE};
+  const int kinds[] = {MeshShape::kMeshShapeType, STATIC_PLANE_PROXYTYPE, TRIANGLE_MESH_SHAPE_PROXYTYPE};
   for (int a : kinds) {
     for (int b : kinds) {
-      if (a != CUSTOM_CONCAVE_SHAPE_TYPE && b != CUSTOM_CONCAVE_SHAPE_TYPE) continue;
+      if (a != MeshShape::kMeshShapeType && b != MeshShape::kMeshShapeType) continue;
       functions.emplace_back(config, configuration->getCollisionAlgorithmCreateFunc(a, b));
       dispatcher.registerCollisionCreateFunc(a, b, &functions.back());
       functions.emplace_back(config, configuration->getClosestPointsAlgorithmCreateFunc(a, b));

@@ -10,7 +10,7 @@ namespace gpucol {
 
 std::vector<PairContact> meshPlaneContacts(const MeshShape& mesh, const btTransform& meshTransform,
                                            const btStaticPlaneShape& plane, const btTransform& planeTransform,
-                                           btScalar threshold, int reductionResolution) {
+                                           int reductionResolution) {
   const btScalar margins = mesh.getMargin() + plane.getMargin();
   // The plane in the mesh's unscaled frame, where the tree lives: a point p of the mesh is at world
   // T(S p), and its distance to the plane is nWorld . T(S p) - cWorld = (S R^T nWorld) . p + (nWorld . t - cWorld).
@@ -18,7 +18,11 @@ std::vector<PairContact> meshPlaneContacts(const MeshShape& mesh, const btTransf
   const btScalar constantWorld = normalWorld.dot(planeTransform(plane.getPlaneNormal() * plane.getPlaneConstant()));
   const btVector3 normalInMesh = (meshTransform.getBasis().transpose() * normalWorld) * mesh.getLocalScaling();
   const btScalar offset = normalWorld.dot(meshTransform.getOrigin()) - constantWorld;
-  const btScalar reach = threshold + margins;
+  // Only vertices that touch or cross the plane (margins counted) give contacts, as triangles that cross give
+  // the mesh pairs theirs. Vertices merely near it would fill Bullet's 4 places per manifold with points that
+  // carry no load and push out the real supports (a mesh resting on a plane then never comes to rest); the
+  // manifold's own refresh keeps points that lift off by less than the breaking threshold.
+  const btScalar reach = margins;
 
   // A box can hold a vertex within reach only if its lowest corner along the plane normal is within reach.
   const auto boxNearPlane = [&](const float* min, const float* max) {

@@ -14,13 +14,17 @@ namespace gpucol {
 MeshShape::MeshShape(std::shared_ptr<const TriangleMesh> mesh, const Config& config) : m_mesh(std::move(mesh)) {
   if (!m_mesh) throw MeshError("MeshShape: the mesh pointer is null");
   m_tree = std::make_shared<const AabbTree>(AabbTree::build(*m_mesh, config.trianglesPerLeaf));
-  m_shapeType = CUSTOM_CONCAVE_SHAPE_TYPE;
+  // Not CUSTOM_CONCAVE_SHAPE_TYPE: Bullet 3 gives that value to SDF_SHAPE_PROXYTYPE too, and its convex-concave
+  // algorithm treats every shape of that type as a btSdfCollisionShape (boxes would fall through a mesh).
+  // FAST_CONCAVE_MESH_PROXYTYPE is a concave type that nothing in Bullet special-cases, so Bullet's generic
+  // concave paths (processAllTriangles) serve it.
+  m_shapeType = kMeshShapeType;
 }
 
 MeshShape::~MeshShape() = default;
 
 bool MeshShape::isMeshShape(const btCollisionShape* shape) {
-  return shape != nullptr && shape->getShapeType() == CUSTOM_CONCAVE_SHAPE_TYPE &&
+  return shape != nullptr && shape->getShapeType() == kMeshShapeType &&
          dynamic_cast<const MeshShape*>(shape) != nullptr;
 }
 

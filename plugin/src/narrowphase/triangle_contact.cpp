@@ -51,7 +51,10 @@ std::optional<TriangleContact> generateContactAndTest(const Eigen::Vector3f (&af
     const int dropAxis = dominantAxis(coplanarB ? planeA.normal : planeB.normal);
     if (!coplanarTrianglesOverlap(pa, pb, dropAxis, &point)) return std::nullopt;
     intersects = true;
-    return TriangleContact{point.cast<float>(), nB.cast<float>(), 0.0f, true};
+    // Flush faces side by side (the sides of two stacked boxes of one size, overlapping by a sliver when one
+    // sinks a little) press on nothing: only faces that face each other rest on each other.
+    if (nA.dot(nB) > 0) return std::nullopt;
+    return TriangleContact{point.cast<float>(), nB.cast<float>(), 0.0f, true, false, point.cast<float>()};
   }
 
   // Möller's interval test on the intersection line L, with the crossing points kept in 3-D: the same
@@ -65,6 +68,7 @@ std::optional<TriangleContact> generateContactAndTest(const Eigen::Vector3f (&af
   if (sB[1][axis] < sB[0][axis]) std::swap(sB[0], sB[1]);
   if (sA[0][axis] > sB[1][axis] || sB[0][axis] > sA[1][axis]) return std::nullopt;
   intersects = true;
+
 
   // §5.3.4: the distance to move each triangle along the other's normal until it is out of the other's
   // plane. The distances are scaled by the plane's |normal|; a triangle that only touches the plane has
@@ -90,8 +94,12 @@ std::optional<TriangleContact> generateContactAndTest(const Eigen::Vector3f (&af
   const Eigen::Vector3d& high = sA[1][axis] <= sB[1][axis] ? sA[1] : sB[1];
   const Eigen::Vector3d normalOnB = aMoves ? nB : Eigen::Vector3d(-nA);
   // 0 - 0 is +0, so touching contacts do not print as -0.
+  // The moving triangle's deepest vertex: the one its move is measured from.
+  const double* const d = aMoves ? dA : dB;
+  const int deepest = d[0] <= d[1] ? (d[0] <= d[2] ? 0 : 2) : (d[1] <= d[2] ? 1 : 2);
+  const Eigen::Vector3d& deepestVertex = aMoves ? a[deepest] : b[deepest];
   return TriangleContact{(0.5 * (low + high)).cast<float>(), normalOnB.cast<float>(),
-                         static_cast<float>(0.0 - move), aMoves};
+                         static_cast<float>(0.0 - move), aMoves, nA.dot(nB) > 0, deepestVertex.cast<float>()};
 }
 
 }  // namespace detail

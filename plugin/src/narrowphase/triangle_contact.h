@@ -18,6 +18,17 @@ struct TriangleContact {
   /// `point` against the normal); false when it is minus A's (B is pushed out of A's face, and B's deepest point
   /// is |depth| from `point` along the normal).
   bool onFaceOfB = true;
+  /// True when the triangles face the same way (nA . nB > 0). Surfaces that press on each other face opposite
+  /// ways, or cross at a right angle where an edge dips into a face; same-facing triangles cross in the wedge
+  /// where two nearly flush faces meet (the sides of two stacked boxes when the upper one tilts a little), and
+  /// there the rule above finds the wedge's small sideways depth, not the bodies'. The mesh pair query uses
+  /// such contacts only for a pair that has no other (deeply overlapping bodies, where every crossing may
+  /// face the same way).
+  bool sameFacing = false;
+  /// The deepest vertex of the triangle that moves out (A's when onFaceOfB, else B's): where that body really
+  /// is deepest, and a point fixed on it (a box's corner rather than the middle of its crossing edge), so that a
+  /// solver's persistent contact stays put from step to step. Coplanar pairs: `point`.
+  Eigen::Vector3f deepestPoint = Eigen::Vector3f::Zero();
 };
 
 /// Contact of two intersecting triangles (thesis §5.3.4); std::nullopt when none is kept.
@@ -38,7 +49,8 @@ struct TriangleContact {
 ///
 /// Coplanar pairs (every vertex of one in the other's plane, within trianglesIntersect's tolerance) have
 /// no intersection line: both distances are 0, so the contact is normalOnB = nB, depth = 0 (resting
-/// face-on-face contact), never dropped, at the mean of the corners of the overlap polygon.
+/// face-on-face contact), at the mean of the corners of the overlap polygon; coplanar triangles facing the
+/// same way (flush faces side by side) give no contact.
 std::optional<TriangleContact> generateContact(const Eigen::Vector3f (&a)[3], const Eigen::Vector3f (&b)[3]);
 
 }  // namespace gpucol
