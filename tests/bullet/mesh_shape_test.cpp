@@ -686,15 +686,9 @@ ATTRIBUTE_ALIGNED16(class) CountingMeshShape : public MeshShape {
   mutable int calls = 0;
 };
 
-// PLUGIN BUG (reported, plugin/src/bullet/mesh_shape.cpp): MeshShape takes the shape type
-// CUSTOM_CONCAVE_SHAPE_TYPE, which Bullet 3.24 aliases as SDF_SHAPE_PROXYTYPE (btBroadphaseProxy.h). Bullet's
-// btConvexConcaveCollisionAlgorithm::processCollision has a branch for that type that casts the shape to
-// btSdfCollisionShape and calls queryPoint on it (undefined behaviour: it reads the MeshShape's members as an
-// SDF), and never calls processAllTriangles. So boxes, spheres and hulls fall through a MeshShape ground,
-// with the stock and with gpucol's dispatcher (both tried). Tried here with a MeshShape whose type was set to
-// FAST_CONCAVE_MESH_PROXYTYPE (which nothing in Bullet 3.24 tests for), all twelve bodies rest within 1e-4 of
-// their analytic heights. This test fails until the shape has a type Bullet treats as a generic concave
-// shape.
+// Boxes, spheres and hulls on a MeshShape ground go through Bullet's convex-concave algorithm. This test caught
+// MeshShape first taking CUSTOM_CONCAVE_SHAPE_TYPE, which Bullet 3.24 also names SDF_SHAPE_PROXYTYPE: that
+// algorithm then read the mesh as a signed distance field and every body fell through.
 TEST(MeshShapeWorld, ConvexShapesRestOnAMeshGroundWithStockBullet) {
   std::mt19937 rng(61);
   std::uniform_real_distribution<float> place(-0.3f, 0.3f);
@@ -823,13 +817,9 @@ TEST(MeshShapeWorld, RealMeshRestsOnATriangleMeshFloor) {
   expectRealMeshRests(Floor::TriangleMesh, 81);
 }
 
-// PLUGIN BUG (reported, plugin/src/bullet/mesh_plane_contacts.cpp): on a btStaticPlaneShape the same drops as
-// on the triangle mesh floor never come to rest: after 8 s the body still moves (kinetic energy 9.2e-3 and
-// 1.2e-2 J) and its lowest vertex is 6.9 and 7.7 mm under the plane; on the floor it rests within 1e-5 m.
-// Suspected cause: the plane path turns every vertex within the contact breaking threshold (1 to 2 cm here)
-// into a contact, so points well above the plane compete with the supporting ones for the manifold's 4
-// places. With gContactBreakingThreshold lowered from 0.02 to 0.002, drop 0 rests (kinetic energy 1.1e-8 J,
-// lowest vertex -8e-7). This test fails until the plane contacts are fixed.
+// A real mesh on a btStaticPlaneShape rests like on the triangle mesh floor. This test caught the plane path
+// first making contacts of every vertex within the breaking threshold (1 to 2 cm here): points above the plane
+// crowded the supports out of the manifold, and the body never came to rest (kinetic energy 9.2e-3 J after 8 s).
 TEST(MeshShapeWorld, RealMeshRestsOnAStaticPlane) {
   expectRealMeshRests(Floor::Plane, 81);
 }
