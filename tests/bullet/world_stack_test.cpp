@@ -179,8 +179,7 @@ TEST(WorldStack, GpucolStackComesToRestAndStays) {
   const StackTrace trace = traceStack(world);
   print("gpucol", trace);
 
-  // GImpact beside it, printed only: its triangle contacts do not hold a stack of touching faces (see
-  // README).
+  // GImpact beside it, printed only: its stack falls over with any margin from 0 to 0.04 (measured).
   scenes::WorldOptions peerOptions;
   peerOptions.backend = scenes::CollisionBackend::GImpact;
   scenes::WorldScene peer(scene, peerOptions);
