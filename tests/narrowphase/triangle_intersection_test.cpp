@@ -142,6 +142,77 @@ TEST(TriangleIntersection, FloatPreTestRejectsOnlyWhatTheDoubleTestRejects) {
   EXPECT_GT(keptNearMargin, 1000);
 }
 
+/// The float interval stage may only reject a pair the double test rejects (trianglesIntersectDouble and
+/// generateContactAndTest both answer "no intersection"). Checked on every random family, and at the stage's
+/// margin: pairs that cross each other's planes with their intervals on the common line 1e-7..1e-1 of the
+/// size apart or overlapping by as much, the planes 1e-3 rad to a right angle apart (the margin grows as the
+/// angle shrinks: about 1e-4 of the size at a right angle, 1e-1 at 1e-3 rad), at scales from 1e-3 to 1e3 and
+/// a third of them 1000 sizes from the origin.
+TEST(TriangleIntersection, FloatIntervalStageRejectsOnlyWhatTheDoubleTestRejects) {
+  std::mt19937_64 rng(20261121);
+  long checked = 0, rejected = 0, keptNearMargin = 0, rejectedNearMargin = 0;
+  auto check = [&](const TriangleF& a, const TriangleF& b, bool nearMargin) {
+    ++checked;
+    if (!detail::floatIntervalsApartBranchFree(a[0], a[1], a[2], b[0], b[1], b[2])) {
+      keptNearMargin += nearMargin;
+      return;
+    }
+    ++rejected;
+    rejectedNearMargin += nearMargin;
+    bool intersects = true;
+    detail::generateContactAndTest({a[0], a[1], a[2]}, {b[0], b[1], b[2]}, intersects);
+    EXPECT_FALSE(detail::trianglesIntersectDouble(a[0], a[1], a[2], b[0], b[1], b[2]))
+        << "float interval stage rejected an intersecting pair: " << a[0].transpose() << " / "
+        << b[0].transpose();
+    EXPECT_FALSE(intersects);
+  };
+  for (int f = 0; f < static_cast<int>(PairFamily::Count); ++f) {
+    for (int i = 0; i < 20000; ++i) {
+      TriangleF a, b;
+      test::randomPair(static_cast<PairFamily>(f), rng, a, b);
+      check(a, b, false);
+      check(b, a, false);
+    }
+  }
+  std::uniform_real_distribution<double> unit(-1.0, 1.0), beyond(1.2, 3.0), logGap(-7.0, -1.0),
+      logAngle(-3.0, std::log10(M_PI / 2)), logScale(-3.0, 3.0);
+  for (int i = 0; i < 100000; ++i) {
+    // In a local frame, the common line is the x axis. A lies in z = 0 and meets y = 0 on [s0, s1]; B lies in
+    // a plane through the x axis at `angle` from A's and meets it on [s1 + gap, s1 + gap + length]: each
+    // triangle is a lone vertex and two vertices beyond the crossing points seen from it.
+    const double s0 = unit(rng), s1 = s0 + 0.2 + std::fabs(unit(rng));
+    const double gap = (i % 2 == 0 ? 1.0 : -1.0) * std::pow(10.0, logGap(rng));
+    const double t0 = s1 + gap, t1 = t0 + 0.2 + std::fabs(unit(rng));
+    const double angle = std::pow(10.0, logAngle(rng));
+    const Eigen::Vector3d lineA(unit(rng), 0.3 + std::fabs(unit(rng)), 0.0);
+    const Eigen::Vector3d loneB(unit(rng), 0.0, 0.3 + std::fabs(unit(rng)));
+    const Eigen::Vector3d c0(s0, 0, 0), c1(s1, 0, 0), d0(t0, 0, 0), d1(t1, 0, 0);
+    const test::TriangleD localA = {lineA, lineA + beyond(rng) * (c0 - lineA),
+                                    lineA + beyond(rng) * (c1 - lineA)};
+    test::TriangleD localB = {loneB, loneB + beyond(rng) * (d0 - loneB), loneB + beyond(rng) * (d1 - loneB)};
+    // Turn B about the common line: its plane goes from y = 0 (a right angle to A's) to `angle` from A's.
+    const Eigen::Matrix3d tilt =
+        Eigen::AngleAxisd(M_PI / 2 - angle, Eigen::Vector3d::UnitX()).toRotationMatrix();
+    for (Eigen::Vector3d& v : localB) v = tilt * v;
+    const double scale = std::pow(10.0, logScale(rng));
+    const Eigen::Matrix3d rotation = test::randomRotation(rng);
+    const Eigen::Vector3d offset =
+        (i % 3 == 0 ? 1000.0 : 1.0) * Eigen::Vector3d(unit(rng), unit(rng), unit(rng));
+    TriangleF a, b;
+    for (int k = 0; k < 3; ++k) {
+      a[k] = (scale * (rotation * localA[k] + offset)).cast<float>();
+      b[k] = (scale * (rotation * localB[k] + offset)).cast<float>();
+    }
+    if (!test::wellShaped(a) || !test::wellShaped(b)) continue;
+    check(a, b, true);
+    check(b, a, true);
+  }
+  std::cout << "  " << checked << " pairs, " << rejected << " rejected in float; at the margin "
+            << rejectedNearMargin << " rejected, " << keptNearMargin << " left to the double test\n";
+  EXPECT_GT(rejectedNearMargin, 1000);
+  EXPECT_GT(keptNearMargin, 1000);
+}
+
 /// Touching configurations built from coordinates that float represents exactly must count as
 /// intersecting: the contract says touching counts, and here rounding cannot blur it.
 TEST(TriangleIntersection, ExactTouchingCountsAsIntersecting) {

@@ -16,11 +16,21 @@
 #include <Eigen/Geometry>
 #include <algorithm>
 #include <cmath>
+#include <cstdint>
+#include <cstring>
 #include <optional>
 
 #include "narrowphase/triangle_contact.h"
 
 namespace gpucol::detail {
+
+/// Inlines a function into its callers even where the compiler's estimate says no: the batched loops of the
+/// near phase are vector code only when the pair tests they call are inlined into them.
+#if defined(__GNUC__)
+#define GPUCOL_FORCE_INLINE inline __attribute__((always_inline))
+#else
+#define GPUCOL_FORCE_INLINE inline
+#endif
 
 /// A triangle is degenerate when sin^2 of the angle between its edges v1-v0 and v2-v0 is below this.
 /// 1e-12 is an angle of 1e-6 rad: moving one vertex by a float ulp (1.2e-7 relative) would tilt such a
@@ -239,6 +249,122 @@ inline unsigned floatCertainlyApartBranchFree(const Eigen::Vector3f& a0, const E
   const unsigned sideB = floatPlaneSide(makeFloatPlane(a0, a1, a2), b0, b1, b2);
   const unsigned sideA = floatPlaneSide(makeFloatPlane(b0, b1, b2), a0, a1, a2);
   return (sideB | ((sideB >> 1) & sideA)) & kAllOneSide;
+}
+
+/// `c ? x : y` on the bits, for the branch-free tests: written as a plain conditional, the compiler moves the
+/// arithmetic that uses the result into the branches, which it may then not run unconditionally (float
+/// operations can trap), so the loop stops being vector code.
+inline float selectFloat(bool c, float x, float y) {
+  std::uint32_t xBits, yBits;
+  std::memcpy(&xBits, &x, sizeof x);
+  std::memcpy(&yBits, &y, sizeof y);
+  const std::uint32_t mask = 0u - static_cast<std::uint32_t>(c);
+  const std::uint32_t bits = (xBits & mask) | (yBits & ~mask);
+  float out;
+  std::memcpy(&out, &bits, sizeof out);
+  return out;
+}
+
+/// Range of every factor (E1, E2, R of both planes) inside which floatIntervalsApartBranchFree is valid:
+/// narrower than the plane test's, because it multiplies four factors (the line direction nA x nB), which
+/// must neither overflow nor lose precision to underflow. Outside it the interval stage abstains.
+inline constexpr float kFloatIntervalMinFactor = 0x1p-20f;
+/// Upper end of that range.
+inline constexpr float kFloatIntervalMaxFactor = 0x1p20f;
+
+/// The interval stage needs the planes' intersection line to be well defined: its float direction must have
+/// a component of at least this times EA1 EA2 EB1 EB2 (about sin 1e-3 for well-shaped triangles), so that
+/// the direction's rounding (below 2^-17 of that product in float, 2^-46 in double) cannot matter.
+inline constexpr float kFloatLineMinimum = 0x1p-10f;
+
+/// Float proof that Möller's interval step (step 3) rejects the pair in double: both triangles cross the
+/// other's plane, and their intervals on the planes' intersection line L are disjoint by more than float and
+/// double rounding could explain. Run on the pairs that floatCertainlyApartBranchFree could not reject (a
+/// third of the candidates of the thesis scene; two thirds of those are rejected here), it leaves the double
+/// test to the pairs that intersect or nearly do. Returns 1 for "certainly apart", else 0; branch-free.
+///
+/// Why the answer is the double test's (u = 2^-24; m the plane test's margin, which bounds the float error of
+/// every distance, see kFloatSideMargin):
+/// - Every distance is |d| > 2m, so float and double agree on every sign, the double snaps none of them to 0
+///   (so its coplanar branch is not taken) and both pick the same lone vertex and the same two edges per
+///   triangle. The exact crossing points of those edges with the other plane lie on L.
+/// - A crossing point is p_a + (p_b - p_a) r, r = d_a / (d_a - d_b) in [0, 1]. With both distances off by at
+///   most m, and |d_a| + |d_b| = S >= 4m, r is off by at most 2m / (S - 2m) <= 4m / S, plus 3.1u for the
+///   float division; the crossing's coordinate is then off by at most W (4m / S + 5.2u) + u |t| on any axis,
+///   W the infinity norm of the edge: the bound errA / errB below, with room to spare (W (4m/S + 8u) + 4u P,
+///   P the largest coordinate magnitude of the six vertices).
+/// - Float tests on its own axis k, the largest component of its direction D; the double on k', the largest
+///   of its own. Two points of L differ along axis x by (their distance along L) |D_x| / |D|, so a gap on k
+///   is at most the gap on k' times |D_k| / |D_k'|, which is below 1 + 2^-34 when |D_k| >= kFloatLineMinimum
+///   EA1 EA2 EB1 EB2 (the double's direction is within 2^-46 of that product).
+/// - The intervals are called apart when their float gap exceeds 2 (errA + errB): the true gap on k then
+///   exceeds errA + errB less the comparison's own rounding (>= 7u P and 7u W), which covers the double's
+///   rounding of its crossing points on k' (below 2^-50 (W + P) and W 1e-15 E1 E2 R / S).
+/// A degenerate triangle is rejected by the double test anyway, so "apart" is its answer for those too.
+GPUCOL_FORCE_INLINE unsigned floatIntervalsApartBranchFree(
+    const Eigen::Vector3f& a0, const Eigen::Vector3f& a1, const Eigen::Vector3f& a2,
+    const Eigen::Vector3f& b0, const Eigen::Vector3f& b1, const Eigen::Vector3f& b2) {
+  constexpr float u = 1.0f / 16777216.0f;
+  const Eigen::Vector3f e1 = a1 - a0, e2 = a2 - a0, f1 = b1 - b0, f2 = b2 - b0;
+  const Eigen::Vector3f nA = e1.cross(e2), nB = f1.cross(f2);
+  const float ea1 = e1.cwiseAbs().maxCoeff(), ea2 = e2.cwiseAbs().maxCoeff();
+  const float eb1 = f1.cwiseAbs().maxCoeff(), eb2 = f2.cwiseAbs().maxCoeff();
+  // Distances as floatPlaneSide computes them (same expressions, so kFloatSideMargin's bound holds).
+  const Eigen::Vector3f rb0 = b0 - a0, rb1 = b1 - a0, rb2 = b2 - a0;
+  const Eigen::Vector3f ra0 = a0 - b0, ra1 = a1 - b0, ra2 = a2 - b0;
+  const float dB[3] = {nA.dot(rb0), nA.dot(rb1), nA.dot(rb2)};
+  const float dA[3] = {nB.dot(ra0), nB.dot(ra1), nB.dot(ra2)};
+  const float extentB = rb0.cwiseAbs().cwiseMax(rb1.cwiseAbs()).cwiseMax(rb2.cwiseAbs()).maxCoeff();
+  const float extentA = ra0.cwiseAbs().cwiseMax(ra1.cwiseAbs()).cwiseMax(ra2.cwiseAbs()).maxCoeff();
+  const float mB = kFloatSideMargin * ea1 * ea2 * extentB;
+  const float mA = kFloatSideMargin * eb1 * eb2 * extentA;
+  auto inRange = [](float x) { return (x >= kFloatIntervalMinFactor) & (x <= kFloatIntervalMaxFactor); };
+  bool valid =
+      inRange(ea1) & inRange(ea2) & inRange(eb1) & inRange(eb2) & inRange(extentA) & inRange(extentB);
+  for (int i = 0; i < 3; ++i) valid &= (std::fabs(dB[i]) > 2.0f * mB) & (std::fabs(dA[i]) > 2.0f * mA);
+  // Both triangles cross the other's plane: neither all above nor all below.
+  valid &= !((dB[0] > 0) & (dB[1] > 0) & (dB[2] > 0)) & !((dB[0] < 0) & (dB[1] < 0) & (dB[2] < 0));
+  valid &= !((dA[0] > 0) & (dA[1] > 0) & (dA[2] > 0)) & !((dA[0] < 0) & (dA[1] < 0) & (dA[2] < 0));
+
+  const Eigen::Vector3f direction = nA.cross(nB);
+  const float dx = std::fabs(direction.x()), dy = std::fabs(direction.y()), dz = std::fabs(direction.z());
+  // Selections by value rather than by index, so that a loop over pairs stays vector code.
+  const bool useX = (dx >= dy) & (dx >= dz), useY = !useX & (dy >= dz);
+  valid &= std::max(std::max(dx, dy), dz) >= kFloatLineMinimum * (ea1 * ea2) * (eb1 * eb2);
+  auto onAxis = [&](const Eigen::Vector3f& v) {
+    return selectFloat(useX, v.x(), selectFloat(useY, v.y(), v.z()));
+  };
+
+  const float largest =
+      std::max({a0.cwiseAbs().maxCoeff(), a1.cwiseAbs().maxCoeff(), a2.cwiseAbs().maxCoeff(),
+                b0.cwiseAbs().maxCoeff(), b1.cwiseAbs().maxCoeff(), b2.cwiseAbs().maxCoeff()});
+  // One triangle's interval on the axis and the bound on its endpoints' error.
+  auto interval = [&](const Eigen::Vector3f& v0, const Eigen::Vector3f& v1, const Eigen::Vector3f& v2,
+                      const float(&d)[3], float m, float edges, float& lo, float& hi, float& error) {
+    const float p0 = onAxis(v0), p1 = onAxis(v1), p2 = onAxis(v2);
+    // The lone vertex as loneVertex() picks it for non-zero distances, then the next two in cyclic order.
+    const bool lone2 = (d[0] > 0) == (d[1] > 0), lone1 = !lone2 & ((d[0] > 0) == (d[2] > 0));
+    const float dLone = selectFloat(lone2, d[2], selectFloat(lone1, d[1], d[0]));
+    const float pLone = selectFloat(lone2, p2, selectFloat(lone1, p1, p0));
+    const float dNext = selectFloat(lone2, d[0], selectFloat(lone1, d[2], d[1]));
+    const float pNext = selectFloat(lone2, p0, selectFloat(lone1, p2, p1));
+    const float dLast = selectFloat(lone2, d[1], selectFloat(lone1, d[0], d[2]));
+    const float pLast = selectFloat(lone2, p1, selectFloat(lone1, p0, p2));
+    const float inverse1 = 1.0f / (dLone - dNext), inverse2 = 1.0f / (dLone - dLast);
+    const float t1 = pLone + (pNext - pLone) * (dLone * inverse1);
+    const float t2 = pLone + (pLast - pLone) * (dLone * inverse2);
+    lo = std::min(t1, t2);
+    hi = std::max(t1, t2);
+    const float inverseSmallest = std::max(std::fabs(inverse1), std::fabs(inverse2));
+    error = edges * (4.0f * m * inverseSmallest + 8.0f * u) + 4.0f * u * largest;
+  };
+  const float edgesA = std::max(std::max(ea1, ea2), (a2 - a1).cwiseAbs().maxCoeff());
+  const float edgesB = std::max(std::max(eb1, eb2), (b2 - b1).cwiseAbs().maxCoeff());
+  float loA, hiA, errorA, loB, hiB, errorB;
+  interval(a0, a1, a2, dA, mA, edgesA, loA, hiA, errorA);
+  interval(b0, b1, b2, dB, mB, edgesB, loB, hiB, errorB);
+  const float tolerance = 2.0f * (errorA + errorB);
+  return unsigned(valid & ((loA > hiB + tolerance) | (loB > hiA + tolerance)));
 }
 
 /// trianglesIntersect without its float pre-test (defined in triangle_intersection.cpp), for callers that
