@@ -25,9 +25,10 @@ struct CarriedBox {
   float max[4];
 };
 
-/// A pair of nodes whose boxes are already known to overlap, with B's box carried (so it is carried once).
+/// A pair of nodes whose boxes are already known to overlap. B's carried box is not kept: it is needed again
+/// only where A alone descends, and carrying it again there (the same operations, so the same bits) costs
+/// less than moving 32 more bytes through the stack for every pair.
 struct NodePair {
-  CarriedBox boxB;
   std::uint32_t a;
   std::uint32_t b;
 };
@@ -204,16 +205,16 @@ class Traverser {
       prefetch(m_nodesB + m_nodesB[childrenB[1]].first);
       for (std::uint32_t cb : childrenB) {
         const CarriedBox box = m_carrier.carry(m_nodesB[cb].min, m_nodesB[cb].max);
-        *top = {box, a0, cb};
+        *top = {a0, cb};
         top += overlaps(childA0.min, childA0.max, box);
-        *top = {box, a1, cb};
+        *top = {a1, cb};
         top += overlaps(childA1.min, childA1.max, box);
       }
       tests += 4;
       return top;
     }
     if (leafA && leafB) {
-      emitLeafPair(na, nb, pair.boxB, out, tests);
+      emitLeafPair(na, nb, out, tests);
       return top;
     }
     if (leafA) {
@@ -221,7 +222,7 @@ class Traverser {
       const std::uint32_t childrenB[2] = {pair.b + 1, nb.first};
       for (std::uint32_t cb : childrenB) {
         const CarriedBox box = m_carrier.carry(m_nodesB[cb].min, m_nodesB[cb].max);
-        *top = {box, pair.a, cb};
+        *top = {pair.a, cb};
         top += overlaps(na.min, na.max, box);
       }
       tests += 2;
@@ -229,9 +230,10 @@ class Traverser {
     }
     // Node against leaf: two tests, B's box already carried.
     const std::uint32_t childrenA[2] = {pair.a + 1, na.first};
+    const CarriedBox boxB = m_carrier.carry(nb.min, nb.max);
     for (std::uint32_t ca : childrenA) {
-      *top = {pair.boxB, ca, pair.b};
-      top += overlaps(m_nodesA[ca].min, m_nodesA[ca].max, pair.boxB);
+      *top = {ca, pair.b};
+      top += overlaps(m_nodesA[ca].min, m_nodesA[ca].max, boxB);
     }
     tests += 2;
     return top;
@@ -254,14 +256,16 @@ class Traverser {
   /// Two overlapping leaves. Leaves of one triangle are the thesis's case: the leaf box is the triangle box,
   /// so the pair is a candidate. Leaves of several triangles test their triangles' boxes, so that every leaf
   /// size gives the same candidates as one triangle per leaf.
-  void emitLeafPair(const AabbNode& na, const AabbNode& nb, const CarriedBox& boxB,
-                    std::vector<TrianglePair>& out, std::uint64_t& tests) const {
+  void emitLeafPair(const AabbNode& na, const AabbNode& nb, std::vector<TrianglePair>& out,
+                    std::uint64_t& tests) const {
     if (na.count == 1 && nb.count == 1) {
       out.push_back({na.first, nb.first});
       return;
     }
+    // A leaf of B with one triangle: its box is the triangle's.
+    const CarriedBox leafBoxB = nb.count == 1 ? m_carrier.carry(nb.min, nb.max) : CarriedBox{};
     for (std::uint32_t j = 0; j < nb.count; ++j) {
-      CarriedBox triB = boxB;
+      CarriedBox triB = leafBoxB;
       std::uint32_t triangleB = nb.first;
       if (nb.count > 1) {
         const AabbLeafEntry& entry = m_entriesB[nb.first + j];
@@ -392,8 +396,8 @@ void findCandidatePairs(const AabbTree& a, const AabbTree& b, const AffineMap& b
   std::uint64_t tests = 1;
   const AabbNode& rootA = a.node(0);
   const AabbNode& rootB = b.node(0);
-  const NodePair root{carrier.carry(rootB.min, rootB.max), 0, 0};
-  if (!overlaps(rootA.min, rootA.max, root.boxB)) {
+  const NodePair root{0, 0};
+  if (!overlaps(rootA.min, rootA.max, carrier.carry(rootB.min, rootB.max))) {
     if (stats) stats->nodeTests += tests;
     return;
   }
