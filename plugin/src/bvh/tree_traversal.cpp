@@ -350,7 +350,10 @@ void sortPairs(std::vector<TrianglePair>& pairs, std::size_t trianglesA, std::si
   constexpr std::size_t kBuckets = std::size_t{1} << kRadixBits;
   constexpr std::uint64_t kMask = kBuckets - 1;
 
-  std::vector<std::uint64_t> keys(n), scratch(n);
+  // Uninitialised: every key is written before it is read (zero-filling them cost as much as a pass).
+  std::unique_ptr<std::uint64_t[]> keyBuffer(new std::uint64_t[n]), scratchBuffer(new std::uint64_t[n]);
+  std::uint64_t* keys = keyBuffer.get();
+  std::uint64_t* scratch = scratchBuffer.get();
   std::vector<std::uint32_t> counts(static_cast<std::size_t>(passes) * kBuckets, 0);
   for (std::size_t i = 0; i < n; ++i) {
     const std::uint64_t key = (std::uint64_t{pairs[i].triangleA} << bitsB) | pairs[i].triangleB;
@@ -368,7 +371,7 @@ void sortPairs(std::vector<TrianglePair>& pairs, std::size_t trianglesA, std::si
       offset += c;
     }
     for (std::size_t i = 0; i < n; ++i) scratch[count[(keys[i] >> shift) & kMask]++] = keys[i];
-    keys.swap(scratch);
+    std::swap(keys, scratch);
   }
   const std::uint64_t maskB = bitsB == 0 ? 0 : (~std::uint64_t{0} >> (64 - bitsB));
   for (std::size_t i = 0; i < n; ++i) {
