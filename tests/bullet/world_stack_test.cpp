@@ -10,6 +10,12 @@
 // nothing wakes it or pushes it. With deactivation off, ten boxes on 10 solver iterations do not stand for
 // long even with btBoxShape (measured: its stack falls over after about 900 steps), so an awake stack is no
 // reference to assert against; gpucol-bench world --no-sleep --scenes stack measures it.
+#include <BulletCollision/BroadphaseCollision/btDbvtBroadphase.h>
+#include <BulletCollision/CollisionDispatch/btCollisionDispatcher.h>
+#include <BulletCollision/CollisionDispatch/btDefaultCollisionConfiguration.h>
+#include <BulletCollision/CollisionShapes/btBoxShape.h>
+#include <BulletDynamics/ConstraintSolver/btSequentialImpulseConstraintSolver.h>
+#include <BulletDynamics/Dynamics/btDiscreteDynamicsWorld.h>
 #include <gtest/gtest.h>
 
 #include <algorithm>
