@@ -2,7 +2,9 @@
 
 #include <BulletCollision/CollisionDispatch/btCollisionObject.h>
 
+#include <algorithm>
 #include <cmath>
+#include <utility>
 
 namespace gpucol {
 namespace {
@@ -11,6 +13,51 @@ namespace {
 // of each other; a box in a right-angled corner gives normals 90° apart, and a curved body on a floor all
 // nearly one. 30° keeps the first in one manifold and splits the second.
 const btScalar kSameManifoldCos = btCos(SIMD_PI / 6);
+
+// The at most 4 contacts of one manifold's group that span the widest support: the deepest, the one farthest
+// from it, the one farthest from the line through those two, and the one farthest on the line's other side.
+// Bullet holds 4 points per manifold; fed a dozen contacts one by one, it keeps what arrival order and its
+// replacement rule leave, which on a box face can be three corners on one side and nothing under the other
+// half. Choosing the spread here first gives it the face's corners, which then stay from step to step.
+std::vector<std::size_t> chooseSupport(const std::vector<PairContact>& contacts, const btVector3& normal) {
+  std::vector<std::size_t> chosen;
+  if (contacts.size() <= 4) {
+    for (std::size_t i = 0; i < contacts.size(); ++i) chosen.push_back(i);
+    return chosen;
+  }
+  const auto argmax = [&](auto score) {
+    std::size_t best = 0;
+    btScalar bestScore = score(contacts[0].pointOnB);
+    for (std::size_t i = 1; i < contacts.size(); ++i) {
+      const btScalar value = score(contacts[i].pointOnB);
+      if (value > bestScore) best = i, bestScore = value;
+    }
+    return std::pair{best, bestScore};
+  };
+  std::size_t d = 0;
+  for (std::size_t i = 1; i < contacts.size(); ++i) {
+    if (contacts[i].distance < contacts[d].distance) d = i;
+  }
+  const btVector3 p0 = contacts[d].pointOnB;
+  const std::size_t far = argmax([&](const btVector3& p) { return (p - p0).length2(); }).first;
+  const btVector3 axis = contacts[far].pointOnB - p0;
+  // Signed distance from the line p0-far, within the contact plane.
+  const auto side = [&](const btVector3& p) { return axis.cross(p - p0).dot(normal); };
+  const std::size_t third = argmax([&](const btVector3& p) { return btFabs(side(p)); }).first;
+  const btScalar sign = side(contacts[third].pointOnB) >= 0 ? btScalar(1) : btScalar(-1);
+  auto [fourth, fourthSide] = argmax([&](const btVector3& p) { return -sign * side(p); });
+  if (fourthSide <= 0) {
+    // Nothing on the other side: the point farthest from the three chosen.
+    fourth = argmax([&](const btVector3& p) {
+               return btMin(btMin((p - p0).length2(), (p - contacts[far].pointOnB).length2()),
+                            (p - contacts[third].pointOnB).length2());
+             }).first;
+  }
+  for (std::size_t i : {d, far, third, fourth}) {
+    if (std::find(chosen.begin(), chosen.end(), i) == chosen.end()) chosen.push_back(i);
+  }
+  return chosen;
+}
 
 }  // namespace
 
@@ -32,23 +79,25 @@ void ContactManifoldSet::write(const std::vector<PairContact>& contacts, const b
                                const btCollisionObjectWrapper* body1, btManifoldResult* result) {
   btPersistentManifold* const original = result->getPersistentManifold();
   const btMatrix3x3& body1Basis = body1->getWorldTransform().getBasis();
+  std::vector<std::vector<PairContact>> byGroup(m_groups.size());
   for (const PairContact& contact : contacts) {
     const btVector3 normalInBody1 = body1Basis.transpose() * contact.normalOnB;
-    Group* group = nullptr;
-    for (Group& g : m_groups) {
-      if (g.normalInBody1.dot(normalInBody1) >= kSameManifoldCos) {
-        group = &g;
-        break;
-      }
-    }
-    if (group == nullptr) {
+    std::size_t group = 0;
+    while (group < m_groups.size() && m_groups[group].normalInBody1.dot(normalInBody1) < kSameManifoldCos) ++group;
+    if (group == m_groups.size()) {
       btPersistentManifold* manifold =
           m_dispatcher->getNewManifold(body0->getCollisionObject(), body1->getCollisionObject());
       m_groups.push_back({manifold, normalInBody1});
-      group = &m_groups.back();
+      byGroup.emplace_back();
     }
-    result->setPersistentManifold(group->manifold);
-    result->addContactPoint(contact.normalOnB, contact.pointOnB, contact.distance);
+    byGroup[group].push_back(contact);
+  }
+  for (std::size_t g = 0; g < m_groups.size(); ++g) {
+    result->setPersistentManifold(m_groups[g].manifold);
+    for (std::size_t i : chooseSupport(byGroup[g], body1Basis * m_groups[g].normalInBody1)) {
+      const PairContact& contact = byGroup[g][i];
+      result->addContactPoint(contact.normalOnB, contact.pointOnB, contact.distance);
+    }
   }
   // Every manifold is refreshed, not only those that got a contact: points of a face that separated must go.
   std::size_t kept = 0;
