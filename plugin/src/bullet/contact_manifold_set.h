@@ -44,9 +44,6 @@ class ContactManifoldSet {
   /// Appends the pair's manifolds.
   void appendTo(btManifoldArray& manifolds) const;
 
-  /// Number of manifolds held now.
-  int size() const { return int(m_groups.size()); }
-
  private:
   struct Group {
     btPersistentManifold* manifold;
