@@ -1,7 +1,8 @@
 // gpucol-demo: a headless falling-stack demo. Builds a Bullet world (a box stack, a pile of mixed meshes in a
 // bin, or copies of a mesh file dropped on the ground) with gpucol's shapes, dispatcher and broad phase, or
 // with GImpact for comparison, steps it, prints progress and a summary, and fails loudly on NaN or an
-// explosion.
+// explosion. On request it writes a picture of the final scene and a plot of heights and kinetic energy over
+// time (PNG).
 #include <gpucol/collision_dispatcher.h>
 #include <gpucol/triangle_mesh.h>
 
@@ -11,7 +12,11 @@
 #include <iostream>
 #include <memory>
 #include <string>
+#include <vector>
 
+#include "demo/scene_picture.h"
+#include "demo/time_plot.h"
+#include "demo/time_series.h"
 #include "scenes/scene_run.h"
 #include "scenes/world_scene.h"
 #include "scenes/world_scenes.h"
@@ -28,6 +33,11 @@ struct DemoOptions {
   float gimpactMargin = gpucol::scenes::WorldOptions().gimpactMargin;
   bool noSleep = false;
   int every = 60;
+  std::string picturePath;
+  std::vector<int> pictureSize{1024, 768};
+  bool orthographic = false;
+  std::string plotPath;
+  std::vector<int> plotSize{1000, 720};
 };
 
 // Exit codes: 0 the run finished, 1 bad input (options, mesh file), 2 the simulation failed (NaN, explosion,
@@ -72,9 +82,15 @@ int run(const DemoOptions& options) {
   RunOptions runOptions;
   runOptions.steps = options.steps;
   runOptions.dt = options.dt;
+  // The plot wants every step, so runScene reports every step and the progress line keeps its own pace.
+  gpucol::demo::TimeSeries series;
+  const bool recording = !options.plotPath.empty();
+  if (recording) series.record(world, 0.0);
   const RunSummary summary = runScene(
       world, runOptions,
-      [&world](const StepSample& s) {
+      [&](const StepSample& s) {
+        if (recording) series.record(world, double(s.step) * double(options.dt));
+        if (s.step % options.every != 0 && s.step != options.steps) return;
         std::printf("step %5d  contacts %5d  kinetic energy %11.4f J  deepest %.2e m  moving %3d  asleep %3d",
                     s.step, s.contacts, s.kineticEnergy, double(s.largestPenetration), s.movingBodies,
                     s.sleepingBodies);
@@ -86,7 +102,7 @@ int run(const DemoOptions& options) {
         std::printf("\n");
         std::fflush(stdout);
       },
-      options.every);
+      recording ? 1 : options.every);
 
   std::printf("\nsummary (%s, %s)\n", scene.name.c_str(), backendName(worldOptions.backend));
   std::printf("  steps run             %d of %d\n", summary.steps, options.steps);
@@ -105,6 +121,32 @@ int run(const DemoOptions& options) {
   if (scene.trackedBody >= 0) {
     std::printf("  top box height drift  %+.3e m (final minus start height)\n",
                 double(summary.trackedHeightDrift));
+  }
+  // Written even when the run failed: the picture shows where the bodies went.
+  if (!options.picturePath.empty()) {
+    gpucol::demo::PictureOptions picture;
+    picture.width = options.pictureSize[0];
+    picture.height = options.pictureSize[1];
+    picture.perspective = !options.orthographic;
+    // The pile lies inside a bin with 2.5 m walls: seen from 17 degrees above the horizon (the stack's view)
+    // the walls hide it, so its picture looks down at 45 degrees.
+    if (scene.name == "pile") picture.elevation = 0.785f;
+    gpucol::demo::writeScenePicture(world, options.picturePath, picture);
+    std::printf("  picture               %s (%d x %d, the scene after step %d)\n",
+                options.picturePath.c_str(), picture.width, picture.height, summary.steps);
+  }
+  if (recording) {
+    gpucol::demo::PlotOptions plot;
+    plot.width = options.plotSize[0];
+    plot.height = options.plotSize[1];
+    char title[256];
+    std::snprintf(title, sizeof title, "gpucol-demo: %s with %s, %d steps of %.4g s", scene.name.c_str(),
+                  backendName(worldOptions.backend), summary.steps, double(options.dt));
+    plot.title = title;
+    if (scene.name == "stack") plot.trackedLabel = "top box";
+    gpucol::demo::writeTimePlot(series, options.plotPath, plot);
+    std::printf("  plot                  %s (%d x %d, %zu samples)\n", options.plotPath.c_str(), plot.width,
+                plot.height, series.size());
   }
   if (summary.failure != RunFailure::None) {
     std::fflush(stdout);
@@ -142,6 +184,19 @@ int main(int argc, char** argv) {
   app.add_flag("--no-sleep", options.noSleep, "keep every body awake (no deactivation)");
   app.add_option("--every", options.every, "print a progress line every this many steps")
       ->check(CLI::PositiveNumber)
+      ->capture_default_str();
+  app.add_option("--picture", options.picturePath,
+                 "write a PNG picture of the final scene, seen from the side");
+  app.add_option("--picture-size", options.pictureSize, "width and height of --picture in pixels")
+      ->expected(2)
+      ->check(CLI::Range(64, 8192))
+      ->capture_default_str();
+  app.add_flag("--orthographic", options.orthographic, "draw --picture without perspective");
+  app.add_option("--plot", options.plotPath,
+                 "write a PNG plot of the bodies' heights and kinetic energy over the run (every step)");
+  app.add_option("--plot-size", options.plotSize, "width and height of --plot in pixels")
+      ->expected(2)
+      ->check(CLI::Range(320, 8192))
       ->capture_default_str();
   app.footer(
       "Exit status: 0 finished, 1 bad input (options, unreadable or open mesh), 2 the simulation failed "
