@@ -11,11 +11,15 @@
 #include <chrono>
 #include <cmath>
 #include <memory>
+#include <mutex>
 #include <optional>
 #include <stdexcept>
 #include <string>
 
+#include "bullet/mesh_device_backend.h"
+#include "bullet/warn_once.h"
 #include "bvh/aabb_tree.h"
+#include "bvh/mesh_batch_device.h"
 #include "bvh/prefetch.h"
 #include "bvh/tree_traversal.h"
 #include "gpucol/mesh_shape.h"
@@ -293,13 +297,49 @@ MeshContact toWorld(const TrianglePair& pair, const TriangleContact& contact, co
   return out;
 }
 
-MeshPairResult collidePair(const MeshShape& shapeA, const btTransform& transformA, const MeshShape& shapeB,
-                           const btTransform& transformB, const Config& config) {
+// The near phase's hits (NearHit here, DeviceNearHit from the device; both in candidate order) into the
+// result's intersecting pairs and contacts, then the contact reduction. Shared by both paths, so the
+// same-facing rule, the world conversion and the reduction cannot drift apart.
+template <class Hit>
+void collectHits(const std::vector<Hit>& hits, const PairFrame& frame, const Config& config,
+                 MeshPairResult& result) {
+  result.stats.triangleTests = result.candidatePairs.size();
+  std::vector<ReductionInput> localContacts;
+  result.intersectingPairs.reserve(hits.size());
+  result.contacts.reserve(hits.size());
+  localContacts.reserve(hits.size());
+  // Same-facing contacts count only when the pair has no other (TriangleContact::sameFacing).
+  const bool anyFacingEachOther = std::any_of(hits.begin(), hits.end(), [](const Hit& hit) {
+    return hit.hasContact && !hit.contact.sameFacing;
+  });
+  for (const Hit& hit : hits) {
+    const TrianglePair& pair = result.candidatePairs[hit.candidate];
+    result.intersectingPairs.push_back(pair);
+    if (!hit.hasContact || (anyFacingEachOther && hit.contact.sameFacing)) continue;
+    result.contacts.push_back(toWorld(pair, hit.contact, frame.worldFromA));
+    localContacts.push_back({hit.contact.point, hit.contact.normalOnB, hit.contact.depth});
+  }
+
+  const auto start = Clock::now();
+  // Binning runs in A's scaled frame: positions are scaled to the contacts' own box, so the frame only has
+  // to be the same for all contacts of the pair.
+  for (std::uint32_t kept : reduceContacts(localContacts, config.reductionResolution)) {
+    result.reducedContacts.push_back(result.contacts[kept]);
+  }
+  result.stats.reductionMs = millisecondsSince(start);
+}
+
+void requireFinite(const btTransform& transformA, const btTransform& transformB) {
   if (!isFinite(transformA) || !isFinite(transformB)) {
     throw std::invalid_argument("collideMeshes: the transform of shape " +
                                 std::string(isFinite(transformA) ? "B" : "A") +
                                 " has a NaN or infinite component");
   }
+}
+
+MeshPairResult collidePair(const MeshShape& shapeA, const btTransform& transformA, const MeshShape& shapeB,
+                           const btTransform& transformB, const Config& config) {
+  requireFinite(transformA, transformB);
   MeshPairResult result;
   result.stats.backendUsed = Backend::Cpu;
   const PairFrame frame = makePairFrame(shapeA, transformA, shapeB, transformB);
@@ -318,38 +358,155 @@ MeshPairResult collidePair(const MeshShape& shapeA, const btTransform& transform
 
   start = Clock::now();
   const std::vector<NearHit> hits = runNearPhase(shapeA.mesh(), shapeB.mesh(), frame, result.candidatePairs);
-  result.stats.triangleTests = result.candidatePairs.size();
-  std::vector<ReductionInput> localContacts;
-  result.intersectingPairs.reserve(hits.size());
-  result.contacts.reserve(hits.size());
-  localContacts.reserve(hits.size());
-  // Same-facing contacts count only when the pair has no other (TriangleContact::sameFacing).
-  const bool anyFacingEachOther = std::any_of(hits.begin(), hits.end(), [](const NearHit& hit) {
-    return hit.hasContact && !hit.contact.sameFacing;
-  });
-  for (const NearHit& hit : hits) {
-    const TrianglePair& pair = result.candidatePairs[hit.candidate];
-    result.intersectingPairs.push_back(pair);
-    if (!hit.hasContact || (anyFacingEachOther && hit.contact.sameFacing)) continue;
-    result.contacts.push_back(toWorld(pair, hit.contact, frame.worldFromA));
-    localContacts.push_back({hit.contact.point, hit.contact.normalOnB, hit.contact.depth});
-  }
-  result.stats.nearPhaseMs = millisecondsSince(start);
-
-  start = Clock::now();
-  // Binning runs in A's scaled frame: positions are scaled to the contacts' own box, so the frame only has
-  // to be the same for all contacts of the pair.
-  for (std::uint32_t kept : reduceContacts(localContacts, config.reductionResolution)) {
-    result.reducedContacts.push_back(result.contacts[kept]);
-  }
-  result.stats.reductionMs = millisecondsSince(start);
+  const double nearMs = millisecondsSince(start);
+  collectHits(hits, frame, config, result);
+  result.stats.nearPhaseMs = nearMs;
   return result;
+}
+
+// What collideMeshesBatch's device path shares between batches: its options and the last batch's stages.
+struct DeviceBackendState {
+  std::mutex mutex;
+  MeshBatchDeviceOptions options;
+  MeshBatchDeviceStats lastStats;
+};
+
+DeviceBackendState& deviceBackendState() {
+  static DeviceBackendState state;
+  return state;
+}
+
+// The batch on the device (bvh/mesh_batch_device.h), when the backend choice wants it: returns false, having
+// filled nothing, when the batch is to run on the CPU instead (Auto below the crossover or on a CPU device, no
+// device, or a device failure, which is said once). Pairs whose root boxes miss never reach the device.
+bool collideOnDevice(const std::vector<MeshPairQuery>& queries, const Config& config,
+                     std::vector<MeshPairResult>& results) {
+  for (const MeshPairQuery& q : queries) requireFinite(q.transformA, q.transformB);
+  const auto start = Clock::now();
+  std::vector<PairFrame> frames;
+  frames.reserve(queries.size());
+  std::vector<std::size_t> overlapping;
+  std::uint64_t triangles = 0;
+  for (std::size_t i = 0; i < queries.size(); ++i) {
+    const MeshPairQuery& q = queries[i];
+    frames.push_back(makePairFrame(*q.shapeA, q.transformA, *q.shapeB, q.transformB));
+    if (rootBoxesOverlap(q.shapeA->tree(), q.shapeB->tree(), frames.back().treeMap)) {
+      overlapping.push_back(i);
+      triangles += q.shapeA->mesh().triangleCount() + q.shapeB->mesh().triangleCount();
+    }
+  }
+  const double rootMs = millisecondsSince(start);
+  // Auto: small batches stay on the CPU without touching OpenCL (it is initialised only when wanted).
+  if (config.meshBackend == Backend::Auto && triangles < detail::kAutoGpuMinimumTriangles) return false;
+
+  MeshBatchDevice* device = nullptr;
+  try {
+    const MeshBatchDeviceFactory& factory = meshBatchDeviceFactory();
+    device = factory ? factory(config) : nullptr;
+  } catch (const std::exception& e) {
+    warnOnce("mesh-opencl-setup", std::string("the OpenCL mesh pipeline failed to set up, using the CPU: ") + e.what());
+    return false;
+  }
+  if (device == nullptr) {
+    if (config.meshBackend == Backend::OpenCL) {
+      warnOnce("mesh-opencl-absent", meshBatchDeviceFactory()
+                                         ? "Backend::OpenCL was asked for mesh pairs, but no usable OpenCL device "
+                                           "was found: they run on the CPU"
+                                         : "Backend::OpenCL was asked for mesh pairs, but gpucol was built without "
+                                           "OpenCL: they run on the CPU");
+    }
+    return false;
+  }
+  // Auto never picks a CPU OpenCL device: the CPU path was faster on it at every size measured.
+  if (config.meshBackend == Backend::Auto && !device->isGpu()) return false;
+
+  std::vector<DeviceMeshPair> pairs(overlapping.size());
+  for (std::size_t k = 0; k < overlapping.size(); ++k) {
+    const MeshPairQuery& q = queries[overlapping[k]];
+    const PairFrame& frame = frames[overlapping[k]];
+    DeviceMeshPair& p = pairs[k];
+    p.meshA = q.shapeA->sharedMesh();
+    p.meshB = q.shapeB->sharedMesh();
+    p.treeA = &q.shapeA->tree();
+    p.treeB = &q.shapeB->tree();
+    p.treeMap = frame.treeMap;
+    p.scaleA = frame.scaleA;
+    p.bLinear = frame.bLinear;
+    p.bTranslation = frame.bTranslation;
+    p.flipA = frame.flipA;
+    p.flipB = frame.flipB;
+  }
+  MeshBatchDeviceOptions options;
+  {
+    std::lock_guard<std::mutex> lock(deviceBackendState().mutex);
+    options = deviceBackendState().options;
+  }
+  std::vector<DeviceMeshPairResult> found;
+  MeshBatchDeviceStats stats;
+  try {
+    device->run(pairs, options, found, &stats);
+  } catch (const std::exception& e) {
+    warnOnce("mesh-opencl-run", std::string("the OpenCL mesh pipeline failed, running mesh batches on the CPU: ") +
+                                    e.what());
+    return false;
+  }
+  {
+    std::lock_guard<std::mutex> lock(deviceBackendState().mutex);
+    deviceBackendState().lastStats = stats;
+  }
+
+  // Per-pair timings: the batch's stages shared evenly among its device pairs, so that they add up to the
+  // batch; node tests are counted per batch by the device (MeshBatchDeviceStats), not per pair.
+  const double share = overlapping.empty() ? 0.0 : 1.0 / double(overlapping.size());
+  const double middleMs = (stats.uploadMs + stats.traversalMs + stats.scanMs + stats.sortMs) * share;
+  const double nearMs = (stats.nearMs + stats.compactionMs + stats.readbackMs) * share;
+  for (std::size_t i = 0; i < queries.size(); ++i) {
+    results[i] = MeshPairResult();
+    results[i].stats.nodeTests = 1;
+    results[i].stats.rootBoxesMissed = true;
+    results[i].stats.middlePhaseMs = rootMs / double(queries.size());
+  }
+  for (std::size_t k = 0; k < overlapping.size(); ++k) {
+    MeshPairResult& result = results[overlapping[k]];
+    result.stats.rootBoxesMissed = false;
+    result.stats.nodeTests = 0;
+    result.stats.backendUsed = Backend::OpenCL;
+    result.stats.middlePhaseMs += middleMs;
+    result.stats.nearPhaseMs = nearMs;
+    result.candidatePairs = std::move(found[k].candidates);
+    collectHits(found[k].hits, frames[overlapping[k]], config, result);
+  }
+  return true;
 }
 
 }  // namespace
 
+namespace detail {
+
+void setMeshDeviceOptions(const MeshBatchDeviceOptions& options) {
+  std::lock_guard<std::mutex> lock(deviceBackendState().mutex);
+  deviceBackendState().options = options;
+}
+
+MeshBatchDeviceOptions meshDeviceOptions() {
+  std::lock_guard<std::mutex> lock(deviceBackendState().mutex);
+  return deviceBackendState().options;
+}
+
+MeshBatchDeviceStats lastMeshDeviceStats() {
+  std::lock_guard<std::mutex> lock(deviceBackendState().mutex);
+  return deviceBackendState().lastStats;
+}
+
+}  // namespace detail
+
 MeshPairResult collideMeshes(const MeshShape& shapeA, const btTransform& transformA, const MeshShape& shapeB,
                              const btTransform& transformB, const Config& config) {
+  if (config.meshBackend != Backend::Cpu) {
+    std::vector<MeshPairQuery> one(1);
+    one[0] = MeshPairQuery{&shapeA, transformA, &shapeB, transformB};
+    return std::move(collideMeshesBatch(one, config)[0]);
+  }
   return collidePair(shapeA, transformA, shapeB, transformB, config);
 }
 
@@ -361,6 +518,9 @@ std::vector<MeshPairResult> collideMeshesBatch(const std::vector<MeshPairQuery>&
     }
   }
   std::vector<MeshPairResult> results(queries.size());
+  if (config.meshBackend != Backend::Cpu && !queries.empty() && collideOnDevice(queries, config, results)) {
+    return results;
+  }
   // Pairs run in parallel; each pair's own stages are parallel too, and oneTBB balances the nesting.
   tbb::parallel_for(std::size_t(0), queries.size(), [&](std::size_t i) {
     const MeshPairQuery& q = queries[i];

@@ -1,0 +1,128 @@
+#include "opencl/host/mesh_device_cache.h"
+
+#include "opencl/shared/mesh_pipeline_types.h"
+
+#include <algorithm>
+#include <cstddef>
+#include <limits>
+#include <stdexcept>
+#include <string>
+
+namespace gpucol::opencl {
+
+static_assert(sizeof(GpucolTreeNode) == sizeof(AabbNode) && offsetof(GpucolTreeNode, max) == offsetof(AabbNode, max) &&
+                  offsetof(GpucolTreeNode, first) == offsetof(AabbNode, first) &&
+                  offsetof(GpucolTreeNode, count) == offsetof(AabbNode, count),
+              "GpucolTreeNode must have AabbNode's layout: the tree is uploaded as it is");
+static_assert(sizeof(GpucolLeafEntry) == sizeof(AabbLeafEntry) &&
+                  offsetof(GpucolLeafEntry, max) == offsetof(AabbLeafEntry, max) &&
+                  offsetof(GpucolLeafEntry, triangle) == offsetof(AabbLeafEntry, triangle),
+              "GpucolLeafEntry must have AabbLeafEntry's layout");
+
+namespace {
+// Arenas index their elements with 32-bit offsets in the kernels.
+constexpr std::size_t kMaxElements = std::numeric_limits<std::uint32_t>::max();
+constexpr std::size_t kElementBytes[4] = {3 * sizeof(float), 3 * sizeof(std::uint32_t), sizeof(AabbNode),
+                                          sizeof(AabbLeafEntry)};
+}  // namespace
+
+std::size_t MeshDeviceCache::append(Arena& arena, const void* data, std::size_t bytes) {
+  const std::size_t offset = arena.used;
+  if (bytes == 0) return offset;
+  cl::CommandQueue& queue = m_context.queue();
+  if (arena.used + bytes > arena.capacity) {
+    // Grown by half again, so that adding meshes one by one costs amortised linear copying.
+    const std::size_t capacity = std::max(arena.used + bytes, arena.capacity + arena.capacity / 2);
+    cl::Buffer grown(m_context.context(), CL_MEM_READ_WRITE, capacity);
+    if (arena.used > 0) queue.enqueueCopyBuffer(arena.buffer, grown, 0, 0, arena.used);
+    arena.buffer = grown;
+    arena.capacity = capacity;
+  }
+  // Blocking: the host arrays belong to the mesh and tree, which the caller may drop after the batch.
+  queue.enqueueWriteBuffer(arena.buffer, CL_TRUE, offset, bytes, data);
+  arena.used += bytes;
+  return offset;
+}
+
+MeshSlot MeshDeviceCache::acquire(const std::shared_ptr<const TriangleMesh>& mesh, const AabbTree& tree,
+                                  std::uint64_t& uploadedBytes) {
+  if (!mesh) throw std::invalid_argument("MeshDeviceCache: null mesh");
+  if (tree.triangleCount() != mesh->triangleCount()) {
+    throw std::invalid_argument("MeshDeviceCache: the tree was not built from this mesh (" +
+                                std::to_string(tree.triangleCount()) + " triangles against " +
+                                std::to_string(mesh->triangleCount()) + ")");
+  }
+  dropExpired();
+  const Key key{mesh, tree.trianglesPerLeaf()};
+  auto found = m_meshes.find(key);
+  if (found == m_meshes.end()) {
+    const void* data[4] = {mesh->positions().data(), mesh->indices().data(), tree.nodes().data(),
+                           tree.leafEntries().data()};
+    const std::size_t bytes[4] = {mesh->positions().size() * sizeof(float),
+                                  mesh->indices().size() * sizeof(std::uint32_t),
+                                  tree.nodes().size() * sizeof(AabbNode),
+                                  tree.leafEntries().size() * sizeof(AabbLeafEntry)};
+    Arena* arenas[4] = {&m_vertexArena, &m_indexArena, &m_nodeArena, &m_entryArena};
+    Ranges ranges;
+    for (int k = 0; k < 4; ++k) {
+      if ((arenas[k]->used + bytes[k]) / kElementBytes[k] > kMaxElements) {
+        throw std::length_error("MeshDeviceCache: the resident meshes exceed 2^32 elements of one kind");
+      }
+      ranges.offset[k] = append(*arenas[k], data[k], bytes[k]);
+      ranges.bytes[k] = bytes[k];
+      uploadedBytes += bytes[k];
+    }
+    found = m_meshes.emplace(key, ranges).first;
+  }
+  const Ranges& r = found->second;
+  MeshSlot slot;
+  slot.vertices = std::uint32_t(r.offset[0] / kElementBytes[0]);
+  slot.triangles = std::uint32_t(r.offset[1] / kElementBytes[1]);
+  slot.nodes = std::uint32_t(r.offset[2] / kElementBytes[2]);
+  slot.entries = std::uint32_t(r.offset[3] / kElementBytes[3]);
+  return slot;
+}
+
+std::size_t MeshDeviceCache::dropExpired() {
+  std::size_t dropped = 0;
+  for (auto it = m_meshes.begin(); it != m_meshes.end();) {
+    if (it->first.mesh.expired()) {
+      it = m_meshes.erase(it);
+      ++dropped;
+    } else {
+      ++it;
+    }
+  }
+  if (dropped > 0) compact();
+  return dropped;
+}
+
+void MeshDeviceCache::clear() {
+  m_meshes.clear();
+  for (Arena* arena : {&m_vertexArena, &m_indexArena, &m_nodeArena, &m_entryArena}) arena->used = 0;
+}
+
+void MeshDeviceCache::compact() {
+  // The live ranges, in arena order, copied into fresh arenas of exactly their size; the old buffers go when
+  // the queue is done with them (OpenCL keeps a buffer alive while commands use it).
+  Arena* arenas[4] = {&m_vertexArena, &m_indexArena, &m_nodeArena, &m_entryArena};
+  cl::CommandQueue& queue = m_context.queue();
+  for (int k = 0; k < 4; ++k) {
+    std::size_t live = 0;
+    for (const auto& entry : m_meshes) live += entry.second.bytes[k];
+    Arena fresh;
+    if (live > 0) {
+      fresh.buffer = cl::Buffer(m_context.context(), CL_MEM_READ_WRITE, live);
+      fresh.capacity = live;
+    }
+    for (auto& entry : m_meshes) {
+      Ranges& r = entry.second;
+      if (r.bytes[k] > 0) queue.enqueueCopyBuffer(arenas[k]->buffer, fresh.buffer, r.offset[k], fresh.used, r.bytes[k]);
+      r.offset[k] = fresh.used;
+      fresh.used += r.bytes[k];
+    }
+    *arenas[k] = fresh;
+  }
+}
+
+}  // namespace gpucol::opencl

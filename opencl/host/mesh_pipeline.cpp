@@ -1,0 +1,425 @@
+// The OpenCL mesh pipeline (thesis §5.4, batched as in its §7.3): host side of mesh_middle_phase.cl and
+// mesh_near_phase.cl.
+#include "opencl/host/mesh_pipeline.h"
+
+#include "gpucol_kernels/kernels.h"
+#include "opencl/host/mesh_device_cache.h"
+#include "opencl/host/opencl_context.h"
+#include "opencl/host/radix_sort.h"
+#include "opencl/host/scan.h"
+#include "opencl/shared/mesh_pipeline_types.h"
+
+#include <algorithm>
+#include <chrono>
+#include <cmath>
+#include <cstddef>
+#include <iostream>
+#include <map>
+#include <mutex>
+#include <set>
+#include <stdexcept>
+#include <string>
+
+namespace gpucol::opencl {
+
+static_assert(sizeof(GpucolMeshPair) == 49 * 4 && offsetof(GpucolMeshPair, absLinear) == 48 &&
+                  offsetof(GpucolMeshPair, bLinear) == 96 && offsetof(GpucolMeshPair, scaleA) == 144 &&
+                  offsetof(GpucolMeshPair, nodesA) == 156 && offsetof(GpucolMeshPair, flipB) == 192,
+              "GpucolMeshPair layout differs from the kernels'");
+static_assert(sizeof(GpucolFrontEntry) == 12, "GpucolFrontEntry layout differs from the kernels'");
+static_assert(sizeof(GpucolNearHit) == 48 && offsetof(GpucolNearHit, point) == 8 &&
+                  offsetof(GpucolNearHit, normal) == 20 && offsetof(GpucolNearHit, depth) == 32 &&
+                  offsetof(GpucolNearHit, deepest) == 36,
+              "GpucolNearHit layout differs from the kernels'");
+
+namespace {
+
+using Clock = std::chrono::steady_clock;
+
+double millisecondsSince(Clock::time_point start) {
+  return std::chrono::duration<double, std::milli>(Clock::now() - start).count();
+}
+
+/// Largest start depth: 4^d paths per pair must stay far below the 2^32 work-items of one launch.
+constexpr int kMaxStartDepth = 12;
+
+/// A device buffer that grows on demand (by a quarter more than asked) and is reused between batches.
+struct DeviceArray {
+  cl::Buffer buffer;
+  std::size_t bytes = 0;
+  const cl::Buffer& ensure(const cl::Context& context, std::size_t wanted) {
+    wanted = std::max<std::size_t>(wanted, 16);
+    if (bytes < wanted) {
+      buffer = cl::Buffer(context, CL_MEM_READ_WRITE, wanted + wanted / 4);
+      bytes = wanted + wanted / 4;
+    }
+    return buffer;
+  }
+};
+
+/// Bits needed to write every index below `count` (at least 1, so that a mask is never empty).
+unsigned indexBits(std::uint64_t count) {
+  unsigned bits = 1;
+  while (bits < 64 && ((count - 1) >> bits) != 0) ++bits;
+  return bits;
+}
+
+class OpenClMeshPipeline final : public MeshBatchDevice {
+ public:
+  explicit OpenClMeshPipeline(OpenClContext& context)
+      : m_context(context), m_cache(context), m_scan(context), m_sort(context) {
+    translateClErrors("setting up the OpenCL mesh pipeline", [&] {
+      cl::Program middle = m_context.program("mesh_middle_phase", kernels::mesh_middle_phase);
+      m_frontStart = cl::Kernel(middle, "mesh_front_start");
+      m_frontExpand = cl::Kernel(middle, "mesh_front_expand");
+      for (int prefilter = 0; prefilter < 2; ++prefilter) {
+        cl::Program nearProgram = m_context.program("mesh_near_phase", kernels::mesh_near_phase,
+                                                    prefilter ? "-DGPUCOL_NEAR_PREFILTER" : "");
+        m_nearTest[prefilter] = cl::Kernel(nearProgram, "mesh_near_test");
+        if (prefilter) {
+          m_nearFlags = cl::Kernel(nearProgram, "mesh_near_flags");
+          m_nearCompact = cl::Kernel(nearProgram, "mesh_near_compact");
+        }
+      }
+      // Kernels read the leaf entry arena even when no tree has entries: give it one element.
+      m_emptyEntries = cl::Buffer(m_context.context(), CL_MEM_READ_ONLY, sizeof(GpucolLeafEntry));
+    });
+  }
+
+  void run(const std::vector<DeviceMeshPair>& pairs, const MeshBatchDeviceOptions& options,
+           std::vector<DeviceMeshPairResult>& results, MeshBatchDeviceStats* stats) override {
+    std::lock_guard<std::mutex> lock(m_mutex);
+    MeshBatchDeviceStats local;
+    MeshBatchDeviceStats& s = stats ? *stats : local;
+    s = MeshBatchDeviceStats();
+    results.assign(pairs.size(), DeviceMeshPairResult());
+    if (pairs.empty()) return;
+    if (options.startDepth < 0 || options.startDepth > kMaxStartDepth) {
+      throw std::invalid_argument("OpenCL mesh pipeline: start depth " + std::to_string(options.startDepth) +
+                                  " is outside 0.." + std::to_string(kMaxStartDepth));
+    }
+    translateClErrors("running the OpenCL mesh pipeline", [&] { runBatch(pairs, options, results, s); });
+  }
+
+  std::string deviceName() const override { return m_context.deviceName(); }
+  bool isGpu() const override { return m_context.isGpu(); }
+  std::size_t residentMeshes() const override {
+    std::lock_guard<std::mutex> lock(m_mutex);
+    return m_cache.size();
+  }
+
+ private:
+  void launch(cl::Kernel& kernel, std::uint64_t items) {
+    if (items == 0) return;
+    const std::size_t local = m_context.workGroupSize(kernel);
+    const std::size_t global = std::size_t((items + local - 1) / local * local);
+    m_context.queue().enqueueNDRangeKernel(kernel, cl::NullRange, cl::NDRange(global), cl::NDRange(local));
+  }
+
+  void runBatch(const std::vector<DeviceMeshPair>& pairs, const MeshBatchDeviceOptions& options,
+                std::vector<DeviceMeshPairResult>& results, MeshBatchDeviceStats& s);
+
+  OpenClContext& m_context;
+  mutable std::mutex m_mutex;
+  MeshDeviceCache m_cache;
+  OpenClScan m_scan;
+  OpenClRadixSort m_sort;
+  cl::Kernel m_frontStart, m_frontExpand, m_nearTest[2], m_nearFlags, m_nearCompact;
+  cl::Buffer m_emptyEntries;
+  DeviceArray m_pairs, m_counts, m_front, m_next, m_keys, m_keysGrow, m_values, m_hits, m_compacted;
+  std::vector<GpucolMeshPair> m_hostPairs;
+  std::vector<std::uint64_t> m_hostKeys;
+  std::vector<GpucolNearHit> m_hostHits;
+};
+
+void OpenClMeshPipeline::runBatch(const std::vector<DeviceMeshPair>& pairs, const MeshBatchDeviceOptions& options,
+                                  std::vector<DeviceMeshPairResult>& results, MeshBatchDeviceStats& s) {
+  const cl::Context& ctx = m_context.context();
+  cl::CommandQueue& queue = m_context.queue();
+
+  // Upload: meshes only when not resident, then the batch description (transforms, offsets).
+  auto start = Clock::now();
+  if (!options.resident) m_cache.clear();
+  std::uint64_t maxTrianglesA = 1, maxTrianglesB = 1;
+  m_hostPairs.resize(pairs.size());
+  for (std::size_t i = 0; i < pairs.size(); ++i) {
+    const DeviceMeshPair& in = pairs[i];
+    if (!in.meshA || !in.meshB || !in.treeA || !in.treeB) {
+      throw std::invalid_argument("OpenCL mesh pipeline: pair " + std::to_string(i) + " lacks a mesh or tree");
+    }
+    const MeshSlot slotA = m_cache.acquire(in.meshA, *in.treeA, s.uploadedBytes);
+    const MeshSlot slotB = m_cache.acquire(in.meshB, *in.treeB, s.uploadedBytes);
+    maxTrianglesA = std::max<std::uint64_t>(maxTrianglesA, in.meshA->triangleCount());
+    maxTrianglesB = std::max<std::uint64_t>(maxTrianglesB, in.meshB->triangleCount());
+    GpucolMeshPair& p = m_hostPairs[i];
+    const Eigen::Vector3f inflation = carriedBoxInflation(*in.treeB, in.treeMap);
+    for (int r = 0; r < 3; ++r) {
+      for (int c = 0; c < 3; ++c) {
+        p.linear[3 * r + c] = in.treeMap.linear(r, c);
+        p.absLinear[3 * r + c] = std::fabs(in.treeMap.linear(r, c));
+        p.bLinear[3 * r + c] = in.bLinear(r, c);
+      }
+      p.translation[r] = in.treeMap.translation(r);
+      p.inflation[r] = inflation(r);
+      p.bTranslation[r] = in.bTranslation(r);
+      p.scaleA[r] = in.scaleA(r);
+    }
+    p.nodesA = slotA.nodes;
+    p.nodesB = slotB.nodes;
+    p.entriesA = slotA.entries;
+    p.entriesB = slotB.entries;
+    p.verticesA = slotA.vertices;
+    p.verticesB = slotB.vertices;
+    p.trianglesA = slotA.triangles;
+    p.trianglesB = slotB.triangles;
+    p.flipA = in.flipA ? 1u : 0u;
+    p.flipB = in.flipB ? 1u : 0u;
+  }
+  const unsigned bitsA = indexBits(maxTrianglesA);
+  const unsigned bitsB = indexBits(maxTrianglesB);
+  const unsigned keyBits = indexBits(pairs.size()) + bitsA + bitsB;
+  if (keyBits > 64) {
+    throw std::length_error("OpenCL mesh pipeline: pair and triangle indices need " + std::to_string(keyBits) +
+                            " bits, more than a 64-bit sort key");
+  }
+  const std::size_t pairBytes = pairs.size() * sizeof(GpucolMeshPair);
+  queue.enqueueWriteBuffer(m_pairs.ensure(ctx, pairBytes), CL_TRUE, 0, pairBytes, m_hostPairs.data());
+  s.uploadedBytes += pairBytes;
+  const cl::Buffer& entries = m_cache.entries()() ? m_cache.entries() : m_emptyEntries;
+  s.uploadMs = millisecondsSince(start);
+
+  // The first front (thesis §5.4.2: optionally at depth d0), counted, scanned and written.
+  const std::uint64_t paths = std::uint64_t(1) << (2 * options.startDepth);
+  const std::uint64_t startItems = paths * pairs.size();
+  if (startItems > 0xffffffffu) {
+    throw std::length_error("OpenCL mesh pipeline: start depth " + std::to_string(options.startDepth) + " with " +
+                            std::to_string(pairs.size()) + " pairs exceeds 2^32 work-items");
+  }
+  start = Clock::now();
+  m_frontStart.setArg(0, m_pairs.buffer);
+  m_frontStart.setArg(1, m_cache.nodes());
+  m_frontStart.setArg(2, cl_uint(pairs.size()));
+  m_frontStart.setArg(3, cl_uint(options.startDepth));
+  m_frontStart.setArg(4, cl_uint(0));
+  m_frontStart.setArg(5, m_counts.ensure(ctx, startItems * sizeof(cl_uint)));
+  m_frontStart.setArg(6, m_front.ensure(ctx, sizeof(GpucolFrontEntry)));
+  launch(m_frontStart, startItems);
+  queue.finish();
+  s.traversalMs += millisecondsSince(start);
+  start = Clock::now();
+  std::uint32_t frontSize = m_scan.exclusiveScan(m_counts.buffer, startItems);
+  s.scanMs += millisecondsSince(start);
+  start = Clock::now();
+  if (frontSize > 0) {
+    m_frontStart.setArg(4, cl_uint(1));
+    m_frontStart.setArg(6, m_front.ensure(ctx, std::size_t(frontSize) * sizeof(GpucolFrontEntry)));
+    launch(m_frontStart, startItems);
+    queue.finish();
+  }
+  s.traversalMs += millisecondsSince(start);
+  // Root tests; below the roots the start kernel repeats ancestors' tests, which are not counted.
+  s.nodeTests += pairs.size();
+
+  // Level by level until the front is empty; candidates are appended as sort keys (pair, triangleA, triangleB).
+  std::uint64_t candidateCount = 0;
+  std::size_t keyCapacity = m_keys.bytes;
+  while (frontSize > 0) {
+    s.frontSizes.push_back(frontSize);
+    const std::uint64_t n = frontSize;
+    if (3 * n > 0xffffffffu) throw std::length_error("OpenCL mesh pipeline: the traversal front exceeds 2^32 / 3");
+    start = Clock::now();
+    m_frontExpand.setArg(0, m_pairs.buffer);
+    m_frontExpand.setArg(1, m_cache.nodes());
+    m_frontExpand.setArg(2, entries);
+    m_frontExpand.setArg(3, m_front.buffer);
+    m_frontExpand.setArg(4, cl_uint(n));
+    m_frontExpand.setArg(5, cl_uint(0));
+    m_frontExpand.setArg(6, m_counts.ensure(ctx, 3 * n * sizeof(cl_uint)));
+    m_frontExpand.setArg(7, m_next.ensure(ctx, sizeof(GpucolFrontEntry)));
+    m_frontExpand.setArg(8, m_keys.ensure(ctx, sizeof(cl_ulong)));
+    m_frontExpand.setArg(9, cl_uint(0));
+    m_frontExpand.setArg(10, cl_uint(0));
+    m_frontExpand.setArg(11, cl_uint(bitsA));
+    m_frontExpand.setArg(12, cl_uint(bitsB));
+    launch(m_frontExpand, n);
+    queue.finish();
+    s.traversalMs += millisecondsSince(start);
+
+    start = Clock::now();
+    const std::uint32_t total = m_scan.exclusiveScan(m_counts.buffer, 3 * n);
+    cl_uint split[2] = {0, 0};
+    queue.enqueueReadBuffer(m_counts.buffer, CL_FALSE, n * sizeof(cl_uint), sizeof(cl_uint), &split[0]);
+    queue.enqueueReadBuffer(m_counts.buffer, CL_TRUE, 2 * n * sizeof(cl_uint), sizeof(cl_uint), &split[1]);
+    s.scanMs += millisecondsSince(start);
+    const std::uint32_t children = split[0];
+    const std::uint32_t newCandidates = split[1] - split[0];
+    s.nodeTests += total - split[1];
+
+    start = Clock::now();
+    if (candidateCount + newCandidates > 0xffffffffu) {
+      throw std::length_error("OpenCL mesh pipeline: more than 2^32 - 1 candidate pairs in one batch");
+    }
+    if (newCandidates > 0 && (candidateCount + newCandidates) * sizeof(cl_ulong) > keyCapacity) {
+      // Grown with a device-side copy of the keys so far; nothing is lost.
+      const std::size_t wanted = std::max<std::size_t>(2 * keyCapacity, (candidateCount + newCandidates) * 8);
+      const cl::Buffer old = m_keys.buffer;
+      const std::size_t oldBytes = m_keys.bytes;
+      m_keys.buffer = cl::Buffer();
+      m_keys.bytes = 0;
+      m_keys.ensure(ctx, wanted);
+      if (candidateCount > 0 && oldBytes > 0) queue.enqueueCopyBuffer(old, m_keys.buffer, 0, 0, candidateCount * 8);
+      keyCapacity = m_keys.bytes;
+    }
+    m_frontExpand.setArg(5, cl_uint(1));
+    m_frontExpand.setArg(7, m_next.ensure(ctx, std::size_t(children) * sizeof(GpucolFrontEntry)));
+    m_frontExpand.setArg(8, m_keys.ensure(ctx, std::max<std::size_t>(keyCapacity, 8)));
+    m_frontExpand.setArg(9, cl_uint(candidateCount));
+    m_frontExpand.setArg(10, cl_uint(children));
+    launch(m_frontExpand, n);
+    queue.finish();
+    s.traversalMs += millisecondsSince(start);
+    candidateCount += newCandidates;
+    std::swap(m_front, m_next);
+    frontSize = children;
+  }
+  s.candidates = candidateCount;
+  if (candidateCount == 0) return;
+
+  // Deterministic order: by pair, then (triangleA, triangleB), which is the CPU's order within each pair.
+  start = Clock::now();
+  m_hostKeys.resize(candidateCount);
+  if (options.deviceSort) {
+    m_sort.sort(m_keys.buffer, m_values.ensure(ctx, candidateCount * sizeof(cl_uint)), candidateCount, keyBits);
+    queue.finish();
+  } else {
+    queue.enqueueReadBuffer(m_keys.buffer, CL_TRUE, 0, candidateCount * 8, m_hostKeys.data());
+    std::sort(m_hostKeys.begin(), m_hostKeys.end());
+    queue.enqueueWriteBuffer(m_keys.buffer, CL_TRUE, 0, candidateCount * 8, m_hostKeys.data());
+  }
+  s.sortMs = millisecondsSince(start);
+
+  // Near phase: every candidate in one kernel, then the intersecting ones compacted in candidate order.
+  start = Clock::now();
+  cl::Kernel& nearTest = m_nearTest[options.nearPrefilter ? 1 : 0];
+  nearTest.setArg(0, m_pairs.buffer);
+  nearTest.setArg(1, m_cache.vertices());
+  nearTest.setArg(2, m_cache.indices());
+  nearTest.setArg(3, m_keys.buffer);
+  nearTest.setArg(4, cl_uint(candidateCount));
+  nearTest.setArg(5, cl_uint(bitsA));
+  nearTest.setArg(6, cl_uint(bitsB));
+  nearTest.setArg(7, m_hits.ensure(ctx, candidateCount * sizeof(GpucolNearHit)));
+  launch(nearTest, candidateCount);
+  queue.finish();
+  s.nearMs = millisecondsSince(start);
+
+  start = Clock::now();
+  m_nearFlags.setArg(0, m_hits.buffer);
+  m_nearFlags.setArg(1, cl_uint(candidateCount));
+  m_nearFlags.setArg(2, m_counts.ensure(ctx, candidateCount * sizeof(cl_uint)));
+  launch(m_nearFlags, candidateCount);
+  const std::uint32_t hitCount = m_scan.exclusiveScan(m_counts.buffer, candidateCount);
+  if (hitCount > 0) {
+    m_nearCompact.setArg(0, m_hits.buffer);
+    m_nearCompact.setArg(1, cl_uint(candidateCount));
+    m_nearCompact.setArg(2, m_counts.buffer);
+    m_nearCompact.setArg(3, m_compacted.ensure(ctx, std::size_t(hitCount) * sizeof(GpucolNearHit)));
+    launch(m_nearCompact, candidateCount);
+  }
+  queue.finish();
+  s.compactionMs = millisecondsSince(start);
+  s.hits = hitCount;
+
+  start = Clock::now();
+  if (options.deviceSort) {
+    queue.enqueueReadBuffer(m_keys.buffer, CL_FALSE, 0, candidateCount * 8, m_hostKeys.data());
+  }
+  m_hostHits.resize(hitCount);
+  if (hitCount > 0) {
+    queue.enqueueReadBuffer(m_compacted.buffer, CL_FALSE, 0, std::size_t(hitCount) * sizeof(GpucolNearHit),
+                            m_hostHits.data());
+  }
+  queue.finish();
+  s.readbackMs = millisecondsSince(start);
+
+  // Split by pair: keys are sorted by pair first, so each pair's candidates are one run.
+  const std::uint64_t maskA = (std::uint64_t(1) << bitsA) - 1, maskB = (std::uint64_t(1) << bitsB) - 1;
+  std::vector<std::uint64_t> pairStart(pairs.size() + 1, 0);
+  for (std::uint64_t key : m_hostKeys) ++pairStart[std::size_t(key >> (bitsA + bitsB)) + 1];
+  for (std::size_t i = 0; i < pairs.size(); ++i) {
+    pairStart[i + 1] += pairStart[i];
+    results[i].candidates.reserve(pairStart[i + 1] - pairStart[i]);
+  }
+  for (std::uint64_t key : m_hostKeys) {
+    results[std::size_t(key >> (bitsA + bitsB))].candidates.push_back(
+        {std::uint32_t((key >> bitsB) & maskA), std::uint32_t(key & maskB)});
+  }
+  for (const GpucolNearHit& h : m_hostHits) {
+    const std::size_t pair = std::size_t(m_hostKeys[h.candidate] >> (bitsA + bitsB));
+    DeviceNearHit hit;
+    hit.candidate = std::uint32_t(h.candidate - pairStart[pair]);
+    hit.hasContact = (h.flags & GPUCOL_HIT_CONTACT) != 0;
+    if (hit.hasContact) {
+      hit.contact.point = Eigen::Vector3f(h.point[0], h.point[1], h.point[2]);
+      hit.contact.normalOnB = Eigen::Vector3f(h.normal[0], h.normal[1], h.normal[2]);
+      hit.contact.depth = h.depth;
+      hit.contact.onFaceOfB = (h.flags & GPUCOL_HIT_ON_FACE_OF_B) != 0;
+      hit.contact.sameFacing = (h.flags & GPUCOL_HIT_SAME_FACING) != 0;
+      hit.contact.deepestPoint = Eigen::Vector3f(h.deepest[0], h.deepest[1], h.deepest[2]);
+    }
+    results[pair].hits.push_back(hit);
+  }
+}
+
+struct PipelineRegistry {
+  std::mutex mutex;
+  // Never destroyed, like the contexts they use (see opencl_context.cpp).
+  std::map<std::string, OpenClMeshPipeline*> pipelines;
+  std::set<std::string> refused;
+};
+
+PipelineRegistry& pipelineRegistry() {
+  static PipelineRegistry* instance = new PipelineRegistry();
+  return *instance;
+}
+
+}  // namespace
+
+MeshBatchDevice* sharedMeshPipeline(const Config& config) {
+  OpenClContext* context = OpenClContext::tryGet(config.openclDevice);
+  if (context == nullptr) return nullptr;
+  PipelineRegistry& r = pipelineRegistry();
+  std::lock_guard<std::mutex> lock(r.mutex);
+  const std::string key = context->deviceName();
+  auto found = r.pipelines.find(key);
+  if (found != r.pipelines.end()) return found->second;
+  if (r.refused.count(key)) return nullptr;
+  const std::string extensions = translateClErrors("querying device extensions", [&] {
+    return context->device().getInfo<CL_DEVICE_EXTENSIONS>();
+  });
+  if (extensions.find("cl_khr_fp64") == std::string::npos) {
+    r.refused.insert(key);
+    std::cerr << "gpucol: the OpenCL device \"" << key
+              << "\" lacks cl_khr_fp64 (the mesh near phase is a double-precision test): mesh pairs use the CPU "
+                 "path\n";
+    return nullptr;
+  }
+  OpenClMeshPipeline* pipeline = new OpenClMeshPipeline(*context);
+  r.pipelines.emplace(key, pipeline);
+  return pipeline;
+}
+
+void registerOpenClMeshPipeline() {
+  gpucol::meshBatchDeviceFactory() = [](const Config& config) { return sharedMeshPipeline(config); };
+}
+
+namespace {
+// Installs the factory when this object file is linked in (see registerOpenClMeshPipeline()).
+const bool kRegistered = (registerOpenClMeshPipeline(), true);
+}  // namespace
+
+}  // namespace gpucol::opencl
+
+/// Anchor with a plain C name: libgpucol's consumers link with --undefined=gpucol_link_opencl_mesh_pipeline
+/// (plugin/CMakeLists.txt), which pulls this object file, and so its registration, out of a static library.
+extern "C" void gpucol_link_opencl_mesh_pipeline() { gpucol::opencl::registerOpenClMeshPipeline(); }

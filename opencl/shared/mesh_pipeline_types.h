@@ -1,0 +1,77 @@
+/* Structs of the OpenCL mesh pipeline shared by the host (opencl/host/mesh_pipeline.cpp, which checks their
+   layout with static_assert) and the kernels (opencl/kernels/mesh_middle_phase.cl, mesh_near_phase.cl).
+   Plain C that compiles as C++ and as OpenCL C; 4-byte fields only, so both sides lay them out alike. */
+#ifndef GPUCOL_OPENCL_SHARED_MESH_PIPELINE_TYPES_H
+#define GPUCOL_OPENCL_SHARED_MESH_PIPELINE_TYPES_H
+
+#ifdef __OPENCL_VERSION__
+typedef uint gpucol_mesh_uint;
+#else
+#include <stdint.h>
+typedef uint32_t gpucol_mesh_uint;
+#endif
+
+/* One mesh pair of a batch. Matrices are row-major. The traversal carries B's boxes into A's unscaled mesh
+   frame (linear, translation, inflation: the CPU traversal's AffineMap and carriedBoxInflation); the near
+   phase builds A's triangles in A's scaled frame (scaleA, flipA) and carries B's in (bLinear, bTranslation,
+   flipB), as plugin/src/bullet/collide_meshes.cpp does. The offsets place each mesh in the resident arenas. */
+typedef struct GpucolMeshPair {
+  float linear[9];
+  float translation[3];
+  float absLinear[9];
+  float inflation[3];
+  float bLinear[9];
+  float bTranslation[3];
+  float scaleA[3];
+  gpucol_mesh_uint nodesA; /* first node of A's tree in the node arena */
+  gpucol_mesh_uint nodesB;
+  gpucol_mesh_uint entriesA; /* first leaf entry of A's tree in the entry arena */
+  gpucol_mesh_uint entriesB;
+  gpucol_mesh_uint verticesA; /* first vertex of A's mesh in the vertex arena (3 floats each) */
+  gpucol_mesh_uint verticesB;
+  gpucol_mesh_uint trianglesA; /* first triangle of A's mesh in the index arena (3 uints each) */
+  gpucol_mesh_uint trianglesB;
+  gpucol_mesh_uint flipA; /* 1: A's scaling mirrors the mesh, swap vertices 1 and 2 */
+  gpucol_mesh_uint flipB;
+} GpucolMeshPair;
+
+/* A tree node as bvh/aabb_tree.h stores it (AabbNode): inner when count == 0 (left child next, right child
+   `first`), a leaf of one triangle `first` when count == 1, else `count` entries from `first`. */
+typedef struct GpucolTreeNode {
+  float min[3];
+  float max[3];
+  gpucol_mesh_uint first;
+  gpucol_mesh_uint count;
+} GpucolTreeNode;
+
+/* A triangle of a leaf of several, with its own box (AabbLeafEntry). */
+typedef struct GpucolLeafEntry {
+  float min[3];
+  float max[3];
+  gpucol_mesh_uint triangle;
+} GpucolLeafEntry;
+
+/* A node pair of the breadth-first front whose boxes overlap: the pair of the batch it belongs to (the
+   front is segmented over all pairs, thesis §7.3) and a node of each tree, relative to the tree's first. */
+typedef struct GpucolFrontEntry {
+  gpucol_mesh_uint pair;
+  gpucol_mesh_uint a;
+  gpucol_mesh_uint b;
+} GpucolFrontEntry;
+
+/* Bits of GpucolNearHit::flags. */
+#define GPUCOL_HIT_CONTACT 1u      /* a contact was kept for this intersecting pair */
+#define GPUCOL_HIT_ON_FACE_OF_B 2u /* TriangleContact::onFaceOfB */
+#define GPUCOL_HIT_SAME_FACING 4u  /* TriangleContact::sameFacing */
+
+/* One intersecting candidate and its contact (TriangleContact, in A's scaled frame). */
+typedef struct GpucolNearHit {
+  gpucol_mesh_uint candidate; /* index into the sorted candidate keys */
+  gpucol_mesh_uint flags;
+  float point[3];
+  float normal[3];
+  float depth;
+  float deepest[3];
+} GpucolNearHit;
+
+#endif /* GPUCOL_OPENCL_SHARED_MESH_PIPELINE_TYPES_H */

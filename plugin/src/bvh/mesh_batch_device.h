@@ -1,0 +1,109 @@
+#pragma once
+// The seam between the mesh pair query (plugin/src/bullet/collide_meshes.cpp) and a device that runs the
+// middle and near phases of a whole batch at once (opencl/host/mesh_pipeline.cpp, registered through
+// meshBatchDeviceFactory()). The plugin does not depend on the OpenCL module: it asks the factory, and takes
+// its CPU path when none is installed or it returns none. Plain types only (no Bullet types): the plugin
+// prepares each pair's frame, the device returns candidates and hits, and the plugin turns those into
+// Bullet contacts and reduces them exactly as its CPU path does.
+#include <Eigen/Core>
+
+#include <cstdint>
+#include <functional>
+#include <memory>
+#include <string>
+#include <vector>
+
+#include "bvh/aabb_tree.h"
+#include "bvh/tree_traversal.h"
+#include "gpucol/collide_meshes.h"
+#include "gpucol/config.h"
+#include "gpucol/triangle_mesh.h"
+#include "narrowphase/triangle_contact.h"
+
+namespace gpucol {
+
+/// One mesh pair as the device takes it: both meshes (their shared pointers key the resident device copies)
+/// and trees, and the pair's frame as collide_meshes.cpp computes it (PairFrame).
+struct DeviceMeshPair {
+  std::shared_ptr<const TriangleMesh> meshA;  ///< A's mesh; the device keeps a copy while it lives.
+  std::shared_ptr<const TriangleMesh> meshB;  ///< B's mesh.
+  const AabbTree* treeA = nullptr;            ///< A's tree (built from meshA); must outlive the call.
+  const AabbTree* treeB = nullptr;            ///< B's tree.
+  AffineMap treeMap;                          ///< B's mesh coordinates into A's unscaled mesh frame.
+  Eigen::Vector3f scaleA = Eigen::Vector3f::Ones();          ///< A's local scaling.
+  Eigen::Matrix3f bLinear = Eigen::Matrix3f::Identity();     ///< B's mesh coordinates into A's scaled frame...
+  Eigen::Vector3f bTranslation = Eigen::Vector3f::Zero();    ///< ... plus this.
+  bool flipA = false;  ///< A's scaling mirrors it: vertices 1 and 2 swap.
+  bool flipB = false;  ///< The same for B.
+};
+
+/// One candidate whose triangles intersect, by its index in DeviceMeshPairResult::candidates.
+struct DeviceNearHit {
+  std::uint32_t candidate = 0;  ///< Index among the pair's candidates.
+  bool hasContact = false;      ///< A contact was kept (generateContact's answer was not std::nullopt).
+  TriangleContact contact;      ///< The contact in A's scaled frame, when hasContact.
+};
+
+/// What the device found for one pair: the same lists, in the same order, as the CPU path's.
+struct DeviceMeshPairResult {
+  std::vector<TrianglePair> candidates;  ///< Sorted by (triangleA, triangleB).
+  std::vector<DeviceNearHit> hits;       ///< Intersecting candidates, in candidate order.
+};
+
+/// How the device runs a batch (the measured options of the OpenCL pipeline; defaults are the chosen ones).
+struct MeshBatchDeviceOptions {
+  /// Depth at which the breadth-first traversal starts (thesis §5.4.2 used 6): the first front is every node
+  /// pair that many expansions below the roots whose boxes (and ancestors' boxes) overlap.
+  int startDepth = 0;
+  /// Run the float plane test of triangle_plane.h before the double test (the early-out).
+  bool nearPrefilter = true;
+  /// Keep each mesh resident on the device between batches; false re-sends every mesh every batch (the
+  /// thesis's choice, §5.4.1), for the measurement.
+  bool resident = true;
+  /// Sort the candidates on the device (radix sort); false sorts them on the host.
+  bool deviceSort = true;
+};
+
+/// Timings and counters of the last batch (host clock around each stage; each stage ends with a wait).
+struct MeshBatchDeviceStats {
+  double uploadMs = 0;       ///< Mesh data (only when not yet resident) and the batch description.
+  double traversalMs = 0;    ///< Box-test kernels of the middle phase, counting and writing passes.
+  double scanMs = 0;         ///< Prefix sums of the middle phase (with their read of the totals).
+  double sortMs = 0;         ///< Candidate sort (device or host).
+  double nearMs = 0;         ///< Near-phase kernel.
+  double compactionMs = 0;   ///< Flags, scan and compaction of the near phase.
+  double readbackMs = 0;     ///< Candidates and hits back to the host.
+  std::uint64_t uploadedBytes = 0;  ///< Bytes written to the device in this batch.
+  std::uint64_t nodeTests = 0;      ///< Box tests of the middle phase, start front included.
+  std::vector<std::uint64_t> frontSizes;  ///< Overlapping node pairs per level (thesis Table 6.3).
+  std::uint64_t candidates = 0;     ///< Candidate triangle pairs of the batch.
+  std::uint64_t hits = 0;           ///< Intersecting candidates of the batch.
+};
+
+/// A device that runs the middle and near phases of a batch. Thread-safe (calls are serialised).
+class MeshBatchDevice {
+ public:
+  virtual ~MeshBatchDevice() = default;
+  /// Runs every pair of `pairs` (their root boxes are known to overlap) and fills `results` (one per pair).
+  /// Throws on a device failure; the caller falls back to its CPU path.
+  virtual void run(const std::vector<DeviceMeshPair>& pairs, const MeshBatchDeviceOptions& options,
+                   std::vector<DeviceMeshPairResult>& results, MeshBatchDeviceStats* stats = nullptr) = 0;
+  /// The device's name.
+  virtual std::string deviceName() const = 0;
+  /// True when the device is a GPU (Backend::Auto only ever picks a GPU; see collide_meshes.cpp).
+  virtual bool isGpu() const = 0;
+  /// Meshes resident on the device now (expired ones are dropped at the start of each run).
+  virtual std::size_t residentMeshes() const = 0;
+};
+
+/// Returns the shared device for `config` (one per device, living until the process ends), or nullptr when
+/// there is none; it says why once on stderr.
+using MeshBatchDeviceFactory = std::function<MeshBatchDevice*(const Config& config)>;
+
+/// The installed factory (empty until the OpenCL module installs one at static initialisation).
+inline MeshBatchDeviceFactory& meshBatchDeviceFactory() {
+  static MeshBatchDeviceFactory factory;
+  return factory;
+}
+
+}  // namespace gpucol
