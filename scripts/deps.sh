@@ -12,6 +12,7 @@ packages=(
   ocl-icd-opencl-dev opencl-headers opencl-clhpp-headers pocl-opencl-icd clinfo
   libgtest-dev libgmock-dev
   libcli11-dev
+  libstb-dev
   python3-matplotlib
 )
 

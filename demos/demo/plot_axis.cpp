@@ -28,7 +28,7 @@ std::string formatFixed(double value, int decimals) {
 }
 
 std::string formatPowerOfTen(int exponent) {
-  if (exponent >= -3 && exponent <= 4) return formatFixed(std::pow(10.0, exponent), std::max(0, -exponent));
+  if (exponent >= -3 && exponent <= 3) return formatFixed(std::pow(10.0, exponent), std::max(0, -exponent));
   return "1e" + std::to_string(exponent);
 }
 
