@@ -38,7 +38,7 @@ class Canvas {
   void polyline(const std::vector<std::pair<float, float>>& points, float thickness, Rgb colour);
 
   /// Writes `text` (ASCII; anything else shows as '?') with its box aligned at (x, y), `scale` pixels per
-  /// font unit (a digit is 7 units high). `vertical` turns it a quarter turn anticlockwise, reading bottom to
+  /// font unit (a digit is 7 units high). `turned` gives it a quarter turn anticlockwise, reading bottom to
   /// top; the alignments then apply along the turned text.
   void text(float x, float y, const std::string& text, float scale, Rgb colour,
             Align horizontal = Align::Start, Align vertical = Align::Start, bool turned = false);
