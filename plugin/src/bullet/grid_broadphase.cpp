@@ -7,6 +7,7 @@
 #include <LinearMath/btAabbUtil2.h>
 
 #include <algorithm>
+#include <cmath>
 #include <cstdio>
 #include <deque>
 #include <iostream>
@@ -16,6 +17,7 @@
 
 #include "broadphase/grid_pair_finder.h"
 #include "broadphase/pair_diff.h"
+#include "bullet/warn_once.h"
 
 namespace gpucol {
 namespace {
@@ -47,6 +49,13 @@ struct GridBroadphase::Impl {
   std::vector<std::uint32_t> freeSlots;        // reusable now
   std::vector<std::uint32_t> pendingFree;      // freed since the last search: reused only after it
   std::vector<std::uint8_t> freedSinceSearch;  // per slot: its old pairs are already gone from the cache
+  // A box with a NaN or infinite component gets no pairs, as Bullet's own updateAabbs drops an overflowing box:
+  // the finder's cell size, grid bounds and cell indices would turn NaN (or a float-to-int conversion of NaN)
+  // and spread to every proxy. Such a proxy is hidden from the finder until its box is finite again.
+  std::vector<std::uint8_t> nonFinite;  // per slot
+  std::uint32_t nonFiniteCount = 0;
+  bool nonFiniteChanged = false;           // a proxy entered or left that state: the next search is a full one
+  std::vector<std::uint8_t> finderFlags;   // flags with the non-finite proxies' active bit cleared
   std::uint32_t liveCount = 0;
   int nextUniqueId = 0;
   bool dirty = true;
@@ -59,13 +68,24 @@ struct GridBroadphase::Impl {
   std::vector<std::uint64_t> next;
   std::vector<std::uint64_t> removedKeys;  // vanished pairs of a cache with deferred removal (sorted)
 
-  ProxyArrays view() const {
+  /// The finder's view of the proxies (called once per search: it consumes nonFiniteChanged).
+  ProxyArrays view() {
     ProxyArrays v;
     v.count = std::uint32_t(flags.size());
     v.minX = minX.data(), v.minY = minY.data(), v.minZ = minZ.data();
     v.maxX = maxX.data(), v.maxY = maxY.data(), v.maxZ = maxZ.data();
     v.group = group.data(), v.mask = mask.data(), v.flags = flags.data();
     v.moved = moved.data();
+    if (nonFiniteCount > 0) {
+      finderFlags = flags;
+      for (std::size_t s = 0; s < flags.size(); ++s) {
+        if (nonFinite[s]) finderFlags[s] = std::uint8_t(finderFlags[s] & ~kProxyActive);
+      }
+      v.flags = finderFlags.data();
+    }
+    // A proxy hidden or shown again is a life change the finder's incremental path does not see in `moved`.
+    if (nonFiniteChanged) v.moved = nullptr;
+    nonFiniteChanged = false;
     return v;
   }
 
@@ -78,6 +98,27 @@ struct GridBroadphase::Impl {
   void store(std::uint32_t s, const btVector3& lo, const btVector3& hi) {
     minX[s] = lo.x(), minY[s] = lo.y(), minZ[s] = lo.z();
     maxX[s] = hi.x(), maxY[s] = hi.y(), maxZ[s] = hi.z();
+    bool finite = true;
+    for (int a = 0; a < 3; ++a) finite = finite && std::isfinite(lo[a]) && std::isfinite(hi[a]);
+    if (!finite) {
+      warnOnce("grid broadphase non-finite box",
+               "GridBroadphase: a proxy's AABB has a NaN or infinite component (min " + toString(lo) + ", max " +
+                   toString(hi) + "); such a proxy gets no pairs until its AABB is finite (said once)");
+    }
+    setNonFinite(s, !finite);
+  }
+
+  void setNonFinite(std::uint32_t s, bool value) {
+    if (bool(nonFinite[s]) == value) return;
+    nonFinite[s] = value;
+    nonFiniteCount += value ? 1 : -1;
+    nonFiniteChanged = true;
+  }
+
+  static std::string toString(const btVector3& v) {
+    char text[96];
+    std::snprintf(text, sizeof text, "(%g, %g, %g)", double(v.x()), double(v.y()), double(v.z()));
+    return text;
   }
 
   PairFinder& chooseFinder(GridBroadphaseStats& st) {
@@ -147,6 +188,7 @@ btBroadphaseProxy* GridBroadphase::createProxy(const btVector3& aabbMin, const b
     for (auto* v : {&d.minX, &d.minY, &d.minZ, &d.maxX, &d.maxY, &d.maxZ}) v->push_back(0.0f);
     d.group.push_back(0), d.mask.push_back(0), d.flags.push_back(0), d.freedSinceSearch.push_back(0);
     d.moved.push_back(0);
+    d.nonFinite.push_back(0);
   }
   GridProxy& p = d.proxies[slot];
   static_cast<btBroadphaseProxy&>(p) =
@@ -175,6 +217,7 @@ void GridBroadphase::destroyProxy(btBroadphaseProxy* proxy, btDispatcher* dispat
   // `accepted` are dropped at the next search, and the slot is reused only after that search.
   d.pairCache->removeOverlappingPairsContainingProxy(proxy, dispatcher);
   d.flags[slot] = 0;
+  d.setNonFinite(slot, false);
   d.freedSinceSearch[slot] = 1;
   d.pendingFree.push_back(slot);
   --d.liveCount;
@@ -210,7 +253,7 @@ void GridBroadphase::rayTest(const btVector3& rayFrom, const btVector3& /*rayTo*
   // box (bounds = [min - aabbMax, max - aabbMin]) with btRayAabb2 from t = 0; so do we, in slot order.
   const btScalar lambdaMax = rayCallback.m_lambda_max;
   for (std::uint32_t s = 0; s < d.flags.size(); ++s) {
-    if (!(d.flags[s] & kProxyActive)) continue;
+    if (!(d.flags[s] & kProxyActive) || d.nonFinite[s]) continue;
     GridProxy& p = d.proxies[s];
     const btVector3 bounds[2] = {p.m_aabbMin - aabbMax, p.m_aabbMax - aabbMin};
     btScalar tmin = 0;
@@ -224,7 +267,7 @@ void GridBroadphase::aabbTest(const btVector3& aabbMin, const btVector3& aabbMax
                               btBroadphaseAabbCallback& callback) {
   Impl& d = *m_impl;
   for (std::uint32_t s = 0; s < d.flags.size(); ++s) {
-    if (!(d.flags[s] & kProxyActive)) continue;
+    if (!(d.flags[s] & kProxyActive) || d.nonFinite[s]) continue;
     // Touching counts, as in btDbvtAabbMm's Intersect.
     if (d.minX[s] <= aabbMax.x() && d.maxX[s] >= aabbMin.x() && d.minY[s] <= aabbMax.y() &&
         d.maxY[s] >= aabbMin.y() && d.minZ[s] <= aabbMax.z() && d.maxZ[s] >= aabbMin.z())
@@ -341,7 +384,7 @@ void GridBroadphase::getBroadphaseAabb(btVector3& aabbMin, btVector3& aabbMax) c
   const Impl& d = *m_impl;
   bool any = false;
   for (std::uint32_t s = 0; s < d.flags.size(); ++s) {
-    if (!(d.flags[s] & kProxyActive)) continue;
+    if (!(d.flags[s] & kProxyActive) || d.nonFinite[s]) continue;
     const btVector3 lo(d.minX[s], d.minY[s], d.minZ[s]), hi(d.maxX[s], d.maxY[s], d.maxZ[s]);
     if (!any) {
       aabbMin = lo, aabbMax = hi, any = true;
@@ -363,6 +406,8 @@ void GridBroadphase::resetPool(btDispatcher* /*dispatcher*/) {
   std::vector<std::uint8_t>().swap(d.flags);
   std::vector<std::uint8_t>().swap(d.freedSinceSearch);
   std::vector<std::uint8_t>().swap(d.moved);
+  std::vector<std::uint8_t>().swap(d.nonFinite);
+  d.nonFiniteCount = 0;
   d.lastFinder = nullptr;
   d.freeSlots.clear(), d.pendingFree.clear(), d.accepted.clear();
   d.nextUniqueId = 0;
