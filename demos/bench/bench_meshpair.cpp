@@ -14,6 +14,7 @@
 
 #include "bench_commands.h"
 #include "bench_stats.h"
+#include "bullet/mesh_device_backend.h"
 #include "scenes/gimpact_peer.h"
 #include "scenes/procedural_meshes.h"
 
@@ -27,6 +28,7 @@ struct MeshPairOptions {
   bool builtin = false;
   int runs = 5;
   std::string csvPath;
+  std::string backend = "cpu";
 };
 
 struct Row {
@@ -151,7 +153,176 @@ void writeCsv(const std::vector<Row>& rows, const std::string& path) {
   }
 }
 
+// --backend opencl: the thesis's Tables 6.2-6.5 and Figs. 6.2-6.3 on the OpenCL device beside the CPU path,
+// same scene, same run. Each OpenCL variant gets one warm-up call first (program builds and the resident upload
+// are one-time costs, reported apart as the first call).
+struct OpenClRow {
+  std::string name;
+  std::size_t triangles = 0;
+  double cpuMiddleMs = 0, cpuNearMs = 0, cpuTotalMs = 0;
+  double firstCallMs = 0;  // the first OpenCL call: mesh upload (and program builds on the very first mesh)
+  MeshBatchDeviceStats stages;  // stage medians of the default options
+  double clTotalMs = 0;
+  double startDepthMs[3] = {0, 0, 0};  // d0 = 0, 3, 6
+  double noEarlyOutMs = 0, resendMs = 0, hostSortMs = 0;
+  double resendUploadMs = 0;
+  std::size_t candidates = 0, intersecting = 0;
+  bool sameAsCpu = false;
+};
+
+constexpr int kStartDepths[3] = {0, 3, 6};
+
+// Median end-to-end time of collideMeshes on OpenCL with `device` options, and the stage medians.
+double timeOpenCl(const MeshShape& shape, const scenes::PairPose& pose, const MeshBatchDeviceOptions& device,
+                  int runs, MeshBatchDeviceStats* stages, MeshPairResult* result) {
+  Config config;
+  config.meshBackend = Backend::OpenCL;
+  detail::setMeshDeviceOptions(device);
+  MeshPairResult r = collideMeshes(shape, pose.a, shape, pose.b, config);  // warm-up
+  std::vector<double> total, upload, traversal, scan, sort, nearPhase, compaction, readback;
+  for (int i = 0; i < runs; ++i) {
+    total.push_back(millisecondsOf([&] { r = collideMeshes(shape, pose.a, shape, pose.b, config); }));
+    const MeshBatchDeviceStats s = detail::lastMeshDeviceStats();
+    upload.push_back(s.uploadMs);
+    traversal.push_back(s.traversalMs);
+    scan.push_back(s.scanMs);
+    sort.push_back(s.sortMs);
+    nearPhase.push_back(s.nearMs);
+    compaction.push_back(s.compactionMs);
+    readback.push_back(s.readbackMs);
+    if (stages && i == 0) *stages = s;
+  }
+  if (stages) {
+    stages->uploadMs = median(upload);
+    stages->traversalMs = median(traversal);
+    stages->scanMs = median(scan);
+    stages->sortMs = median(sort);
+    stages->nearMs = median(nearPhase);
+    stages->compactionMs = median(compaction);
+    stages->readbackMs = median(readback);
+  }
+  if (result) *result = std::move(r);
+  detail::setMeshDeviceOptions(MeshBatchDeviceOptions());
+  return median(total);
+}
+
+OpenClRow measureOpenCl(const std::string& name, const TriangleMesh& loaded, int runs) {
+  const auto mesh = std::make_shared<const TriangleMesh>(scenes::centredOnVertexCentroid(loaded));
+  const scenes::PairPose pose = scenes::thesisPose(*mesh);
+  const MeshShape shape(mesh);
+  OpenClRow row;
+  row.name = name;
+  row.triangles = mesh->triangleCount();
+  Config cpu;
+  cpu.meshBackend = Backend::Cpu;
+  MeshPairResult cpuResult = collideMeshes(shape, pose.a, shape, pose.b, cpu);
+  std::vector<double> total, middle, nearPhase;
+  for (int i = 0; i < runs; ++i) {
+    total.push_back(millisecondsOf([&] { cpuResult = collideMeshes(shape, pose.a, shape, pose.b, cpu); }));
+    middle.push_back(cpuResult.stats.middlePhaseMs);
+    nearPhase.push_back(cpuResult.stats.nearPhaseMs + cpuResult.stats.reductionMs);
+  }
+  row.cpuTotalMs = median(total);
+  row.cpuMiddleMs = median(middle);
+  row.cpuNearMs = median(nearPhase);
+
+  Config cl;
+  cl.meshBackend = Backend::OpenCL;
+  row.firstCallMs = millisecondsOf([&] { collideMeshes(shape, pose.a, shape, pose.b, cl); });
+  MeshPairResult clResult;
+  row.clTotalMs = timeOpenCl(shape, pose, MeshBatchDeviceOptions(), runs, &row.stages, &clResult);
+  row.sameAsCpu = clResult.stats.backendUsed == Backend::OpenCL &&
+                  clResult.candidatePairs == cpuResult.candidatePairs &&
+                  clResult.intersectingPairs == cpuResult.intersectingPairs &&
+                  clResult.contacts.size() == cpuResult.contacts.size();
+  row.candidates = cpuResult.candidatePairs.size();
+  row.intersecting = cpuResult.intersectingPairs.size();
+  for (int k = 0; k < 3; ++k) {
+    MeshBatchDeviceOptions o;
+    o.startDepth = kStartDepths[k];
+    row.startDepthMs[k] = timeOpenCl(shape, pose, o, runs, nullptr, nullptr);
+  }
+  MeshBatchDeviceOptions o;
+  o.nearPrefilter = false;
+  row.noEarlyOutMs = timeOpenCl(shape, pose, o, runs, nullptr, nullptr);
+  o = MeshBatchDeviceOptions();
+  o.deviceSort = false;
+  row.hostSortMs = timeOpenCl(shape, pose, o, runs, nullptr, nullptr);
+  o = MeshBatchDeviceOptions();
+  o.resident = false;
+  MeshBatchDeviceStats resend;
+  row.resendMs = timeOpenCl(shape, pose, o, runs, &resend, nullptr);
+  row.resendUploadMs = resend.uploadMs;
+  return row;
+}
+
+void printOpenClTables(const std::vector<OpenClRow>& rows, const std::string& device, int runs, std::ostream& out) {
+  out << std::fixed << std::setprecision(2);
+  out << "\nOpenCL device: " << device << "; thesis scene, median of " << runs << " runs\n";
+  out << "\nCPU vs OpenCL, end to end (thesis Tables 6.2, 6.5); OpenCL middle = upload + traversal + scan + sort, "
+         "near = near kernel + compaction + readback\n";
+  out << "| mesh | triangles | CPU middle ms | CPU near+reduction ms | CPU total ms | OpenCL middle ms | OpenCL near "
+         "ms | OpenCL total ms | OpenCL / CPU | first OpenCL call ms | same results |\n";
+  out << "|---|---:|---:|---:|---:|---:|---:|---:|---:|---:|---|\n";
+  for (const OpenClRow& r : rows) {
+    const MeshBatchDeviceStats& s = r.stages;
+    out << "| " << r.name << " | " << r.triangles << " | " << r.cpuMiddleMs << " | " << r.cpuNearMs << " | "
+        << r.cpuTotalMs << " | " << s.uploadMs + s.traversalMs + s.scanMs + s.sortMs << " | "
+        << s.nearMs + s.compactionMs + s.readbackMs << " | " << r.clTotalMs << " | " << std::setprecision(1)
+        << r.clTotalMs / r.cpuTotalMs << "x" << std::setprecision(2) << " | " << r.firstCallMs << " | "
+        << (r.sameAsCpu ? "yes" : "NO") << " |\n";
+  }
+  out << "\nOpenCL time split (thesis Figs. 6.2-6.3), ms\n";
+  out << "| mesh | upload (transforms) | traversal | prefix sum | sort | near kernel | compaction | readback | node "
+         "tests | candidates | intersecting |\n";
+  out << "|---|---:|---:|---:|---:|---:|---:|---:|---:|---:|---:|\n";
+  for (const OpenClRow& r : rows) {
+    const MeshBatchDeviceStats& s = r.stages;
+    out << "| " << r.name << " | " << s.uploadMs << " | " << s.traversalMs << " | " << s.scanMs << " | " << s.sortMs
+        << " | " << s.nearMs << " | " << s.compactionMs << " | " << s.readbackMs << " | " << s.nodeTests << " | "
+        << r.candidates << " | " << r.intersecting << " |\n";
+  }
+  out << "\nOverlapping node pairs per level of the breadth-first traversal (thesis Table 6.3; level 0 = roots)\n";
+  for (const OpenClRow& r : rows) {
+    out << "- " << r.name << ":";
+    for (std::uint64_t f : r.stages.frontSizes) out << " " << f;
+    out << "\n";
+  }
+  out << "\nOpenCL variants, end-to-end ms: start depth d0 (thesis used 6), without the early-out test, host sort, "
+         "and meshes re-sent every call (thesis §5.4.1) instead of resident\n";
+  out << "| mesh | d0=0 | d0=3 | d0=6 | no early-out | host sort | re-sent (its upload) | resident |\n";
+  out << "|---|---:|---:|---:|---:|---:|---:|---:|\n";
+  for (const OpenClRow& r : rows) {
+    out << "| " << r.name << " | " << r.startDepthMs[0] << " | " << r.startDepthMs[1] << " | " << r.startDepthMs[2]
+        << " | " << r.noEarlyOutMs << " | " << r.hostSortMs << " | " << r.resendMs << " (" << r.resendUploadMs
+        << ") | " << r.clTotalMs << " |\n";
+  }
+}
+
+void runOpenCl(const MeshPairOptions& options) {
+  Config cl;
+  cl.meshBackend = Backend::OpenCL;
+  MeshBatchDevice* device = meshBatchDeviceFactory() ? meshBatchDeviceFactory()(cl) : nullptr;
+  if (device == nullptr) throw std::runtime_error("--backend opencl: no usable OpenCL device");
+  std::vector<OpenClRow> rows;
+  if (options.builtin) {
+    rows.push_back(measureOpenCl("icosphere (5 levels)", scenes::makeIcosphere(1.0f, 5), options.runs));
+    rows.push_back(measureOpenCl("torus 256x64", scenes::makeTorus(1.0f, 0.3f, 256, 64), options.runs));
+  } else {
+    for (const std::string& file : options.meshes) {
+      const std::string path = options.meshDirectory + "/" + file;
+      std::cout << "measuring " << path << " ..." << std::endl;
+      rows.push_back(measureOpenCl(file, loadMesh(path), options.runs));
+    }
+  }
+  printOpenClTables(rows, device->deviceName(), options.runs, std::cout);
+}
+
 void run(const MeshPairOptions& options) {
+  if (options.backend == "opencl") {
+    runOpenCl(options);
+    return;
+  }
   std::vector<Row> rows;
   if (options.builtin) {
     std::cout << "built-in scene: procedural meshes, no files needed\n";
@@ -177,7 +348,10 @@ const CommandRegistration kRegistration([](CLI::App& app) {
   command->add_flag("--builtin", options->builtin, "use built-in procedural meshes instead of files");
   command->add_option("--runs", options->runs, "runs per measurement; the median is reported")
       ->check(CLI::PositiveNumber);
-  command->add_option("--csv", options->csvPath, "also write the rows to this CSV file");
+  command->add_option("--csv", options->csvPath, "also write the rows to this CSV file (cpu backend)");
+  command->add_option("--backend", options->backend,
+                      "cpu: gpucol beside GImpact; opencl: the OpenCL pipeline beside the CPU path, stage by stage")
+      ->check(CLI::IsMember({"cpu", "opencl"}));
   command->callback([options] { run(*options); });
 });
 
