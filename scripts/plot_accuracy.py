@@ -17,7 +17,7 @@ import matplotlib.pyplot as plt  # noqa: E402
 ERRORS = [
     ("missed_pairs", "missed intersecting pairs"),
     ("false_pairs", "false intersecting pairs"),
-    ("depth_error_m", "depth error (m)"),
+    ("depth_error_m", "deepest depth - true penetration (m)"),
     ("normal_error_deg", "normal error (degrees)"),
     ("broadphase_missed", "broad phase missed pairs"),
     ("broadphase_extra", "broad phase extra pairs"),
@@ -76,7 +76,7 @@ def main(path, folder):
             ax.set_xlabel(TIME_LABELS.get(study, "ms per query"))
             ax.set_ylabel(label)
             values = [number(r[key]) for r in mine if r[key] != ""]
-            positive = [v for v in values if v > 0]
+            positive = [abs(v) for v in values if v != 0]
             if positive and max(positive) / max(min(positive), 1e-300) > 100:
                 ax.set_yscale("symlog", linthresh=min(positive))
             ax.grid(True, alpha=0.3)

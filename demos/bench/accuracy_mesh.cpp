@@ -81,7 +81,7 @@ AccuracyRow measureAnalytic(const AnalyticPair& pair, const Config& config, int 
   row.timeMs = median(samples);
   row.contacts = double(result.reducedContacts.size());
   if (result.reducedContacts.empty()) {
-    row.depthError = pair.penetration;  // Nothing found: the whole penetration is missed.
+    row.depthError = -pair.penetration;  // Nothing found: the whole penetration is missed.
     return row;
   }
   // The deepest contact is what the solver resolves first; the depth-weighted sum of normals is the direction
@@ -92,7 +92,9 @@ AccuracyRow measureAnalytic(const AnalyticPair& pair, const Config& config, int 
     deepest = std::max(deepest, -double(c.depth));
     push += c.normalWorldOnB * std::max(-c.depth, btScalar(1e-9));
   }
-  row.depthError = std::fabs(deepest - pair.penetration);
+  // Signed: the §5.3.4 depth of a triangle pair is local to the two triangles, so it cannot exceed what the
+  // triangles' own extent allows; with triangles smaller than the overlap it reports less than the bodies'.
+  row.depthError = deepest - pair.penetration;
   const double cosine = std::clamp(double(push.normalized().dot(pair.normal)), -1.0, 1.0);
   row.normalErrorDeg = std::acos(cosine) * 180.0 / kPi;
   return row;

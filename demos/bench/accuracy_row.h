@@ -20,7 +20,7 @@ struct AccuracyRow {
   double timeMs = kNotMeasured;  ///< Median time of the measured operation (the study says which).
   double missedPairs = kNotMeasured;    ///< Intersecting triangle pairs the reference finds and gpucol does not.
   double falsePairs = kNotMeasured;     ///< Pairs gpucol reports intersecting that the reference does not.
-  double depthError = kNotMeasured;     ///< |deepest contact depth - analytic penetration| (metres).
+  double depthError = kNotMeasured;     ///< Deepest contact's |depth| minus the analytic penetration (metres).
   double normalErrorDeg = kNotMeasured; ///< Angle between the contacts' resultant push and the analytic normal.
   double contacts = kNotMeasured;       ///< Contacts kept (after reduction).
   double broadphaseMissed = kNotMeasured;  ///< Overlapping proxy pairs the broad phase did not report.
