@@ -39,7 +39,8 @@ AccuracyRow runStack(const Config& config, int stepsPerSecond, bool quick) {
 void add(std::vector<AccuracyRow>& rows, AccuracyRow row, const std::string& study, const std::string& setting,
          bool isDefault) {
   row.study = study;
-  row.setting = setting;
+  // The top box more than half a box lower: the stack fell over, which the plot should say next to the point.
+  row.setting = row.heightDrift > 0.5 ? setting + " (fell)" : setting;
   row.isDefault = isDefault;
   printAccuracyRow(row);
   rows.push_back(std::move(row));
