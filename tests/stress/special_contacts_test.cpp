@@ -391,3 +391,26 @@ TEST(StressContacts, ArmadilloSliversAgainstTheBruteForce) {
 
 }  // namespace
 }  // namespace gpucol::test
+
+namespace gpucol::test {
+namespace {
+
+// Found by tests/fuzz/triangle_fuzzer: a needle 1e-44 wide (its right angle at v0, so not degenerate by the
+// angle test) lying in the other triangle's plane. Rounding put both ends of its short edge on a line of the
+// other triangle while the crossing test still saw them straddle it, and the coplanar overlap divided 0 by 0:
+// the contact point was NaN. Every contact must be finite, and the pair still touches.
+TEST(StressContacts, NeedleInTheOtherPlaneGivesAFiniteContact) {
+  const Eigen::Vector3f a[3] = {{4.20389539e-45f, 1.12103877e-44f, 0}, {0, 0, 1}, {0, 0, 0}};
+  const Eigen::Vector3f b[3] = {
+      {1, 0, 0.5f}, {0.5f, 0, 2.3509887e-38f}, {-6.52687105e-24f, 1.0354888e-38f, 0}};
+  EXPECT_TRUE(trianglesIntersect(a[0], a[1], a[2], b[0], b[1], b[2]));
+  const std::optional<TriangleContact> contact = generateContact(a, b);
+  ASSERT_TRUE(contact.has_value());
+  EXPECT_TRUE(contact->point.allFinite());
+  EXPECT_TRUE(contact->deepestPoint.allFinite());
+  EXPECT_TRUE(contact->normalOnB.allFinite());
+  EXPECT_EQ(contact->depth, 0.0f);
+}
+
+}  // namespace
+}  // namespace gpucol::test

@@ -53,9 +53,13 @@ bool coplanarTrianglesOverlap(const Eigen::Vector3d* const a[3], const Eigen::Ve
       if (!straddles(o1, o2) || (o1 == 0.0 && o2 == 0.0)) continue;
       const double o3 = orient2d(bx[j], by[j], bx[j1], by[j1], ax[i], ay[i]);
       const double o4 = orient2d(bx[j], by[j], bx[j1], by[j1], ax[i1], ay[i1]);
-      if (!straddles(o3, o4)) continue;
+      // o3 == o4 (both zero, since they straddle) says that a's edge lies on b's line. Exact input reaches it
+      // only for collinear edges, but rounding does too: an edge shorter than about 1e-16 of the other
+      // triangle's size has both ends "on" b's line while o1, o2 still straddle (found by the triangle fuzzer:
+      // a needle 1e-44 wide gave 0 / 0 = NaN as the contact point). Either way the endpoints that matter are
+      // found by the containment tests below, as for collinear edges.
+      if (!straddles(o3, o4) || o3 == o4) continue;
       if (!wantPoint) return true;
-      // o3 - o4 != 0 here: o3 == o4 would need both zero (they straddle), i.e. collinear edges.
       const double t = o3 / (o3 - o4);
       corners.add(*a[i] + (*a[i1] - *a[i]) * t);
     }
