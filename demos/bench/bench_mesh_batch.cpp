@@ -1,14 +1,14 @@
 // gpucol-bench meshbatch: many mesh pairs in one collideMeshesBatch call against the same pairs one call at a
-// time, on the CPU and on OpenCL (thesis §7.3: the whole batch of a step in one traversal). The pairs are copies
-// of the thesis scene, each with its own small random turn and shift, so no two pairs are the same.
+// time, on the CPU and on OpenCL (thesis §7.3: the whole batch of a step in one traversal). The pairs are
+// copies of the thesis scene, each with its own small random turn and shift, so no two pairs are the same.
+#include <gpucol/gpucol.h>
+
 #include <iomanip>
 #include <iostream>
 #include <memory>
 #include <random>
 #include <string>
 #include <vector>
-
-#include <gpucol/gpucol.h>
 
 #include "bench_commands.h"
 #include "bench_stats.h"
@@ -75,9 +75,11 @@ void run(const MeshBatchOptions& options) {
     queries.push_back(MeshPairQuery{&shape, pose.a, &shape, b});
   }
   std::cout << std::fixed << std::setprecision(2);
-  std::cout << options.pairs << " pairs of " << options.mesh << " (thesis scene, each turned and shifted a little), "
+  std::cout << options.pairs << " pairs of " << options.mesh
+            << " (thesis scene, each turned and shifted a little), "
             << "median of " << options.runs << " runs\n";
-  std::cout << "| backend | one batch ms | " << options.pairs << " single calls ms | batch speed-up | contacts | "
+  std::cout << "| backend | one batch ms | " << options.pairs
+            << " single calls ms | batch speed-up | contacts | "
             << "batch == single calls |\n|---|---:|---:|---:|---:|---|\n";
   for (Backend backend : {Backend::Cpu, Backend::OpenCL}) {
     Config config;
@@ -87,24 +89,25 @@ void run(const MeshBatchOptions& options) {
       continue;
     }
     const Timing t = measure(queries, config, options.runs);
-    std::cout << "| " << (backend == Backend::Cpu ? "CPU" : "OpenCL") << " | " << t.batchMs << " | " << t.singleMs
-              << " | " << std::setprecision(1) << t.singleMs / t.batchMs << "x" << std::setprecision(2) << " | "
-              << t.contacts << " | " << (t.same ? "yes" : "NO") << " |\n";
+    std::cout << "| " << (backend == Backend::Cpu ? "CPU" : "OpenCL") << " | " << t.batchMs << " | "
+              << t.singleMs << " | " << std::setprecision(1) << t.singleMs / t.batchMs << "x"
+              << std::setprecision(2) << " | " << t.contacts << " | " << (t.same ? "yes" : "NO") << " |\n";
     if (backend == Backend::OpenCL) {
       collideMeshesBatch(queries, config);
       const MeshBatchDeviceStats s = detail::lastMeshDeviceStats();
-      std::cout << "  OpenCL batch stages, ms (one run): upload " << s.uploadMs << ", traversal " << s.traversalMs
-                << ", prefix sum " << s.scanMs << ", sort " << s.sortMs << ", near " << s.nearMs << ", compaction "
-                << s.compactionMs << ", readback " << s.readbackMs << "; " << s.frontSizes.size() << " levels, "
-                << s.candidates << " candidates, " << s.hits << " intersecting\n";
+      std::cout << "  OpenCL batch stages, ms (one run): upload " << s.uploadMs << ", traversal "
+                << s.traversalMs << ", prefix sum " << s.scanMs << ", sort " << s.sortMs << ", near "
+                << s.nearMs << ", compaction " << s.compactionMs << ", readback " << s.readbackMs << "; "
+                << s.frontSizes.size() << " levels, " << s.candidates << " candidates, " << s.hits
+                << " intersecting\n";
     }
   }
 }
 
 const CommandRegistration kRegistration([](CLI::App& app) {
   auto options = std::make_shared<MeshBatchOptions>();
-  CLI::App* command =
-      app.add_subcommand("meshbatch", "many mesh pairs as one batch against one call per pair, CPU and OpenCL");
+  CLI::App* command = app.add_subcommand(
+      "meshbatch", "many mesh pairs as one batch against one call per pair, CPU and OpenCL");
   command->add_option("--mesh-dir", options->meshDirectory, "folder of the mesh files");
   command->add_option("--mesh", options->mesh, "mesh file in --mesh-dir (default armadillo-2766.ply)");
   command->add_option("--pairs", options->pairs, "pairs in the batch")->check(CLI::PositiveNumber);

@@ -1,16 +1,17 @@
 #include "opencl/host/mesh_device_cache.h"
 
-#include "opencl/shared/mesh_pipeline_types.h"
-
 #include <algorithm>
 #include <cstddef>
 #include <limits>
 #include <stdexcept>
 #include <string>
 
+#include "opencl/shared/mesh_pipeline_types.h"
+
 namespace gpucol::opencl {
 
-static_assert(sizeof(GpucolTreeNode) == sizeof(AabbNode) && offsetof(GpucolTreeNode, max) == offsetof(AabbNode, max) &&
+static_assert(sizeof(GpucolTreeNode) == sizeof(AabbNode) &&
+                  offsetof(GpucolTreeNode, max) == offsetof(AabbNode, max) &&
                   offsetof(GpucolTreeNode, first) == offsetof(AabbNode, first) &&
                   offsetof(GpucolTreeNode, count) == offsetof(AabbNode, count),
               "GpucolTreeNode must have AabbNode's layout: the tree is uploaded as it is");
@@ -58,10 +59,9 @@ MeshSlot MeshDeviceCache::acquire(const std::shared_ptr<const TriangleMesh>& mes
   if (found == m_meshes.end()) {
     const void* data[4] = {mesh->positions().data(), mesh->indices().data(), tree.nodes().data(),
                            tree.leafEntries().data()};
-    const std::size_t bytes[4] = {mesh->positions().size() * sizeof(float),
-                                  mesh->indices().size() * sizeof(std::uint32_t),
-                                  tree.nodes().size() * sizeof(AabbNode),
-                                  tree.leafEntries().size() * sizeof(AabbLeafEntry)};
+    const std::size_t bytes[4] = {
+        mesh->positions().size() * sizeof(float), mesh->indices().size() * sizeof(std::uint32_t),
+        tree.nodes().size() * sizeof(AabbNode), tree.leafEntries().size() * sizeof(AabbLeafEntry)};
     Arena* arenas[4] = {&m_vertexArena, &m_indexArena, &m_nodeArena, &m_entryArena};
     Ranges ranges;
     for (int k = 0; k < 4; ++k) {
@@ -117,7 +117,8 @@ void MeshDeviceCache::compact() {
     }
     for (auto& entry : m_meshes) {
       Ranges& r = entry.second;
-      if (r.bytes[k] > 0) queue.enqueueCopyBuffer(arenas[k]->buffer, fresh.buffer, r.offset[k], fresh.used, r.bytes[k]);
+      if (r.bytes[k] > 0)
+        queue.enqueueCopyBuffer(arenas[k]->buffer, fresh.buffer, r.offset[k], fresh.used, r.bytes[k]);
       r.offset[k] = fresh.used;
       fresh.used += r.bytes[k];
     }

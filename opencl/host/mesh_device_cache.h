@@ -1,7 +1,5 @@
 #pragma once
 
-#include "opencl/host/opencl_context.h"
-
 #include <cstddef>
 #include <cstdint>
 #include <map>
@@ -9,6 +7,7 @@
 
 #include "bvh/aabb_tree.h"
 #include "gpucol/triangle_mesh.h"
+#include "opencl/host/opencl_context.h"
 
 namespace gpucol::opencl {
 
@@ -20,21 +19,23 @@ struct MeshSlot {
   std::uint32_t triangles = 0;  ///< First triangle in the index arena (3 uints each).
 };
 
-/// The meshes of the mesh pipeline kept on the device (vertices, triangles, tree nodes, leaf entries), uploaded
-/// once per mesh and tree shape (thesis §5.4.1 re-sent triangles every step; this keeps them resident).
+/// The meshes of the mesh pipeline kept on the device (vertices, triangles, tree nodes, leaf entries),
+/// uploaded once per mesh and tree shape (thesis §5.4.1 re-sent triangles every step; this keeps them
+/// resident).
 ///
-/// All meshes share four arenas, so that one kernel launch can reach every mesh of a batch; a mesh is found by
-/// its slot's offsets. Entries are keyed by the mesh's shared pointer through a std::weak_ptr (owner order),
-/// so a dead mesh can never be mistaken for a new one at the same address, and by the tree's leaf size. A mesh
-/// whose last owner is gone is dropped at the next acquire(): its arena ranges are given back by copying the
-/// live ranges into fresh arenas (on the device, no host transfer). Not thread-safe: the pipeline serialises.
+/// All meshes share four arenas, so that one kernel launch can reach every mesh of a batch; a mesh is found
+/// by its slot's offsets. Entries are keyed by the mesh's shared pointer through a std::weak_ptr (owner
+/// order), so a dead mesh can never be mistaken for a new one at the same address, and by the tree's leaf
+/// size. A mesh whose last owner is gone is dropped at the next acquire(): its arena ranges are given back by
+/// copying the live ranges into fresh arenas (on the device, no host transfer). Not thread-safe: the pipeline
+/// serialises.
 class MeshDeviceCache {
  public:
   /// An empty cache on `context`.
   explicit MeshDeviceCache(OpenClContext& context) : m_context(context) {}
 
-  /// Drops every mesh whose last owner is gone, then the slot of `mesh` with `tree` (built from it), uploading
-  /// them when not resident. Returns the bytes written to the device in `uploadedBytes` (added).
+  /// Drops every mesh whose last owner is gone, then the slot of `mesh` with `tree` (built from it),
+  /// uploading them when not resident. Returns the bytes written to the device in `uploadedBytes` (added).
   MeshSlot acquire(const std::shared_ptr<const TriangleMesh>& mesh, const AabbTree& tree,
                    std::uint64_t& uploadedBytes);
 

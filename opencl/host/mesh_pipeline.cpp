@@ -2,13 +2,6 @@
 // mesh_near_phase.cl.
 #include "opencl/host/mesh_pipeline.h"
 
-#include "gpucol_kernels/kernels.h"
-#include "opencl/host/mesh_device_cache.h"
-#include "opencl/host/opencl_context.h"
-#include "opencl/host/radix_sort.h"
-#include "opencl/host/scan.h"
-#include "opencl/shared/mesh_pipeline_types.h"
-
 #include <algorithm>
 #include <chrono>
 #include <cmath>
@@ -19,6 +12,13 @@
 #include <set>
 #include <stdexcept>
 #include <string>
+
+#include "gpucol_kernels/kernels.h"
+#include "opencl/host/mesh_device_cache.h"
+#include "opencl/host/opencl_context.h"
+#include "opencl/host/radix_sort.h"
+#include "opencl/host/scan.h"
+#include "opencl/shared/mesh_pipeline_types.h"
 
 namespace gpucol::opencl {
 
@@ -132,7 +132,8 @@ class OpenClMeshPipeline final : public MeshBatchDevice {
   std::vector<GpucolNearHit> m_hostHits;
 };
 
-void OpenClMeshPipeline::runBatch(const std::vector<DeviceMeshPair>& pairs, const MeshBatchDeviceOptions& options,
+void OpenClMeshPipeline::runBatch(const std::vector<DeviceMeshPair>& pairs,
+                                  const MeshBatchDeviceOptions& options,
                                   std::vector<DeviceMeshPairResult>& results, MeshBatchDeviceStats& s) {
   const cl::Context& ctx = m_context.context();
   cl::CommandQueue& queue = m_context.queue();
@@ -145,7 +146,8 @@ void OpenClMeshPipeline::runBatch(const std::vector<DeviceMeshPair>& pairs, cons
   for (std::size_t i = 0; i < pairs.size(); ++i) {
     const DeviceMeshPair& in = pairs[i];
     if (!in.meshA || !in.meshB || !in.treeA || !in.treeB) {
-      throw std::invalid_argument("OpenCL mesh pipeline: pair " + std::to_string(i) + " lacks a mesh or tree");
+      throw std::invalid_argument("OpenCL mesh pipeline: pair " + std::to_string(i) +
+                                  " lacks a mesh or tree");
     }
     const MeshSlot slotA = m_cache.acquire(in.meshA, *in.treeA, s.uploadedBytes);
     const MeshSlot slotB = m_cache.acquire(in.meshB, *in.treeB, s.uploadedBytes);
@@ -179,8 +181,8 @@ void OpenClMeshPipeline::runBatch(const std::vector<DeviceMeshPair>& pairs, cons
   const unsigned bitsB = indexBits(maxTrianglesB);
   const unsigned keyBits = indexBits(pairs.size()) + bitsA + bitsB;
   if (keyBits > 64) {
-    throw std::length_error("OpenCL mesh pipeline: pair and triangle indices need " + std::to_string(keyBits) +
-                            " bits, more than a 64-bit sort key");
+    throw std::length_error("OpenCL mesh pipeline: pair and triangle indices need " +
+                            std::to_string(keyBits) + " bits, more than a 64-bit sort key");
   }
   const std::size_t pairBytes = pairs.size() * sizeof(GpucolMeshPair);
   queue.enqueueWriteBuffer(m_pairs.ensure(ctx, pairBytes), CL_TRUE, 0, pairBytes, m_hostPairs.data());
@@ -192,8 +194,8 @@ void OpenClMeshPipeline::runBatch(const std::vector<DeviceMeshPair>& pairs, cons
   const std::uint64_t paths = std::uint64_t(1) << (2 * options.startDepth);
   const std::uint64_t startItems = paths * pairs.size();
   if (startItems > 0xffffffffu) {
-    throw std::length_error("OpenCL mesh pipeline: start depth " + std::to_string(options.startDepth) + " with " +
-                            std::to_string(pairs.size()) + " pairs exceeds 2^32 work-items");
+    throw std::length_error("OpenCL mesh pipeline: start depth " + std::to_string(options.startDepth) +
+                            " with " + std::to_string(pairs.size()) + " pairs exceeds 2^32 work-items");
   }
   start = Clock::now();
   m_frontStart.setArg(0, m_pairs.buffer);
@@ -220,13 +222,15 @@ void OpenClMeshPipeline::runBatch(const std::vector<DeviceMeshPair>& pairs, cons
   // Root tests; below the roots the start kernel repeats ancestors' tests, which are not counted.
   s.nodeTests += pairs.size();
 
-  // Level by level until the front is empty; candidates are appended as sort keys (pair, triangleA, triangleB).
+  // Level by level until the front is empty; candidates are appended as sort keys (pair, triangleA,
+  // triangleB).
   std::uint64_t candidateCount = 0;
   std::size_t keyCapacity = m_keys.bytes;
   while (frontSize > 0) {
     s.frontSizes.push_back(frontSize);
     const std::uint64_t n = frontSize;
-    if (3 * n > 0xffffffffu) throw std::length_error("OpenCL mesh pipeline: the traversal front exceeds 2^32 / 3");
+    if (3 * n > 0xffffffffu)
+      throw std::length_error("OpenCL mesh pipeline: the traversal front exceeds 2^32 / 3");
     start = Clock::now();
     m_frontExpand.setArg(0, m_pairs.buffer);
     m_frontExpand.setArg(1, m_cache.nodes());
@@ -267,7 +271,8 @@ void OpenClMeshPipeline::runBatch(const std::vector<DeviceMeshPair>& pairs, cons
       m_keys.buffer = cl::Buffer();
       m_keys.bytes = 0;
       m_keys.ensure(ctx, wanted);
-      if (candidateCount > 0 && oldBytes > 0) queue.enqueueCopyBuffer(old, m_keys.buffer, 0, 0, candidateCount * 8);
+      if (candidateCount > 0 && oldBytes > 0)
+        queue.enqueueCopyBuffer(old, m_keys.buffer, 0, 0, candidateCount * 8);
       keyCapacity = m_keys.bytes;
     }
     m_frontExpand.setArg(5, cl_uint(1));
@@ -289,7 +294,8 @@ void OpenClMeshPipeline::runBatch(const std::vector<DeviceMeshPair>& pairs, cons
   start = Clock::now();
   m_hostKeys.resize(candidateCount);
   if (options.deviceSort) {
-    m_sort.sort(m_keys.buffer, m_values.ensure(ctx, candidateCount * sizeof(cl_uint)), candidateCount, keyBits);
+    m_sort.sort(m_keys.buffer, m_values.ensure(ctx, candidateCount * sizeof(cl_uint)), candidateCount,
+                keyBits);
     queue.finish();
   } else {
     queue.enqueueReadBuffer(m_keys.buffer, CL_TRUE, 0, candidateCount * 8, m_hostKeys.data());
@@ -394,14 +400,14 @@ MeshBatchDevice* sharedMeshPipeline(const Config& config) {
   auto found = r.pipelines.find(key);
   if (found != r.pipelines.end()) return found->second;
   if (r.refused.count(key)) return nullptr;
-  const std::string extensions = translateClErrors("querying device extensions", [&] {
-    return context->device().getInfo<CL_DEVICE_EXTENSIONS>();
-  });
+  const std::string extensions = translateClErrors(
+      "querying device extensions", [&] { return context->device().getInfo<CL_DEVICE_EXTENSIONS>(); });
   if (extensions.find("cl_khr_fp64") == std::string::npos) {
     r.refused.insert(key);
-    std::cerr << "gpucol: the OpenCL device \"" << key
-              << "\" lacks cl_khr_fp64 (the mesh near phase is a double-precision test): mesh pairs use the CPU "
-                 "path\n";
+    std::cerr
+        << "gpucol: the OpenCL device \"" << key
+        << "\" lacks cl_khr_fp64 (the mesh near phase is a double-precision test): mesh pairs use the CPU "
+           "path\n";
     return nullptr;
   }
   OpenClMeshPipeline* pipeline = new OpenClMeshPipeline(*context);
@@ -422,4 +428,6 @@ const bool kRegistered = (registerOpenClMeshPipeline(), true);
 
 /// Anchor with a plain C name: libgpucol's consumers link with --undefined=gpucol_link_opencl_mesh_pipeline
 /// (plugin/CMakeLists.txt), which pulls this object file, and so its registration, out of a static library.
-extern "C" void gpucol_link_opencl_mesh_pipeline() { gpucol::opencl::registerOpenClMeshPipeline(); }
+extern "C" void gpucol_link_opencl_mesh_pipeline() {
+  gpucol::opencl::registerOpenClMeshPipeline();
+}

@@ -4,6 +4,9 @@
 // launches larger than a work-group, leaves of several triangles, scaled and mirrored shapes, every start
 // depth, with and without the early-out test, device or host sort. Candidate and intersecting pairs must be
 // identical and in the same order; contacts equal within float tolerance (and counted bit for bit).
+#include "opencl/host/mesh_pipeline.h"
+
+#include <gpucol/gpucol.h>
 #include <gtest/gtest.h>
 
 #include <cmath>
@@ -11,10 +14,7 @@
 #include <random>
 #include <vector>
 
-#include <gpucol/gpucol.h>
-
 #include "bullet/mesh_device_backend.h"
-#include "opencl/host/mesh_pipeline.h"
 #include "opencl/opencl_test_device.h"
 #include "scenes/gimpact_peer.h"
 #include "scenes/procedural_meshes.h"
@@ -93,7 +93,8 @@ Compared expectSameAsCpu(const std::vector<MeshPairQuery>& queries, float scale)
     EXPECT_EQ(e.reducedContacts.size(), g.reducedContacts.size()) << where;
     if (e.reducedContacts.size() == g.reducedContacts.size()) {
       for (std::size_t c = 0; c < e.reducedContacts.size(); ++c) {
-        expectContactNear(e.reducedContacts[c], g.reducedContacts[c], scale, where + " reduced " + std::to_string(c));
+        expectContactNear(e.reducedContacts[c], g.reducedContacts[c], scale,
+                          where + " reduced " + std::to_string(c));
       }
     }
   }
@@ -151,7 +152,8 @@ TEST(MeshPipeline, ThesisSceneAtEveryStartDepthWithAndWithoutEarlyOut) {
 
 TEST(MeshPipeline, FarFromTheOrigin) {
   GPUCOL_REQUIRE_OPENCL(context);
-  MeshShape a(sharedMesh(scenes::makeTorus(1.0f, 0.3f, 48, 16))), b(sharedMesh(scenes::makeIcosphere(0.5f, 3)));
+  MeshShape a(sharedMesh(scenes::makeTorus(1.0f, 0.3f, 48, 16))),
+      b(sharedMesh(scenes::makeIcosphere(0.5f, 3)));
   std::mt19937 rng(7);
   const btVector3 farAway(1.0e4f, -2.0e4f, 3.0e3f);
   std::vector<MeshPairQuery> queries;
@@ -183,9 +185,10 @@ TEST(MeshPipeline, RootBoxMissesNeverReachTheDeviceAndZeroCandidatePairsWork) {
   // Mixed in one batch: the miss stays on the CPU, the empty pair and a crossing pair on the device.
   btTransform crossing = identity;
   crossing.setOrigin(btVector3(1.2f, 0, 0));
-  const Compared mixed = expectSameAsCpu({query(sphere, identity, sphere, apart), query(torus, identity, small, identity),
-                                          query(torus, identity, sphere, crossing)},
-                                         2.0f);
+  const Compared mixed =
+      expectSameAsCpu({query(sphere, identity, sphere, apart), query(torus, identity, small, identity),
+                       query(torus, identity, sphere, crossing)},
+                      2.0f);
   EXPECT_EQ(mixed.onDevice, 2u);
   EXPECT_GT(mixed.intersecting, 0u);
 }
@@ -215,12 +218,15 @@ TEST(MeshPipeline, BoxesRestingAndTouchingFaceOnFace) {
 
 TEST(MeshPipeline, TwoSpheresAtKnownOverlap) {
   GPUCOL_REQUIRE_OPENCL(context);
-  MeshShape sphere3(sharedMesh(scenes::makeIcosphere(1.0f, 3))), sphere4(sharedMesh(scenes::makeIcosphere(1.0f, 4)));
+  MeshShape sphere3(sharedMesh(scenes::makeIcosphere(1.0f, 3))),
+      sphere4(sharedMesh(scenes::makeIcosphere(1.0f, 4)));
   const btVector3 axis = btVector3(1, 2, 0.5f).normalized();
   const btVector3 centreA(5, 5, 5), centreB = centreA + axis * 1.9f;
   const btTransform ta(btQuaternion(btVector3(0, 1, 1), 0.3f), centreA);
   const btTransform tb(btQuaternion(btVector3(1, 0, 1), 1.1f), centreB);
-  EXPECT_GT(expectSameAsCpu({query(sphere3, ta, sphere3, tb), query(sphere4, ta, sphere4, tb)}, 7.0f).contacts, 20u);
+  EXPECT_GT(
+      expectSameAsCpu({query(sphere3, ta, sphere3, tb), query(sphere4, ta, sphere4, tb)}, 7.0f).contacts,
+      20u);
 }
 
 TEST(MeshPipeline, ScaledAndMirroredShapes) {
@@ -272,8 +278,8 @@ TEST(MeshPipeline, MixedBatchesOfOneSevenAndAHundredPairs) {
   for (int size : {1, 7, 100}) {
     std::vector<MeshPairQuery> queries;
     for (int i = 0; i < size; ++i) {
-      queries.push_back(query(*shapes[i % 4], randomPose(rng, btVector3(0, 0, 0), 0.2f), *shapes[(i * 3 + 1) % 4],
-                              randomPose(rng, btVector3(0, 0, 0), 1.0f)));
+      queries.push_back(query(*shapes[i % 4], randomPose(rng, btVector3(0, 0, 0), 0.2f),
+                              *shapes[(i * 3 + 1) % 4], randomPose(rng, btVector3(0, 0, 0), 1.0f)));
     }
     SCOPED_TRACE("batch of " + std::to_string(size));
     const Compared seen = expectSameAsCpu(queries, 3.0f);

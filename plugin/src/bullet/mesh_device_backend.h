@@ -17,9 +17,9 @@ MeshBatchDeviceStats lastMeshDeviceStats();
 
 /// Total triangles (A's plus B's, summed over the pairs whose root boxes overlap) from which Backend::Auto
 /// sends a batch to a GPU. Not measured here (no GPU in this project's runs so far): it is the thesis's
-/// crossover, about 27K triangles per mesh (Tables 6.2, 6.5), for two meshes. A CPU OpenCL device (PoCL) never
-/// gets a batch under Auto: it was measured slower than the CPU path at every size (README, "Mesh pairs on
-/// OpenCL").
+/// crossover, about 27K triangles per mesh (Tables 6.2, 6.5), for two meshes. A CPU OpenCL device (PoCL)
+/// never gets a batch under Auto: it was measured slower than the CPU path at every size (README, "Mesh pairs
+/// on OpenCL").
 inline constexpr std::uint64_t kAutoGpuMinimumTriangles = 2 * 27000;
 
 }  // namespace gpucol::detail

@@ -6,7 +6,6 @@
 // prepares each pair's frame, the device returns candidates and hits, and the plugin turns those into
 // Bullet contacts and reduces them exactly as its CPU path does.
 #include <Eigen/Core>
-
 #include <cstdint>
 #include <functional>
 #include <memory>
@@ -25,16 +24,16 @@ namespace gpucol {
 /// One mesh pair as the device takes it: both meshes (their shared pointers key the resident device copies)
 /// and trees, and the pair's frame as collide_meshes.cpp computes it (PairFrame).
 struct DeviceMeshPair {
-  std::shared_ptr<const TriangleMesh> meshA;  ///< A's mesh; the device keeps a copy while it lives.
-  std::shared_ptr<const TriangleMesh> meshB;  ///< B's mesh.
-  const AabbTree* treeA = nullptr;            ///< A's tree (built from meshA); must outlive the call.
-  const AabbTree* treeB = nullptr;            ///< B's tree.
-  AffineMap treeMap;                          ///< B's mesh coordinates into A's unscaled mesh frame.
-  Eigen::Vector3f scaleA = Eigen::Vector3f::Ones();          ///< A's local scaling.
-  Eigen::Matrix3f bLinear = Eigen::Matrix3f::Identity();     ///< B's mesh coordinates into A's scaled frame...
-  Eigen::Vector3f bTranslation = Eigen::Vector3f::Zero();    ///< ... plus this.
-  bool flipA = false;  ///< A's scaling mirrors it: vertices 1 and 2 swap.
-  bool flipB = false;  ///< The same for B.
+  std::shared_ptr<const TriangleMesh> meshA;         ///< A's mesh; the device keeps a copy while it lives.
+  std::shared_ptr<const TriangleMesh> meshB;         ///< B's mesh.
+  const AabbTree* treeA = nullptr;                   ///< A's tree (built from meshA); must outlive the call.
+  const AabbTree* treeB = nullptr;                   ///< B's tree.
+  AffineMap treeMap;                                 ///< B's mesh coordinates into A's unscaled mesh frame.
+  Eigen::Vector3f scaleA = Eigen::Vector3f::Ones();  ///< A's local scaling.
+  Eigen::Matrix3f bLinear = Eigen::Matrix3f::Identity();   ///< B's mesh coordinates into A's scaled frame...
+  Eigen::Vector3f bTranslation = Eigen::Vector3f::Zero();  ///< ... plus this.
+  bool flipA = false;                                      ///< A's scaling mirrors it: vertices 1 and 2 swap.
+  bool flipB = false;                                      ///< The same for B.
 };
 
 /// One candidate whose triangles intersect, by its index in DeviceMeshPairResult::candidates.
@@ -66,18 +65,18 @@ struct MeshBatchDeviceOptions {
 
 /// Timings and counters of the last batch (host clock around each stage; each stage ends with a wait).
 struct MeshBatchDeviceStats {
-  double uploadMs = 0;       ///< Mesh data (only when not yet resident) and the batch description.
-  double traversalMs = 0;    ///< Box-test kernels of the middle phase, counting and writing passes.
-  double scanMs = 0;         ///< Prefix sums of the middle phase (with their read of the totals).
-  double sortMs = 0;         ///< Candidate sort (device or host).
-  double nearMs = 0;         ///< Near-phase kernel.
-  double compactionMs = 0;   ///< Flags, scan and compaction of the near phase.
-  double readbackMs = 0;     ///< Candidates and hits back to the host.
+  double uploadMs = 0;              ///< Mesh data (only when not yet resident) and the batch description.
+  double traversalMs = 0;           ///< Box-test kernels of the middle phase, counting and writing passes.
+  double scanMs = 0;                ///< Prefix sums of the middle phase (with their read of the totals).
+  double sortMs = 0;                ///< Candidate sort (device or host).
+  double nearMs = 0;                ///< Near-phase kernel.
+  double compactionMs = 0;          ///< Flags, scan and compaction of the near phase.
+  double readbackMs = 0;            ///< Candidates and hits back to the host.
   std::uint64_t uploadedBytes = 0;  ///< Bytes written to the device in this batch.
   std::uint64_t nodeTests = 0;      ///< Box tests of the middle phase, start front included.
   std::vector<std::uint64_t> frontSizes;  ///< Overlapping node pairs per level (thesis Table 6.3).
-  std::uint64_t candidates = 0;     ///< Candidate triangle pairs of the batch.
-  std::uint64_t hits = 0;           ///< Intersecting candidates of the batch.
+  std::uint64_t candidates = 0;           ///< Candidate triangle pairs of the batch.
+  std::uint64_t hits = 0;                 ///< Intersecting candidates of the batch.
 };
 
 /// A device that runs the middle and near phases of a batch. Thread-safe (calls are serialised).
