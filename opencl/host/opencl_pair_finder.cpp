@@ -1,21 +1,20 @@
 // OpenCL implementation of the grid pair finder; stage numbers are those of grid_pair_finder.h.
 #include "opencl/host/opencl_pair_finder.h"
 
-#include "broadphase/grid_choice.h"
-#include "broadphase/pair_mapping.h"
-
-#include "gpucol_kernels/kernels.h"
-#include "opencl/host/opencl_context.h"
-#include "opencl/host/radix_sort.h"
-#include "opencl/host/scan.h"
-#include "opencl/shared/grid_params.h"
-
 #include <algorithm>
 #include <cmath>
 #include <cstddef>
 #include <limits>
 #include <stdexcept>
 #include <string>
+
+#include "broadphase/grid_choice.h"
+#include "broadphase/pair_mapping.h"
+#include "gpucol_kernels/kernels.h"
+#include "opencl/host/opencl_context.h"
+#include "opencl/host/radix_sort.h"
+#include "opencl/host/scan.h"
+#include "opencl/shared/grid_params.h"
 
 namespace gpucol::opencl {
 
@@ -59,6 +58,7 @@ class OpenClPairFinder final : public PairFinder {
                  std::vector<std::uint64_t>& pairs) override;
   const PairFinderStats& stats() const override { return m_stats; }
   std::string name() const override { return "opencl"; }
+  bool runsOnGpu() const override { return m_context.isGpu(); }
 
  private:
   struct Kernels {
@@ -93,8 +93,8 @@ class OpenClPairFinder final : public PairFinder {
 OpenClPairFinder::Kernels& OpenClPairFinder::kernels(bool newton) {
   Kernels& k = m_kernels[newton ? 1 : 0];
   if (!m_kernelsBuilt[newton ? 1 : 0]) {
-    cl::Program program =
-        m_context.program("grid_find_pairs", kernels::grid_find_pairs, newton ? "-DGPUCOL_MAPPING_NEWTON" : "");
+    cl::Program program = m_context.program("grid_find_pairs", kernels::grid_find_pairs,
+                                            newton ? "-DGPUCOL_MAPPING_NEWTON" : "");
     k.countCells = cl::Kernel(program, "grid_count_cells");
     k.writeKeys = cl::Kernel(program, "grid_write_keys");
     k.markRuns = cl::Kernel(program, "grid_mark_runs");
@@ -108,7 +108,8 @@ OpenClPairFinder::Kernels& OpenClPairFinder::kernels(bool newton) {
   return k;
 }
 
-void OpenClPairFinder::chooseGrid(const ProxyArrays& p, const PairFinderOptions& options, GpucolGridParams& g) {
+void OpenClPairFinder::chooseGrid(const ProxyArrays& p, const PairFinderOptions& options,
+                                  GpucolGridParams& g) {
   // Stages 2-3, the same grid as the CPU finder's (broadphase/grid_choice.h). The grid only decides the
   // speed: whatever the grid, the pairs found are exactly the overlapping ones, because binning and the
   // dedupe rule use the same cell function on the device.
@@ -133,8 +134,9 @@ void OpenClPairFinder::upload(const ProxyArrays& p) {
   const cl::Context& c = m_context.context();
   cl::CommandQueue& q = m_context.queue();
   const std::size_t n = p.count;
-  const std::pair<DeviceArray*, const float*> floats[] = {{&m_minX, p.minX}, {&m_minY, p.minY}, {&m_minZ, p.minZ},
-                                                          {&m_maxX, p.maxX}, {&m_maxY, p.maxY}, {&m_maxZ, p.maxZ}};
+  const std::pair<DeviceArray*, const float*> floats[] = {{&m_minX, p.minX}, {&m_minY, p.minY},
+                                                          {&m_minZ, p.minZ}, {&m_maxX, p.maxX},
+                                                          {&m_maxY, p.maxY}, {&m_maxZ, p.maxZ}};
   for (const auto& f : floats) {
     q.enqueueWriteBuffer(f.first->ensure(c, n * 4), CL_FALSE, 0, n * 4, f.second);
   }
@@ -144,7 +146,8 @@ void OpenClPairFinder::upload(const ProxyArrays& p) {
 }
 
 void OpenClPairFinder::setProxyArgs(cl::Kernel& kernel) {
-  const DeviceArray* arrays[] = {&m_minX, &m_minY, &m_minZ, &m_maxX, &m_maxY, &m_maxZ, &m_group, &m_mask, &m_flags};
+  const DeviceArray* arrays[] = {&m_minX, &m_minY,  &m_minZ, &m_maxX, &m_maxY,
+                                 &m_maxZ, &m_group, &m_mask, &m_flags};
   for (cl_uint i = 0; i < 9; ++i) {
     kernel.setArg(i, arrays[i]->buffer);
   }
@@ -192,7 +195,8 @@ void OpenClPairFinder::findPairs(const ProxyArrays& p, const PairFinderOptions& 
     Kernels& k = kernels(options.mappingSqrt == MappingSqrt::Newton);
     upload(p);
     const std::uint32_t activeCount = std::uint32_t(m_active.size());
-    q.enqueueWriteBuffer(m_activeBuf.ensure(c, activeCount * 4), CL_FALSE, 0, activeCount * 4, m_active.data());
+    q.enqueueWriteBuffer(m_activeBuf.ensure(c, activeCount * 4), CL_FALSE, 0, activeCount * 4,
+                         m_active.data());
     const cl_uint slotBits = bitsFor(p.count - 1);
     const cl_uint zero = 0;
     m_counter.ensure(c, 4);
@@ -209,7 +213,8 @@ void OpenClPairFinder::findPairs(const ProxyArrays& p, const PairFinderOptions& 
       const std::uint32_t binnedCount = std::uint32_t(m_binned.size());
       if (binnedCount > 0) {
         q.enqueueWriteBuffer(m_grid.ensure(c, sizeof grid), CL_FALSE, 0, sizeof grid, &grid);
-        q.enqueueWriteBuffer(m_binnedBuf.ensure(c, binnedCount * 4), CL_FALSE, 0, binnedCount * 4, m_binned.data());
+        q.enqueueWriteBuffer(m_binnedBuf.ensure(c, binnedCount * 4), CL_FALSE, 0, binnedCount * 4,
+                             m_binned.data());
         // Stage 4: count cells per box, scan, fill (cell, slot) entries.
         setProxyArgs(k.countCells);
         k.countCells.setArg(9, m_grid.buffer);
@@ -253,7 +258,8 @@ void OpenClPairFinder::findPairs(const ProxyArrays& p, const PairFinderOptions& 
         cl_uint overflow = 0;
         q.enqueueReadBuffer(m_overflow.buffer, CL_TRUE, 0, 4, &overflow);
         if (overflow != 0) {
-          throw std::overflow_error("gpucol OpenCL pair finder: a box or a cell exceeds 2^32 - 1 entries or candidates");
+          throw std::overflow_error(
+              "gpucol OpenCL pair finder: a box or a cell exceeds 2^32 - 1 entries or candidates");
         }
         m_stats.candidates = candidates;
       }
@@ -280,9 +286,10 @@ void OpenClPairFinder::findPairs(const ProxyArrays& p, const PairFinderOptions& 
           const std::uint64_t units = m_context.device().getInfo<CL_DEVICE_MAX_COMPUTE_UNITS>();
           const std::uint64_t targetItems = units * local * (m_context.isGpu() ? 64 : 1);
           const std::uint64_t minChunk = m_context.isGpu() ? 1 : 16;
-          const std::uint64_t chunkLength = m_tuning.candidatesPerItem != 0
-                                                ? m_tuning.candidatesPerItem
-                                                : std::max(minChunk, (candidates + targetItems - 1) / targetItems);
+          const std::uint64_t chunkLength =
+              m_tuning.candidatesPerItem != 0
+                  ? m_tuning.candidatesPerItem
+                  : std::max(minChunk, (candidates + targetItems - 1) / targetItems);
           setProxyArgs(k.testCandidates);
           k.testCandidates.setArg(9, m_grid.buffer);
           k.testCandidates.setArg(10, m_runStart.buffer);
@@ -325,7 +332,8 @@ void OpenClPairFinder::findPairs(const ProxyArrays& p, const PairFinderOptions& 
       cl_uint found = 0;
       q.enqueueReadBuffer(m_counter.buffer, CL_TRUE, 0, 4, &found);
       if (found == 0xffffffffu) {
-        throw std::overflow_error("gpucol OpenCL pair finder: 2^32 - 1 or more overlapping pairs in one step");
+        throw std::overflow_error(
+            "gpucol OpenCL pair finder: 2^32 - 1 or more overlapping pairs in one step");
       }
       if (found <= capacity) {
         m_lastPairs = found;
@@ -349,10 +357,11 @@ void OpenClPairFinder::findPairs(const ProxyArrays& p, const PairFinderOptions& 
     }
   });
   std::size_t bytes = 0;
-  for (const DeviceArray* a : {&m_minX, &m_minY, &m_minZ, &m_maxX, &m_maxY, &m_maxZ, &m_group, &m_mask, &m_flags,
-                               &m_grid, &m_activeBuf, &m_binnedBuf, &m_hugeBuf, &m_isHugeBuf, &m_counts,
-                               &m_cellKeys, &m_keySlots, &m_runHeads, &m_runStart, &m_runCell, &m_runPairs,
-                               &m_pairs, &m_pairValues, &m_counter, &m_overflow}) {
+  for (const DeviceArray* a :
+       {&m_minX,   &m_minY,       &m_minZ,     &m_maxX,      &m_maxY,      &m_maxZ,    &m_group,
+        &m_mask,   &m_flags,      &m_grid,     &m_activeBuf, &m_binnedBuf, &m_hugeBuf, &m_isHugeBuf,
+        &m_counts, &m_cellKeys,   &m_keySlots, &m_runHeads,  &m_runStart,  &m_runCell, &m_runPairs,
+        &m_pairs,  &m_pairValues, &m_counter,  &m_overflow}) {
     bytes += a->bytes;
   }
   m_stats.scratchBytes = bytes;
@@ -381,4 +390,6 @@ const bool kRegistered = (registerOpenClPairFinder(), true);
 
 /// Anchor with a plain C name: libgpucol's consumers link with --undefined=gpucol_link_opencl_pair_finder
 /// (plugin/CMakeLists.txt), which pulls this object file, and so its registration, out of a static library.
-extern "C" void gpucol_link_opencl_pair_finder() { gpucol::opencl::registerOpenClPairFinder(); }
+extern "C" void gpucol_link_opencl_pair_finder() {
+  gpucol::opencl::registerOpenClPairFinder();
+}

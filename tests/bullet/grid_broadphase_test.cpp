@@ -16,6 +16,8 @@
 #include <utility>
 #include <vector>
 
+#include "broadphase/grid_pair_finder.h"
+
 namespace {
 
 using IdPair = std::pair<int, int>;
@@ -452,3 +454,28 @@ TEST(GridBroadphase, FallingBoxesAgreeWithDbvt) {
 }
 
 }  // namespace
+
+TEST(GridBroadphase, AutoBackendHandsLargeScenesToOpenClOnlyOnAGpu) {
+  // Backend::Auto: from kAutoOpenClFrom (100K) proxies the OpenCL finder runs only when its device is a GPU;
+  // on a CPU device (PoCL) the CPU path was faster at every measured size, so Auto keeps the CPU path.
+  std::unique_ptr<gpucol::PairFinder> openCl = gpucol::makeOpenClPairFinder(gpucol::Config{});
+  if (!openCl) GTEST_SKIP() << "no OpenCL pair finder (built without OpenCL, or no OpenCL device)";
+  const bool gpu = openCl->runsOnGpu();
+  gpucol::GridBroadphase bp;  // Config{}: Backend::Auto
+  btDefaultCollisionConfiguration configuration;
+  btCollisionDispatcher dispatcher(&configuration);
+  const int side = 47;  // 47^3 = 103,823 unit boxes, each touching its face neighbours
+  for (int z = 0; z < side; ++z)
+    for (int y = 0; y < side; ++y)
+      for (int x = 0; x < side; ++x) {
+        const btVector3 lo{float(x), float(y), float(z)};
+        bp.createProxy(lo, lo + btVector3(1, 1, 1), BOX_SHAPE_PROXYTYPE, nullptr,
+                       btBroadphaseProxy::DefaultFilter, btBroadphaseProxy::AllFilter, &dispatcher);
+      }
+  bp.calculateOverlappingPairs(&dispatcher);
+  EXPECT_EQ(bp.stats().usedOpenCl, gpu);
+  // Touching counts: every pair of boxes that share a face, an edge or a corner.
+  const std::uint64_t n = side, faces = 3 * (n - 1) * n * n, edges = 6 * (n - 1) * (n - 1) * n,
+                      corners = 4 * (n - 1) * (n - 1) * (n - 1);
+  EXPECT_EQ(bp.stats().overlappingPairs, faces + edges + corners);
+}

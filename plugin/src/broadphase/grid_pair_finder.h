@@ -139,6 +139,8 @@ class PairFinder {
   virtual const PairFinderStats& stats() const = 0;
   /// Short name for logs and benchmarks ("cpu", "opencl").
   virtual std::string name() const = 0;
+  /// True when the search runs on a GPU (Backend::Auto hands large scenes only to such a finder).
+  virtual bool runsOnGpu() const { return false; }
 };
 
 /// The CPU implementation (oneTBB), the reference the OpenCL path must match bit for bit.

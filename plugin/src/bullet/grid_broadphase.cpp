@@ -22,8 +22,10 @@
 namespace gpucol {
 namespace {
 
-/// Auto backend: at and above this many proxies the OpenCL finder is tried (when one is registered and a
-/// device works). A placeholder until the OpenCL path is measured beside the CPU one (issue 4 benchmark).
+/// Auto backend: at and above this many proxies the OpenCL finder is used, when one is registered and its
+/// device is a GPU. On a CPU device (PoCL) Auto never uses it: there the CPU path was faster at every size
+/// measured, 1K to 1M boxes (README, "Broad phase"). The GPU crossover has not been measured (no GPU was
+/// available), so this value is a guess, not a measurement.
 constexpr std::uint32_t kAutoOpenClFrom = 100000;
 
 /// A proxy with its slot in the structure-of-arrays storage.
@@ -49,13 +51,13 @@ struct GridBroadphase::Impl {
   std::vector<std::uint32_t> freeSlots;        // reusable now
   std::vector<std::uint32_t> pendingFree;      // freed since the last search: reused only after it
   std::vector<std::uint8_t> freedSinceSearch;  // per slot: its old pairs are already gone from the cache
-  // A box with a NaN or infinite component gets no pairs, as Bullet's own updateAabbs drops an overflowing box:
-  // the finder's cell size, grid bounds and cell indices would turn NaN (or a float-to-int conversion of NaN)
-  // and spread to every proxy. Such a proxy is hidden from the finder until its box is finite again.
+  // A box with a NaN or infinite component gets no pairs, as Bullet's own updateAabbs drops an overflowing
+  // box: the finder's cell size, grid bounds and cell indices would turn NaN (or a float-to-int conversion of
+  // NaN) and spread to every proxy. Such a proxy is hidden from the finder until its box is finite again.
   std::vector<std::uint8_t> nonFinite;  // per slot
   std::uint32_t nonFiniteCount = 0;
-  bool nonFiniteChanged = false;           // a proxy entered or left that state: the next search is a full one
-  std::vector<std::uint8_t> finderFlags;   // flags with the non-finite proxies' active bit cleared
+  bool nonFiniteChanged = false;          // a proxy entered or left that state: the next search is a full one
+  std::vector<std::uint8_t> finderFlags;  // flags with the non-finite proxies' active bit cleared
   std::uint32_t liveCount = 0;
   int nextUniqueId = 0;
   bool dirty = true;
@@ -102,8 +104,9 @@ struct GridBroadphase::Impl {
     for (int a = 0; a < 3; ++a) finite = finite && std::isfinite(lo[a]) && std::isfinite(hi[a]);
     if (!finite) {
       warnOnce("grid broadphase non-finite box",
-               "GridBroadphase: a proxy's AABB has a NaN or infinite component (min " + toString(lo) + ", max " +
-                   toString(hi) + "); such a proxy gets no pairs until its AABB is finite (said once)");
+               "GridBroadphase: a proxy's AABB has a NaN or infinite component (min " + toString(lo) +
+                   ", max " + toString(hi) +
+                   "); such a proxy gets no pairs until its AABB is finite (said once)");
     }
     setNonFinite(s, !finite);
   }
@@ -130,7 +133,7 @@ struct GridBroadphase::Impl {
       if (!openClFinder && b == Backend::OpenCL)
         std::cerr << "gpucol::GridBroadphase: no OpenCL pair finder available; using the CPU path\n";
     }
-    if (wantOpenCl && openClFinder) {
+    if (wantOpenCl && openClFinder && (b == Backend::OpenCL || openClFinder->runsOnGpu())) {
       st.usedOpenCl = true;
       return *openClFinder;
     }
