@@ -14,6 +14,7 @@ packages=(
   libcli11-dev
   libstb-dev
   python3-matplotlib
+  clang libclang-rt-14-dev
 )
 
 missing=()
