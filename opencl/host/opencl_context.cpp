@@ -1,5 +1,7 @@
 #include "opencl/host/opencl_context.h"
 
+#include "opencl/host/opencl_started.h"
+
 #include "opencl/host/device_selection.h"
 
 #include <functional>
@@ -96,6 +98,7 @@ OpenClContext::OpenClContext(const std::string& filter) {
     m_context = cl::Context(m_device);
     m_queue = cl::CommandQueue(m_context, m_device);
   });
+  ++openClContextsCreated();
 }
 
 OpenClContext& OpenClContext::get(const std::string& configuredDevice) {

@@ -12,6 +12,7 @@ namespace gpucol {
 struct DispatchStats {
   std::uint64_t meshPairs = 0;          ///< Mesh-mesh pairs collided in the step's batch.
   std::uint64_t rootBoxesMissed = 0;    ///< Of those, pairs whose root boxes missed (nothing else ran).
+  std::uint64_t openClPairs = 0;        ///< Of those, pairs that ran on OpenCL (the rest ran on the CPU).
   std::uint64_t reducedContacts = 0;    ///< Contacts written towards the manifolds.
   double batchMilliseconds = 0;         ///< Time of collideMeshesBatch for the step.
 };

@@ -10,4 +10,5 @@
 #include "gpucol/mesh_mesh_algorithm.h"
 #include "gpucol/mesh_report.h"
 #include "gpucol/mesh_shape.h"
+#include "gpucol/opencl_status.h"
 #include "gpucol/triangle_mesh.h"

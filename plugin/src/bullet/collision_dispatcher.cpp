@@ -73,6 +73,7 @@ void CollisionDispatcher::dispatchAllCollisionPairs(btOverlappingPairCache* pair
         std::vector<MeshPairResult> results = collideMeshesBatch(collector.queries, m_config);
         for (std::size_t i = 0; i < results.size(); ++i) {
           m_lastStepStats.rootBoxesMissed += results[i].stats.rootBoxesMissed;
+          m_lastStepStats.openClPairs += results[i].stats.backendUsed == Backend::OpenCL;
           m_lastStepStats.reducedContacts += results[i].reducedContacts.size();
           collector.algorithms[i]->setPrecomputedResult(collector.queries[i], std::move(results[i]));
         }
