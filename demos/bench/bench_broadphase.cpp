@@ -130,7 +130,8 @@ Result notRun(const std::string& label, const std::string& why) {
 }
 
 Result run(const std::string& label, btBroadphaseInterface& bp, Scene scene, int steps,
-           const std::function<std::size_t()>& memory = nullptr) {
+           const std::function<std::size_t()>& memory = nullptr,
+           const std::function<void()>& afterStep = nullptr) {
   btDefaultCollisionConfiguration configuration;
   btCollisionDispatcher dispatcher(&configuration);
   std::vector<btBroadphaseProxy*> proxies;
@@ -149,6 +150,7 @@ Result run(const std::string& label, btBroadphaseInterface& bp, Scene scene, int
       bp.setAabb(proxies[i], scene.centre[i] - scene.half[i], scene.centre[i] + scene.half[i], &dispatcher);
     bp.calculateOverlappingPairs(&dispatcher);
     ms.push_back(std::chrono::duration<double, std::milli>(Clock::now() - start).count());
+    if (afterStep) afterStep();
   }
   Result r;
   r.broadphase = label;
@@ -224,6 +226,25 @@ Result runB3(const std::string& label, B3GpuGridPeer& peer, Scene scene, int ste
   return r;
 }
 
+/// --stages: median wall ms per stage of GridBroadphase's steps (the rest of a step is setAabb and the scan
+/// of the proxies' filters).
+void printStages(const std::string& scene, std::size_t n, const std::string& label,
+                 const std::vector<GridBroadphaseStats>& steps) {
+  auto med = [&](double GridBroadphaseStats::*field) {
+    std::vector<double> v;
+    for (const GridBroadphaseStats& s : steps) v.push_back(s.*field);
+    return median(v);
+  };
+  std::printf(
+      "%-8s %9zu %-18s stages (median ms): search %.3f [grid choice %.3f, binning %.3f, tests %.3f, huge "
+      "%.3f, "
+      "pair sort %.3f], diff + pair cache %.3f\n",
+      scene.c_str(), n, label.c_str(), med(&GridBroadphaseStats::searchMs),
+      med(&GridBroadphaseStats::chooseMs), med(&GridBroadphaseStats::binMs),
+      med(&GridBroadphaseStats::testMs), med(&GridBroadphaseStats::hugeMs), med(&GridBroadphaseStats::sortMs),
+      med(&GridBroadphaseStats::cacheMs));
+}
+
 std::vector<std::size_t> parseList(const std::string& text) {
   std::vector<std::size_t> v;
   std::stringstream ss(text);
@@ -251,6 +272,7 @@ struct Options {
   std::string output = "compacted";
   std::string sqrtMode = "double";
   std::string device;
+  bool stages = false;
   int bruteForceBelow = Config{}.bruteForceBelow;
   std::size_t peerMax = 1000000;
   // bt32BitAxisSweep3 inserts each new proxy by walking its edges down the three sorted axes: n proxies
@@ -325,7 +347,11 @@ void runAll(const Options& o) {
         config.broadphaseBackend = backend;
         GridBroadphase grid(config);
         grid.setTuning(tuning);
-        results.push_back(run(label, grid, make(), o.steps, [&] { return grid.stats().memoryBytes; }));
+        std::vector<GridBroadphaseStats> stepStats;
+        results.push_back(run(
+            label, grid, make(), o.steps, [&] { return grid.stats().memoryBytes; },
+            [&] { stepStats.push_back(grid.stats()); }));
+        if (o.stages) printStages(sceneName, n, label, stepStats);
         if (!cpu && !grid.stats().usedOpenCl) results.back().note = "ran on the CPU: OpenCL path fell back";
       }
       if (wanted("dbvt")) {
@@ -415,6 +441,9 @@ const CommandRegistration kRegistration([](CLI::App& app) {
       "--device", options->device,
       "OpenCL device name substring (Config::openclDevice; GPUCOL_OPENCL_DEVICE overrides); b3 uses "
       "the same device");
+  cmd->add_flag(
+      "--stages", options->stages,
+      "also print gpucol's median wall ms per stage (search and its grid stages, diff + pair cache)");
   cmd->add_option("--cell-rule", options->cellRule, "grid cell size rule: size or density")
       ->check(CLI::IsMember({"size", "density"}))
       ->capture_default_str();

@@ -48,6 +48,12 @@ struct GridBroadphaseStats {
   float cellSize = 0.0f;
   /// Bytes held by the broad phase (proxies, arrays, pair lists, scratch), excluding the pair cache.
   std::size_t memoryBytes = 0;
+  /// Wall-clock milliseconds of the pair search, and of the diff with the last step plus the pair cache's
+  /// additions and removals.
+  double searchMs = 0, cacheMs = 0;
+  /// Wall-clock milliseconds of the stages of a full grid search on the CPU (0 otherwise): cell size and
+  /// huge split, binning and sort by cell, candidate tests, huge boxes, gather and sort of the pairs.
+  double chooseMs = 0, binMs = 0, testMs = 0, hugeMs = 0, sortMs = 0;
 };
 
 /// A btBroadphaseInterface that finds exactly the pairs whose AABBs overlap (touching counts) with a uniform

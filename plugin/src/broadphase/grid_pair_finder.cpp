@@ -8,6 +8,7 @@
 #include <tbb/parallel_sort.h>
 
 #include <algorithm>
+#include <chrono>
 #include <cmath>
 #include <functional>
 #include <limits>
@@ -137,6 +138,20 @@ inline void forEachCell(const CellRange& r, const Grid& g, F&& f) {
       for (std::uint32_t x = r.lo[0]; x <= r.hi[0]; ++x) f(std::uint32_t(row + x));
     }
 }
+
+/// Milliseconds since the last lap (stage timings of PairFinderStats).
+class StageClock {
+ public:
+  double lap() {
+    const auto now = std::chrono::steady_clock::now();
+    const double ms = std::chrono::duration<double, std::milli>(now - m_last).count();
+    m_last = now;
+    return ms;
+  }
+
+ private:
+  std::chrono::steady_clock::time_point m_last = std::chrono::steady_clock::now();
+};
 
 /// Splits [0, total) into deterministic chunks (boundaries depend only on total).
 inline std::uint64_t chunkSize(std::uint64_t total) {
@@ -768,6 +783,7 @@ void CpuPairFinder::grid(const ProxyArrays& p, const PairFinderOptions& options,
                          std::vector<std::uint64_t>& pairs) {
   m_stats.usedGrid = true;
   m_denseBuilt = false;
+  StageClock clock;
   const Grid g = chooseGrid(p, m_active, options, m_extent, m_binned, m_huge);
   m_stats.hugeProxies = std::uint32_t(m_huge.size());
   m_isBinned.assign(p.count, 0);
@@ -775,14 +791,19 @@ void CpuPairFinder::grid(const ProxyArrays& p, const PairFinderOptions& options,
   m_keptGrid = g;
   m_stats.cellSize = g.cell;
   for (int a = 0; a < 3; ++a) m_stats.dims[a] = g.dims[a];
+  m_stats.chooseMs = clock.lap();
   if (!m_binned.empty()) {
     binSorted(p, g);
+    m_stats.binMs = clock.lap();
     testRuns(options, g);
+    m_stats.testMs = clock.lap();
   }
   testHuge(p, g);
+  m_stats.hugeMs = clock.lap();
   gather(pairs);
   // Stage 10: one order whatever the chunking, threads or device.
   radixSortPairs(pairs, m_sortScratch, slotBitsFor(p.count));
+  m_stats.sortMs = clock.lap();
 }
 
 std::size_t CpuPairFinder::scratchBytes() const {

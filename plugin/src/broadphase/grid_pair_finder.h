@@ -126,6 +126,10 @@ struct PairFinderStats {
   std::uint32_t restingProxies = 0;
   /// Active proxies binned (or, when huge, tested against all) in this search.
   std::uint32_t rebinnedProxies = 0;
+  /// Wall-clock milliseconds of the stages of a full grid search (CPU finder; 0 elsewhere): stages 2-3
+  /// (cell size, huge split), 4-6 (binning, sort by cell, runs), 7-9 (candidate tests),
+  /// 3 (huge boxes against the rest) and 10 (gather and sort of the pair keys).
+  double chooseMs = 0, binMs = 0, testMs = 0, hugeMs = 0, sortMs = 0;
 };
 
 /// Finds every pair of active proxies whose AABBs overlap (touching counts) and pass the filters.

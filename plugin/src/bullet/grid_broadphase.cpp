@@ -7,6 +7,7 @@
 #include <LinearMath/btAabbUtil2.h>
 
 #include <algorithm>
+#include <chrono>
 #include <cmath>
 #include <cstdio>
 #include <deque>
@@ -305,7 +306,13 @@ void GridBroadphase::calculateOverlappingPairs(btDispatcher* dispatcher) {
   ProxyArrays view = d.view();
   // `moved` is relative to the previous search of the same finder; after a switch of finder, all moved.
   if (&finder != d.lastFinder) view.moved = nullptr;
+  const auto searchStart = std::chrono::steady_clock::now();
   finder.findPairs(view, d.options(), d.found);
+  const auto cacheStart = std::chrono::steady_clock::now();
+  st.searchMs = std::chrono::duration<double, std::milli>(cacheStart - searchStart).count();
+  const PairFinderStats& fs = finder.stats();
+  st.chooseMs = fs.chooseMs, st.binMs = fs.binMs, st.testMs = fs.testMs, st.hugeMs = fs.hugeMs;
+  st.sortMs = fs.sortMs;
   d.lastFinder = &finder;
   std::fill(d.moved.begin(), d.moved.end(), std::uint8_t(0));
   st.usedGrid = finder.stats().usedGrid;
@@ -348,6 +355,8 @@ void GridBroadphase::calculateOverlappingPairs(btDispatcher* dispatcher) {
   d.pendingFree.clear();
   d.dirty = false;
   st.memoryBytes = d.memoryBytes(finder);
+  st.cacheMs =
+      std::chrono::duration<double, std::milli>(std::chrono::steady_clock::now() - cacheStart).count();
   d.stats = st;
 }
 
