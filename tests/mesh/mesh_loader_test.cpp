@@ -2,8 +2,11 @@
 // on exactly equal positions only; node transforms are applied; bad files give a MeshError that
 // names the file and the reason, and never crash (assimp itself does on truncated PLY files).
 #include <gtest/gtest.h>
+#include <unistd.h>
 
 #include <algorithm>
+#include <cstdio>
+#include <cstdlib>
 #include <cstring>
 #include <fstream>
 #include <limits>
@@ -172,12 +175,110 @@ TEST(LoadMesh, MissingEmptyAndGarbageFiles) {
   for (std::size_t i = 0; i < noise.size(); ++i) noise[i] = char((i * 2654435761u) >> 13);
   const std::string garbage = dir.write("garbage.xyzw", noise);
   EXPECT_CONTAINS(loadError(garbage), garbage + ": assimp cannot read the mesh file: ");
+  // assimp reads every .ply path with its PLY reader, so the pre-check sees it first.
   const std::string garbagePly = dir.write("garbage.ply", noise);
-  EXPECT_CONTAINS(loadError(garbagePly), garbagePly + ": assimp cannot read the mesh file: ");
+  EXPECT_CONTAINS(loadError(garbagePly),
+                  garbagePly + ": malformed PLY file: it does not start with the line 'ply'");
   // An OBJ file with vertices but no faces holds no triangle mesh.
   const std::string noFaces = dir.write("nofaces.obj", "v 0 0 0\nv 1 0 0\nv 0 1 0\n");
   EXPECT_CONTAINS(loadError(noFaces),
                   noFaces + ": assimp cannot read the mesh file: Validation failed: Mesh");
+}
+
+/// Loads `path` in a child process that SIGALRM ends after 10 s, so a loader that hangs fails the test
+/// instead of stalling it, and expects a MeshError containing `part` (the child prints the message it got).
+void expectPromptError(const std::string& path, const std::string& part) {
+  EXPECT_EXIT(
+      {
+        alarm(10);
+        int code = 3;  // no MeshError
+        try {
+          loadMesh(path);
+        } catch (const MeshError& e) {
+          std::fprintf(stderr, "%s\n", e.what());
+          code = std::string(e.what()).find(part) == std::string::npos ? 2 : 0;
+        }
+        std::_Exit(code);
+      },
+      ::testing::ExitedWithCode(0), "")
+      << path << " should fail with \"" << part << "\"";
+}
+
+TEST(LoadMesh, EveryFileAssimpReadsAsPlyIsPrechecked) {
+  // Found by tests/fuzz/mesh_loader_fuzzer (tests/fuzz/findings/loader_hang_assimp_ply.bin, less its first
+  // byte, which chose .ply): "ply" followed by escape bytes, a '\0', then a PLY header with no "end_header"
+  // line. Its first line is not exactly "ply", so the pre-check used to let it through to assimp, whose magic
+  // test only compares three bytes; assimp's header loop then never ends (a failed read per turn: 17 s user,
+  // 55 s system in 120 s).
+  static const char kFinding[] =
+      "ply\033\033\033\033\033\033\033\033\033\033\033\033\033\033\033\033\033\033\033\033\033\033\033\033"
+      "\033"
+      "\033\033\033\033\033\033\033\033\033\033\033\033\033\033\033\033\033\033\033\033\033\033\033\033\033"
+      "\033"
+      "\033\033\033\033\033\033\033\033\033\033\033\033\033\033\033\033\033\033\033\033\033\033\033\033\033"
+      "\033"
+      "\033\033\033\033\033\033\033\033\033\033\033\033\033\033\033\033\033\033\033\033td\"\"\"\"\"\"\"\"\"\""
+      "p"
+      "\000\000\000\"\"\"\"\"\"\"\"\"\"\"\"\"\"\"\"\000ply\nformat ascii 1.0\nelement &ertex 3\nproperty "
+      "float "
+      "x\npro\"\"\"\"\"\"\"\"\"\"\"perty float y\034\000\000\000\000\007\000\000\nproperty float "
+      "z\nel\003OFF\n"
+      "4 4 0\n0 0\n\n0 0 0\000\000\000\000\000\000\000\000\n1 0\0000\n0 1 "
+      "0\"\"\"\"\"\"\"\"\"\"\"\"\"\"\"\"\"\""
+      "\"\"\"\"\"\"\"\"\"\"\"\"\"\"\"\"\"ar 2 1 2int vertex_indices\nend 3_header\n\n0 0 0\n3 0 1 2\n\n1 "
+      "0\0000"
+      "\n0 1 0\n3 0 1 2=\n";
+  test::TempDir dir;
+  const std::string finding = dir.write("finding.ply", std::string(kFinding, sizeof kFinding - 1));
+  ASSERT_EQ(test::readBytes(finding).size(), 396u);
+  expectPromptError(finding, finding +
+                                 ": malformed PLY file: it does not start with the line 'ply' but with "
+                                 "\"ply\\x1b\\x1b");
+  // The same bytes under another name: assimp picks its PLY reader by content when no reader claims the
+  // extension.
+  const std::string unknown = dir.write("finding.mesh", std::string(kFinding, sizeof kFinding - 1));
+  expectPromptError(unknown, unknown + ": malformed PLY file: it does not start with the line 'ply'");
+  // assimp skips one leading line end before its magic test: this one reaches its header loop too.
+  const std::string head = "ply\nformat ascii 1.0\nelement vertex 3\nproperty float x\n";
+  const std::string leading = dir.write("leading.ply", "\n" + head);
+  expectPromptError(leading, "it does not start with the line 'ply' but with \"\\x0aply\\x0aformat");
+  // 3 MB of zero bytes named .ply: assimp's line reader runs past its 1 MiB buffer looking for a '\n'.
+  const std::string zeros = dir.write("zeros.ply", std::string(3000000, '\0'));
+  expectPromptError(zeros, "it does not start with the line 'ply' but with \"\\x00");
+}
+
+TEST(LoadMesh, PlyTextWithControlBytesAndEmptyElementsIsRefused) {
+  // Each of these hangs (more than 20 s) or aborts Debian's assimp 5.2.5 after the pre-check used to pass it.
+  const std::string header =
+      "ply\nformat ascii 1.0\nelement vertex 3\nproperty float x\nproperty float y\nproperty float z\n"
+      "element face 1\nproperty list uchar int vertex_indices\n";
+  const std::string body = "0 0 0\n1 0 0\n0 1 0\n3 0 1 2\n";
+  test::TempDir dir;
+  // assimp ends the header only at "end_header" followed by a space, tab or line end; '\v' is none of them.
+  const std::string vtab = dir.write("vtab.ply", header + "end_header\v\n" + body);
+  expectPromptError(vtab,
+                    vtab + ": malformed PLY file: header line 9 holds the control byte 0x0b at column 11");
+  // assimp ends a line at '\f' and drops the rest, so the record is one value short (an assert aborts).
+  const std::string feed = dir.write("feed.ply", header + "end_header\n0 0 0\n1 0\f0\n0 1 0\n3 0 1 2\n");
+  expectPromptError(feed, feed + ": malformed PLY file: body line 2 holds the control byte 0x0c at column 4");
+  // A binary element without properties takes no bytes, so no file size bounds its count; assimp loops over
+  // it.
+  const std::string binary = "ply\nformat binary_little_endian 1.0\n";
+  const std::string emptyVertex =
+      dir.write("empty-vertex.ply", binary + "element vertex 4000000000\nend_header\n");
+  expectPromptError(
+      emptyVertex,
+      emptyVertex + ": malformed PLY file: element 'vertex' declares 4000000000 records but no properties");
+  const std::string emptyFace =
+      dir.write("empty-face.ply",
+                binary + "element vertex 1\nproperty float x\nelement face 4000000000\nend_header\n0000");
+  expectPromptError(emptyFace, "element 'face' declares 4000000000 records but no properties");
+  // The same header with a tab and "\r\n" line ends, which both readers take, still loads.
+  std::string crlf = header + "end_header\n" + body;
+  for (std::size_t at = crlf.find('\n'); at != std::string::npos; at = crlf.find('\n', at + 2))
+    crlf.insert(at, "\r");
+  crlf.replace(crlf.find("property float y"), 16, "property\tfloat y");
+  EXPECT_EQ(loadMesh(dir.write("crlf.ply", crlf)).triangleCount(), 1u);
 }
 
 TEST(LoadMesh, TruncatedBinaryPly) {

@@ -168,8 +168,9 @@ TriangleMesh loadMesh(const std::string& path) {
   const std::vector<char> bytes = readWholeFile(path);
   Assimp::Importer importer;
   const aiScene* scene = nullptr;
-  if (looksLikePly(bytes.data(), bytes.size())) {
-    // assimp's PLY reader is not safe on malformed input (see ply_precheck.h): check first.
+  if (reachesAssimpPlyReader(bytes.data(), bytes.size(), path)) {
+    // assimp's PLY reader is not safe on malformed input (see ply_precheck.h): check first. Every file it
+    // would read, not only those with the exact magic line, so none reaches it unchecked.
     checkPlyStructure(bytes.data(), bytes.size(), path);
     scene = importer.ReadFileFromMemory(bytes.data(), bytes.size(), kPostProcess, "ply");
   } else {

@@ -1,9 +1,12 @@
 #include "mesh/ply_precheck.h"
 
+#include <algorithm>
+#include <cctype>
 #include <cmath>
 #include <cstdint>
 #include <cstdlib>
 #include <cstring>
+#include <iomanip>
 #include <sstream>
 #include <vector>
 
@@ -44,6 +47,28 @@ int typeSize(const std::string& type) {
   return 0;
 }
 
+/// assimp 5.2.5's line ends (IOStreamBuffer::getNextLine and ParsingUtils' IsLineEnd).
+bool isAssimpLineEnd(char c) {
+  return c == '\n' || c == '\r' || c == '\0' || c == '\f';
+}
+
+/// Throws when a line of PLY text holds a control byte other than a tab (a final '\r' is already removed).
+/// assimp ends lines at '\0', '\r' and '\f' and splits words only at spaces and tabs, while this check splits
+/// lines at '\n' and words at any white space, so such a line reads differently in the two: "end_header\v"
+/// ends the header here but not in assimp, which then loops forever looking for it. Valid PLY text has none.
+void requirePlainText(const std::string& text, const char* where, std::size_t line, const std::string& path) {
+  for (std::size_t k = 0; k < text.size(); ++k) {
+    const unsigned char c = static_cast<unsigned char>(text[k]);
+    if ((c < 0x20 && c != '\t') || c == 0x7f) {
+      std::ostringstream out;
+      out << where << " line " << line << " holds the control byte 0x" << std::hex << std::setw(2)
+          << std::setfill('0') << unsigned(c) << std::dec << " at column " << k + 1
+          << "; PLY text may hold only printable characters, spaces and tabs";
+      fail(path, out.str());
+    }
+  }
+}
+
 /// Reads an unsigned or signed list count of `bytes` bytes in the file's byte order.
 std::int64_t readCount(const unsigned char* p, int bytes, bool isSigned, bool bigEndian) {
   std::uint64_t value = 0;
@@ -62,6 +87,14 @@ void checkBinary(const std::vector<PlyElement>& elements, const unsigned char* d
     for (const PlyProperty& p : element.properties) {
       fixed = fixed && p.countSize == 0;
       recordSize += std::uint64_t(p.size);
+    }
+    if (element.properties.empty() && element.count != 0) {
+      // Zero bytes per record, so no file size bounds the count, and assimp loops over it: a 'vertex' or
+      // 'face' element of 4e9 such records kept it busy for more than 30 s. The ASCII check refuses these as
+      // lines with values where none are expected.
+      std::ostringstream out;
+      out << "element '" << element.name << "' declares " << element.count << " records but no properties";
+      fail(path, out.str());
     }
     if (fixed) {
       // Whole element at once; compare by division so a huge declared count cannot overflow.
@@ -111,9 +144,12 @@ void checkAscii(const std::vector<PlyElement>& elements, const char* data, std::
     while (offset < size) {
       std::size_t end = offset;
       while (end < size && data[end] != '\n') ++end;
-      std::istringstream in(std::string(data + offset, end - offset));
+      std::string text(data + offset, end - offset);
+      if (!text.empty() && text.back() == '\r') text.pop_back();
       offset = end < size ? end + 1 : end;
       ++line;
+      requirePlainText(text, "body", line, path);
+      std::istringstream in(text);
       for (std::string token; in >> token;) tokens.push_back(token);
       if (!tokens.empty()) return true;
     }
@@ -176,12 +212,51 @@ bool looksLikePly(const char* data, std::size_t size) {
   return size >= 4 && std::memcmp(data, "ply", 3) == 0 && (data[3] == '\n' || data[3] == '\r');
 }
 
+bool reachesAssimpPlyReader(const char* data, std::size_t size, const std::string& path) {
+  // assimp 5.2.5 Importer::ReadFile: a path whose end matches one reader's extension goes to that reader
+  // alone, with no look at the bytes.
+  if (path.size() >= 4) {
+    std::string extension = path.substr(path.size() - 4);
+    for (char& c : extension) c = char(std::tolower(static_cast<unsigned char>(c)));
+    if (extension == ".ply") return true;
+  }
+  // PLYImporter::InternReadFile takes the first line from IOStreamBuffer::getNextLine, which skips to just
+  // past the first '\n' when the file starts with a line end, and compares three bytes without regard to
+  // case.
+  std::size_t start = 0;
+  if (size > 0 && isAssimpLineEnd(data[0])) {
+    while (start < size && data[start] != '\n') ++start;
+    ++start;
+  }
+  if (start + 3 > size) return false;
+  const char* magic = "ply";
+  for (int k = 0; k < 3; ++k) {
+    if (std::tolower(static_cast<unsigned char>(data[start + std::size_t(k)])) != magic[k]) return false;
+  }
+  return true;
+}
+
 void checkPlyStructure(const char* data, std::size_t size, const std::string& path) {
-  if (!looksLikePly(data, size)) fail(path, "it does not start with the line 'ply'");
+  if (!looksLikePly(data, size)) {
+    // Show how it does start, escaped, so a stray byte after "ply" or before it can be seen.
+    std::ostringstream out;
+    out << "it does not start with the line 'ply' but with \"";
+    const std::size_t shown = std::min<std::size_t>(size, 16);
+    for (std::size_t k = 0; k < shown; ++k) {
+      const unsigned char c = static_cast<unsigned char>(data[k]);
+      if (c >= 0x20 && c < 0x7f && c != '"' && c != '\\')
+        out << char(c);
+      else
+        out << "\\x" << std::hex << std::setw(2) << std::setfill('0') << unsigned(c) << std::dec;
+    }
+    out << (size > shown ? "...\"" : "\"");
+    fail(path, out.str());
+  }
   std::size_t offset = 0;
   bool formatSeen = false, ended = false;
   PlyFormat format = PlyFormat::kAscii;
   std::vector<PlyElement> elements;
+  std::size_t line = 0;
   while (!ended) {
     std::size_t end = offset;
     while (end < size && data[end] != '\n') ++end;
@@ -189,6 +264,7 @@ void checkPlyStructure(const char* data, std::size_t size, const std::string& pa
     std::string text(data + offset, end - offset);
     if (!text.empty() && text.back() == '\r') text.pop_back();
     offset = end + 1;
+    requirePlainText(text, "header", ++line, path);
     std::istringstream in(text);
     std::string keyword;
     in >> keyword;
