@@ -1,5 +1,7 @@
 // gpucol-bench meshpair: the thesis's scene (two copies of a mesh, the second moved along x by 0.3 × the
 // largest side and turned 0.5 rad about y), gpucol beside btGImpactCollisionAlgorithm in the same run.
+#include <gpucol/gpucol.h>
+
 #include <algorithm>
 #include <fstream>
 #include <iomanip>
@@ -9,8 +11,6 @@
 #include <string>
 #include <utility>
 #include <vector>
-
-#include <gpucol/gpucol.h>
 
 #include "bench_commands.h"
 #include "bench_stats.h"
@@ -38,13 +38,13 @@ struct Row {
   double middleMs = 0, nearMs = 0, reductionMs = 0, gpucolTotalMs = 0, gimpactMs = 0;
   std::uint64_t nodeTests = 0;
   std::size_t candidates = 0, intersecting = 0, contacts = 0, reduced = 0, gimpactContacts = 0;
-  std::size_t gimpactPairsMissed = 0;     // GImpact pairs whose triangles' boxes overlap, not among candidates.
-  std::size_t gimpactPairsApart = 0;      // GImpact pairs whose triangles' boxes do not even overlap.
+  std::size_t gimpactPairsMissed = 0;  // GImpact pairs whose triangles' boxes overlap, not among candidates.
+  std::size_t gimpactPairsApart = 0;   // GImpact pairs whose triangles' boxes do not even overlap.
 };
 
 // World-space box of triangle `t` of `mesh` under `transform`, in double.
-void worldTriangleBox(const TriangleMesh& mesh, const btTransform& transform, std::uint32_t t, double (&lo)[3],
-                      double (&hi)[3]) {
+void worldTriangleBox(const TriangleMesh& mesh, const btTransform& transform, std::uint32_t t,
+                      double (&lo)[3], double (&hi)[3]) {
   for (int axis = 0; axis < 3; ++axis) {
     lo[axis] = 1e300;
     hi[axis] = -1e300;
@@ -102,9 +102,9 @@ Row measure(const std::string& name, const TriangleMesh& loaded, int runs) {
   row.reduced = result.reducedContacts.size();
   row.gimpactContacts = peerContacts.size();
 
-  // Every triangle pair GImpact made a contact from and whose triangles' boxes overlap (in double, world space)
-  // must be among gpucol's candidates: the middle phase loses nothing. Pairs whose boxes miss cannot touch;
-  // GImpact's contacts from such pairs are counted apart. Whether a pair truly intersects is the exact
+  // Every triangle pair GImpact made a contact from and whose triangles' boxes overlap (in double, world
+  // space) must be among gpucol's candidates: the middle phase loses nothing. Pairs whose boxes miss cannot
+  // touch; GImpact's contacts from such pairs are counted apart. Whether a pair truly intersects is the exact
   // test's call, checked against a double-precision reference in the test suite.
   const std::set<TrianglePair> candidates(result.candidatePairs.begin(), result.candidatePairs.end());
   std::set<TrianglePair> peerPairs;
@@ -126,7 +126,8 @@ Row measure(const std::string& name, const TriangleMesh& loaded, int runs) {
 
 void printTable(const std::vector<Row>& rows, std::ostream& out) {
   out << std::fixed << std::setprecision(2);
-  out << "| mesh | triangles | build gpucol / GImpact ms | middle ms | near ms | reduction ms | gpucol total ms "
+  out << "| mesh | triangles | build gpucol / GImpact ms | middle ms | near ms | reduction ms | gpucol total "
+         "ms "
          "| GImpact ms | speed-up | node tests | candidates | intersecting | contacts | reduced | GImpact "
          "contacts | GImpact pairs missed by gpucol | GImpact pairs whose triangles are apart |\n";
   out << "|---|---:|---:|---:|---:|---:|---:|---:|---:|---:|---:|---:|---:|---:|---:|---:|---:|\n";
@@ -144,18 +145,20 @@ void writeCsv(const std::vector<Row>& rows, const std::string& path) {
   std::ofstream csv(path);
   if (!csv) throw std::runtime_error("cannot write " + path);
   csv << "mesh,triangles,gpucol_build_ms,gimpact_build_ms,middle_ms,near_ms,reduction_ms,gpucol_total_ms,"
-         "gimpact_ms,node_tests,candidates,intersecting,contacts,reduced,gimpact_contacts,gimpact_pairs_missed,gimpact_pairs_apart\n";
+         "gimpact_ms,node_tests,candidates,intersecting,contacts,reduced,gimpact_contacts,gimpact_pairs_"
+         "missed,gimpact_pairs_apart\n";
   for (const Row& r : rows) {
-    csv << r.name << ',' << r.triangles << ',' << r.gpucolBuildMs << ',' << r.gimpactBuildMs << ',' << r.middleMs
-        << ',' << r.nearMs << ',' << r.reductionMs << ',' << r.gpucolTotalMs << ',' << r.gimpactMs << ','
-        << r.nodeTests << ',' << r.candidates << ',' << r.intersecting << ',' << r.contacts << ',' << r.reduced
-        << ',' << r.gimpactContacts << ',' << r.gimpactPairsMissed << ',' << r.gimpactPairsApart << '\n';
+    csv << r.name << ',' << r.triangles << ',' << r.gpucolBuildMs << ',' << r.gimpactBuildMs << ','
+        << r.middleMs << ',' << r.nearMs << ',' << r.reductionMs << ',' << r.gpucolTotalMs << ','
+        << r.gimpactMs << ',' << r.nodeTests << ',' << r.candidates << ',' << r.intersecting << ','
+        << r.contacts << ',' << r.reduced << ',' << r.gimpactContacts << ',' << r.gimpactPairsMissed << ','
+        << r.gimpactPairsApart << '\n';
   }
 }
 
 // --backend opencl: the thesis's Tables 6.2-6.5 and Figs. 6.2-6.3 on the OpenCL device beside the CPU path,
-// same scene, same run. Each OpenCL variant gets one warm-up call first (program builds and the resident upload
-// are one-time costs, reported apart as the first call).
+// same scene, same run. Each OpenCL variant gets one warm-up call first (program builds and the resident
+// upload are one-time costs, reported apart as the first call).
 struct OpenClRow {
   std::string name;
   std::size_t triangles = 0;
@@ -163,7 +166,8 @@ struct OpenClRow {
   double firstCallMs = 0;  // the first OpenCL call: mesh upload (and program builds on the very first mesh)
   MeshBatchDeviceStats stages;  // stage medians of the default options
   double clTotalMs = 0;
-  double startDepthMs[3] = {0, 0, 0};  // d0 = 0, 3, 6
+  double startDepthMs[3] = {0, 0, 0};  // breadth-first, d0 = 0, 3, 6
+  double depthFirstMs[3] = {0, 0, 0};  // depth-first, start depth 3, 6, 8
   double noEarlyOutMs = 0, resendMs = 0, hostSortMs = 0;
   double resendUploadMs = 0;
   std::size_t candidates = 0, intersecting = 0;
@@ -171,6 +175,7 @@ struct OpenClRow {
 };
 
 constexpr int kStartDepths[3] = {0, 3, 6};
+constexpr int kDepthFirstStartDepths[3] = {3, 6, 8};
 
 // Median end-to-end time of collideMeshes on OpenCL with `device` options, and the stage medians.
 double timeOpenCl(const MeshShape& shape, const scenes::PairPose& pose, const MeshBatchDeviceOptions& device,
@@ -179,7 +184,7 @@ double timeOpenCl(const MeshShape& shape, const scenes::PairPose& pose, const Me
   config.meshBackend = Backend::OpenCL;
   detail::setMeshDeviceOptions(device);
   MeshPairResult r = collideMeshes(shape, pose.a, shape, pose.b, config);  // warm-up
-  std::vector<double> total, upload, traversal, scan, sort, nearPhase, compaction, readback;
+  std::vector<double> total, upload, traversal, scan, sort, prefilter, nearPhase, compaction, readback;
   for (int i = 0; i < runs; ++i) {
     total.push_back(millisecondsOf([&] { r = collideMeshes(shape, pose.a, shape, pose.b, config); }));
     const MeshBatchDeviceStats s = detail::lastMeshDeviceStats();
@@ -187,6 +192,7 @@ double timeOpenCl(const MeshShape& shape, const scenes::PairPose& pose, const Me
     traversal.push_back(s.traversalMs);
     scan.push_back(s.scanMs);
     sort.push_back(s.sortMs);
+    prefilter.push_back(s.prefilterMs);
     nearPhase.push_back(s.nearMs);
     compaction.push_back(s.compactionMs);
     readback.push_back(s.readbackMs);
@@ -197,6 +203,7 @@ double timeOpenCl(const MeshShape& shape, const scenes::PairPose& pose, const Me
     stages->traversalMs = median(traversal);
     stages->scanMs = median(scan);
     stages->sortMs = median(sort);
+    stages->prefilterMs = median(prefilter);
     stages->nearMs = median(nearPhase);
     stages->compactionMs = median(compaction);
     stages->readbackMs = median(readback);
@@ -239,8 +246,17 @@ OpenClRow measureOpenCl(const std::string& name, const TriangleMesh& loaded, int
   row.intersecting = cpuResult.intersectingPairs.size();
   for (int k = 0; k < 3; ++k) {
     MeshBatchDeviceOptions o;
+    o.traversal = MeshTraversal::BreadthFirst;
     o.startDepth = kStartDepths[k];
-    row.startDepthMs[k] = timeOpenCl(shape, pose, o, runs, nullptr, nullptr);
+    // The per-level front sizes (Table 6.3) come from the breadth-first walk from the roots.
+    MeshBatchDeviceStats breadthFirst;
+    row.startDepthMs[k] = timeOpenCl(shape, pose, o, runs, &breadthFirst, nullptr);
+    if (k == 0) row.stages.frontSizes = breadthFirst.frontSizes;
+  }
+  for (int k = 0; k < 3; ++k) {
+    MeshBatchDeviceOptions o;
+    o.depthFirstStartDepth = kDepthFirstStartDepths[k];
+    row.depthFirstMs[k] = timeOpenCl(shape, pose, o, runs, nullptr, nullptr);
   }
   MeshBatchDeviceOptions o;
   o.nearPrefilter = false;
@@ -256,46 +272,57 @@ OpenClRow measureOpenCl(const std::string& name, const TriangleMesh& loaded, int
   return row;
 }
 
-void printOpenClTables(const std::vector<OpenClRow>& rows, const std::string& device, int runs, std::ostream& out) {
+void printOpenClTables(const std::vector<OpenClRow>& rows, const std::string& device, int runs,
+                       std::ostream& out) {
   out << std::fixed << std::setprecision(2);
   out << "\nOpenCL device: " << device << "; thesis scene, median of " << runs << " runs\n";
-  out << "\nCPU vs OpenCL, end to end (thesis Tables 6.2, 6.5); OpenCL middle = upload + traversal + scan + sort, "
+  out << "\nCPU vs OpenCL, end to end (thesis Tables 6.2, 6.5); OpenCL middle = upload + traversal + scan + "
+         "sort, "
          "near = near kernel + compaction + readback\n";
-  out << "| mesh | triangles | CPU middle ms | CPU near+reduction ms | CPU total ms | OpenCL middle ms | OpenCL near "
+  out << "| mesh | triangles | CPU middle ms | CPU near+reduction ms | CPU total ms | OpenCL middle ms | "
+         "OpenCL near "
          "ms | OpenCL total ms | OpenCL / CPU | first OpenCL call ms | same results |\n";
   out << "|---|---:|---:|---:|---:|---:|---:|---:|---:|---:|---|\n";
   for (const OpenClRow& r : rows) {
     const MeshBatchDeviceStats& s = r.stages;
     out << "| " << r.name << " | " << r.triangles << " | " << r.cpuMiddleMs << " | " << r.cpuNearMs << " | "
         << r.cpuTotalMs << " | " << s.uploadMs + s.traversalMs + s.scanMs + s.sortMs << " | "
-        << s.nearMs + s.compactionMs + s.readbackMs << " | " << r.clTotalMs << " | " << std::setprecision(1)
-        << r.clTotalMs / r.cpuTotalMs << "x" << std::setprecision(2) << " | " << r.firstCallMs << " | "
-        << (r.sameAsCpu ? "yes" : "NO") << " |\n";
+        << s.prefilterMs + s.nearMs + s.compactionMs + s.readbackMs << " | " << r.clTotalMs << " | "
+        << std::setprecision(1) << r.clTotalMs / r.cpuTotalMs << "x" << std::setprecision(2) << " | "
+        << r.firstCallMs << " | " << (r.sameAsCpu ? "yes" : "NO") << " |\n";
   }
   out << "\nOpenCL time split (thesis Figs. 6.2-6.3), ms\n";
-  out << "| mesh | upload (transforms) | traversal | prefix sum | sort | near kernel | compaction | readback | node "
-         "tests | candidates | intersecting |\n";
-  out << "|---|---:|---:|---:|---:|---:|---:|---:|---:|---:|---:|\n";
+  out << "| mesh | upload (transforms) | traversal | prefix sum | sort | early-out | near kernel | "
+         "compaction | "
+         "readback | node tests | candidates | intersecting |\n";
+  out << "|---|---:|---:|---:|---:|---:|---:|---:|---:|---:|---:|---:|\n";
   for (const OpenClRow& r : rows) {
     const MeshBatchDeviceStats& s = r.stages;
-    out << "| " << r.name << " | " << s.uploadMs << " | " << s.traversalMs << " | " << s.scanMs << " | " << s.sortMs
-        << " | " << s.nearMs << " | " << s.compactionMs << " | " << s.readbackMs << " | " << s.nodeTests << " | "
-        << r.candidates << " | " << r.intersecting << " |\n";
+    out << "| " << r.name << " | " << s.uploadMs << " | " << s.traversalMs << " | " << s.scanMs << " | "
+        << s.sortMs << " | " << s.prefilterMs << " | " << s.nearMs << " | " << s.compactionMs << " | "
+        << s.readbackMs << " | " << s.nodeTests << " | " << r.candidates << " | " << r.intersecting << " |\n";
   }
-  out << "\nOverlapping node pairs per level of the breadth-first traversal (thesis Table 6.3; level 0 = roots)\n";
+  out << "\nOverlapping node pairs per level of the breadth-first traversal (thesis Table 6.3; level 0 = "
+         "roots)\n";
   for (const OpenClRow& r : rows) {
     out << "- " << r.name << ":";
     for (std::uint64_t f : r.stages.frontSizes) out << " " << f;
     out << "\n";
   }
-  out << "\nOpenCL variants, end-to-end ms: start depth d0 (thesis used 6), without the early-out test, host sort, "
-         "and meshes re-sent every call (thesis §5.4.1) instead of resident\n";
-  out << "| mesh | d0=0 | d0=3 | d0=6 | no early-out | host sort | re-sent (its upload) | resident |\n";
-  out << "|---|---:|---:|---:|---:|---:|---:|---:|\n";
+  out << "\nOpenCL variants, end-to-end ms: the breadth-first traversal (thesis §5.4.2) from start depth d0 "
+         "(thesis "
+         "used 6), the depth-first one from a fixed start depth, without the early-out test, host sort, and "
+         "meshes "
+         "re-sent every call (thesis §5.4.1) instead of resident; the last column is the default\n";
+  out << "| mesh | breadth-first d0=0 | d0=3 | d0=6 | depth-first d=3 | d=6 | d=8 | no early-out | host sort "
+         "| "
+         "re-sent (its upload) | default |\n";
+  out << "|---|---:|---:|---:|---:|---:|---:|---:|---:|---:|---:|\n";
   for (const OpenClRow& r : rows) {
-    out << "| " << r.name << " | " << r.startDepthMs[0] << " | " << r.startDepthMs[1] << " | " << r.startDepthMs[2]
-        << " | " << r.noEarlyOutMs << " | " << r.hostSortMs << " | " << r.resendMs << " (" << r.resendUploadMs
-        << ") | " << r.clTotalMs << " |\n";
+    out << "| " << r.name << " | " << r.startDepthMs[0] << " | " << r.startDepthMs[1] << " | "
+        << r.startDepthMs[2] << " | " << r.depthFirstMs[0] << " | " << r.depthFirstMs[1] << " | "
+        << r.depthFirstMs[2] << " | " << r.noEarlyOutMs << " | " << r.hostSortMs << " | " << r.resendMs
+        << " (" << r.resendUploadMs << ") | " << r.clTotalMs << " |\n";
   }
 }
 
@@ -335,7 +362,8 @@ void run(const MeshPairOptions& options) {
       rows.push_back(measure(file, loadMesh(path), options.runs));
     }
   }
-  std::cout << "\nthesis scene, median of " << options.runs << " runs (gpucol total = collideMeshes end to end)\n";
+  std::cout << "\nthesis scene, median of " << options.runs
+            << " runs (gpucol total = collideMeshes end to end)\n";
   printTable(rows, std::cout);
   if (!options.csvPath.empty()) writeCsv(rows, options.csvPath);
 }
@@ -349,8 +377,10 @@ const CommandRegistration kRegistration([](CLI::App& app) {
   command->add_option("--runs", options->runs, "runs per measurement; the median is reported")
       ->check(CLI::PositiveNumber);
   command->add_option("--csv", options->csvPath, "also write the rows to this CSV file (cpu backend)");
-  command->add_option("--backend", options->backend,
-                      "cpu: gpucol beside GImpact; opencl: the OpenCL pipeline beside the CPU path, stage by stage")
+  command
+      ->add_option(
+          "--backend", options->backend,
+          "cpu: gpucol beside GImpact; opencl: the OpenCL pipeline beside the CPU path, stage by stage")
       ->check(CLI::IsMember({"cpu", "opencl"}));
   command->callback([options] { run(*options); });
 });

@@ -43,6 +43,9 @@ double millisecondsSince(Clock::time_point start) {
 /// Largest start depth: 4^d paths per pair must stay far below the 2^32 work-items of one launch.
 constexpr int kMaxStartDepth = 12;
 
+/// Work-items the depth-first traversal's automatic start depth aims for (MeshBatchDeviceOptions).
+constexpr std::uint64_t kDepthFirstItems = 4096;
+
 /// A device buffer that grows on demand (by a quarter more than asked) and is reused between batches.
 struct DeviceArray {
   cl::Buffer buffer;
@@ -72,15 +75,12 @@ class OpenClMeshPipeline final : public MeshBatchDevice {
       cl::Program middle = m_context.program("mesh_middle_phase", kernels::mesh_middle_phase);
       m_frontStart = cl::Kernel(middle, "mesh_front_start");
       m_frontExpand = cl::Kernel(middle, "mesh_front_expand");
-      for (int prefilter = 0; prefilter < 2; ++prefilter) {
-        cl::Program nearProgram = m_context.program("mesh_near_phase", kernels::mesh_near_phase,
-                                                    prefilter ? "-DGPUCOL_NEAR_PREFILTER" : "");
-        m_nearTest[prefilter] = cl::Kernel(nearProgram, "mesh_near_test");
-        if (prefilter) {
-          m_nearFlags = cl::Kernel(nearProgram, "mesh_near_flags");
-          m_nearCompact = cl::Kernel(nearProgram, "mesh_near_compact");
-        }
-      }
+      cl::Program nearProgram = m_context.program("mesh_near_phase", kernels::mesh_near_phase);
+      m_nearPrefilter = cl::Kernel(nearProgram, "mesh_near_prefilter");
+      m_nearGather = cl::Kernel(nearProgram, "mesh_near_gather");
+      m_nearTest = cl::Kernel(nearProgram, "mesh_near_test");
+      m_computeUnits = m_context.device().getInfo<CL_DEVICE_MAX_COMPUTE_UNITS>();
+      m_counters = cl::Buffer(m_context.context(), CL_MEM_READ_WRITE, 4 * sizeof(cl_uint));
       // Kernels read the leaf entry arena even when no tree has entries: give it one element.
       m_emptyEntries = cl::Buffer(m_context.context(), CL_MEM_READ_ONLY, sizeof(GpucolLeafEntry));
     });
@@ -98,6 +98,11 @@ class OpenClMeshPipeline final : public MeshBatchDevice {
       throw std::invalid_argument("OpenCL mesh pipeline: start depth " + std::to_string(options.startDepth) +
                                   " is outside 0.." + std::to_string(kMaxStartDepth));
     }
+    if (options.depthFirstStartDepth < -1 || options.depthFirstStartDepth > kMaxStartDepth) {
+      throw std::invalid_argument("OpenCL mesh pipeline: depth-first start depth " +
+                                  std::to_string(options.depthFirstStartDepth) + " is outside -1.." +
+                                  std::to_string(kMaxStartDepth));
+    }
     translateClErrors("running the OpenCL mesh pipeline", [&] { runBatch(pairs, options, results, s); });
   }
 
@@ -109,24 +114,49 @@ class OpenClMeshPipeline final : public MeshBatchDevice {
   }
 
  private:
+  /// The work-group size for `items` work-items of `kernel`: the device's largest for it, halved until every
+  /// compute unit gets several groups (a CPU device runs one work-group per thread, and PoCL's largest group,
+  /// 4096, would put a whole small batch on one core; the depth-first kernel's work-items also differ widely
+  /// in work).
+  std::size_t groupSize(const cl::Kernel& kernel, std::uint64_t items) const {
+    std::size_t local = m_context.workGroupSize(kernel);
+    while (local > 1 && (items + local - 1) / local < 16 * std::uint64_t(m_computeUnits)) local /= 2;
+    return local;
+  }
+
+  /// The global size launch() uses for `items` work-items of `kernel`.
+  std::size_t globalSize(const cl::Kernel& kernel, std::uint64_t items) const {
+    const std::size_t local = groupSize(kernel, items);
+    return std::size_t((items + local - 1) / local * local);
+  }
+
+  /// Enqueues `kernel` over at least `items` work-items (rounded up to whole work-groups).
   void launch(cl::Kernel& kernel, std::uint64_t items) {
     if (items == 0) return;
-    const std::size_t local = m_context.workGroupSize(kernel);
-    const std::size_t global = std::size_t((items + local - 1) / local * local);
-    m_context.queue().enqueueNDRangeKernel(kernel, cl::NullRange, cl::NDRange(global), cl::NDRange(local));
+    m_context.queue().enqueueNDRangeKernel(kernel, cl::NullRange, cl::NDRange(globalSize(kernel, items)),
+                                           cl::NDRange(groupSize(kernel, items)));
   }
 
   void runBatch(const std::vector<DeviceMeshPair>& pairs, const MeshBatchDeviceOptions& options,
                 std::vector<DeviceMeshPairResult>& results, MeshBatchDeviceStats& s);
+  std::uint64_t traverseBreadthFirst(std::size_t pairCount, const MeshBatchDeviceOptions& options,
+                                     const cl::Buffer& entries, unsigned bitsA, unsigned bitsB,
+                                     MeshBatchDeviceStats& s);
+  std::uint64_t traverseDepthFirst(std::size_t pairCount, int treeDepths,
+                                   const MeshBatchDeviceOptions& options, const cl::Buffer& entries,
+                                   unsigned bitsA, unsigned bitsB, MeshBatchDeviceStats& s);
+  cl::Kernel& depthFirstKernel(int treeDepths);
 
   OpenClContext& m_context;
   mutable std::mutex m_mutex;
   MeshDeviceCache m_cache;
   OpenClScan m_scan;
   OpenClRadixSort m_sort;
-  cl::Kernel m_frontStart, m_frontExpand, m_nearTest[2], m_nearFlags, m_nearCompact;
-  cl::Buffer m_emptyEntries;
-  DeviceArray m_pairs, m_counts, m_front, m_next, m_keys, m_keysGrow, m_values, m_hits, m_compacted;
+  cl::Kernel m_frontStart, m_frontExpand, m_nearPrefilter, m_nearGather, m_nearTest;
+  std::map<std::size_t, cl::Kernel> m_depthFirst;  // by stack length
+  cl_uint m_computeUnits = 1;
+  cl::Buffer m_emptyEntries, m_counters;
+  DeviceArray m_pairs, m_counts, m_front, m_next, m_keys, m_values, m_hits, m_survivors;
   std::vector<GpucolMeshPair> m_hostPairs;
   std::vector<std::uint64_t> m_hostKeys;
   std::vector<GpucolNearHit> m_hostHits;
@@ -142,6 +172,7 @@ void OpenClMeshPipeline::runBatch(const std::vector<DeviceMeshPair>& pairs,
   auto start = Clock::now();
   if (!options.resident) m_cache.clear();
   std::uint64_t maxTrianglesA = 1, maxTrianglesB = 1;
+  int treeDepths = 0;
   m_hostPairs.resize(pairs.size());
   for (std::size_t i = 0; i < pairs.size(); ++i) {
     const DeviceMeshPair& in = pairs[i];
@@ -153,6 +184,7 @@ void OpenClMeshPipeline::runBatch(const std::vector<DeviceMeshPair>& pairs,
     const MeshSlot slotB = m_cache.acquire(in.meshB, *in.treeB, s.uploadedBytes);
     maxTrianglesA = std::max<std::uint64_t>(maxTrianglesA, in.meshA->triangleCount());
     maxTrianglesB = std::max<std::uint64_t>(maxTrianglesB, in.meshB->triangleCount());
+    treeDepths = std::max(treeDepths, in.treeA->depth() + in.treeB->depth());
     GpucolMeshPair& p = m_hostPairs[i];
     const Eigen::Vector3f inflation = carriedBoxInflation(*in.treeB, in.treeMap);
     for (int r = 0; r < 3; ++r) {
@@ -185,22 +217,143 @@ void OpenClMeshPipeline::runBatch(const std::vector<DeviceMeshPair>& pairs,
                             std::to_string(keyBits) + " bits, more than a 64-bit sort key");
   }
   const std::size_t pairBytes = pairs.size() * sizeof(GpucolMeshPair);
-  queue.enqueueWriteBuffer(m_pairs.ensure(ctx, pairBytes), CL_TRUE, 0, pairBytes, m_hostPairs.data());
+  // Not waited for: the in-order queue runs it before the first kernel, and m_hostPairs stays untouched until
+  // the next batch, which begins after this one's last wait.
+  queue.enqueueWriteBuffer(m_pairs.ensure(ctx, pairBytes), CL_FALSE, 0, pairBytes, m_hostPairs.data());
   s.uploadedBytes += pairBytes;
   const cl::Buffer& entries = m_cache.entries()() ? m_cache.entries() : m_emptyEntries;
   s.uploadMs = millisecondsSince(start);
 
-  // The first front (thesis §5.4.2: optionally at depth d0), counted, scanned and written.
-  const std::uint64_t paths = std::uint64_t(1) << (2 * options.startDepth);
-  const std::uint64_t startItems = paths * pairs.size();
-  if (startItems > 0xffffffffu) {
-    throw std::length_error("OpenCL mesh pipeline: start depth " + std::to_string(options.startDepth) +
-                            " with " + std::to_string(pairs.size()) + " pairs exceeds 2^32 work-items");
+  std::uint64_t candidateCount = 0;
+  if (options.traversal == MeshTraversal::BreadthFirst) {
+    candidateCount = traverseBreadthFirst(pairs.size(), options, entries, bitsA, bitsB, s);
+  } else {
+    candidateCount = traverseDepthFirst(pairs.size(), treeDepths, options, entries, bitsA, bitsB, s);
+  }
+  s.candidates = candidateCount;
+  if (candidateCount == 0) return;
+
+  // Deterministic order: by pair, then (triangleA, triangleB), which is the CPU's order within each pair.
+  start = Clock::now();
+  m_hostKeys.resize(candidateCount);
+  if (options.deviceSort) {
+    m_sort.sort(m_keys.buffer, m_values.ensure(ctx, candidateCount * sizeof(cl_uint)), candidateCount,
+                keyBits);
+    queue.finish();
+  } else {
+    queue.enqueueReadBuffer(m_keys.buffer, CL_TRUE, 0, candidateCount * 8, m_hostKeys.data());
+    std::sort(m_hostKeys.begin(), m_hostKeys.end());
+    queue.enqueueWriteBuffer(m_keys.buffer, CL_TRUE, 0, candidateCount * 8, m_hostKeys.data());
+  }
+  s.sortMs = millisecondsSince(start);
+
+  // Near phase: the float early-out over every candidate, the survivors compacted in candidate order, then
+  // the double test and contact generation on them. Its hit records come back in that order; the host keeps
+  // the intersecting ones.
+  std::uint64_t tested = candidateCount;
+  if (options.nearPrefilter) {
+    start = Clock::now();
+    m_nearPrefilter.setArg(0, m_pairs.buffer);
+    m_nearPrefilter.setArg(1, m_cache.vertices());
+    m_nearPrefilter.setArg(2, m_cache.indices());
+    m_nearPrefilter.setArg(3, m_keys.buffer);
+    m_nearPrefilter.setArg(4, cl_uint(candidateCount));
+    m_nearPrefilter.setArg(5, cl_uint(bitsA));
+    m_nearPrefilter.setArg(6, cl_uint(bitsB));
+    m_nearPrefilter.setArg(
+        7, m_counts.ensure(ctx, globalSize(m_nearPrefilter, candidateCount) * sizeof(cl_uint)));
+    launch(m_nearPrefilter, candidateCount);
+    queue.finish();
+    s.prefilterMs = millisecondsSince(start);
+    start = Clock::now();
+    tested = m_scan.exclusiveScan(m_counts.buffer, candidateCount);
+    if (tested > 0) {
+      m_nearGather.setArg(0, m_counts.buffer);
+      m_nearGather.setArg(1, cl_uint(candidateCount));
+      m_nearGather.setArg(2, cl_uint(tested));
+      m_nearGather.setArg(3, m_survivors.ensure(ctx, tested * sizeof(cl_uint)));
+      launch(m_nearGather, candidateCount);
+      queue.finish();
+    }
+    s.compactionMs = millisecondsSince(start);
   }
   start = Clock::now();
+  if (tested > 0) {
+    m_nearTest.setArg(0, m_pairs.buffer);
+    m_nearTest.setArg(1, m_cache.vertices());
+    m_nearTest.setArg(2, m_cache.indices());
+    m_nearTest.setArg(3, m_keys.buffer);
+    m_nearTest.setArg(4, m_survivors.ensure(ctx, sizeof(cl_uint)));
+    m_nearTest.setArg(5, cl_uint(options.nearPrefilter ? 1 : 0));
+    m_nearTest.setArg(6, cl_uint(tested));
+    m_nearTest.setArg(7, cl_uint(bitsA));
+    m_nearTest.setArg(8, cl_uint(bitsB));
+    m_nearTest.setArg(9, m_hits.ensure(ctx, tested * sizeof(GpucolNearHit)));
+    launch(m_nearTest, tested);
+    queue.finish();
+  }
+  s.nearMs += millisecondsSince(start);
+
+  start = Clock::now();
+  if (options.deviceSort) {
+    queue.enqueueReadBuffer(m_keys.buffer, CL_FALSE, 0, candidateCount * 8, m_hostKeys.data());
+  }
+  m_hostHits.resize(tested);
+  if (tested > 0) {
+    queue.enqueueReadBuffer(m_hits.buffer, CL_FALSE, 0, std::size_t(tested) * sizeof(GpucolNearHit),
+                            m_hostHits.data());
+  }
+  queue.finish();
+  s.readbackMs = millisecondsSince(start);
+
+  // Split by pair: keys are sorted by pair first, so each pair's candidates are one run.
+  const std::uint64_t maskA = (std::uint64_t(1) << bitsA) - 1, maskB = (std::uint64_t(1) << bitsB) - 1;
+  std::vector<std::uint64_t> pairStart(pairs.size() + 1, 0);
+  for (std::uint64_t key : m_hostKeys) ++pairStart[std::size_t(key >> (bitsA + bitsB)) + 1];
+  for (std::size_t i = 0; i < pairs.size(); ++i) {
+    pairStart[i + 1] += pairStart[i];
+    results[i].candidates.reserve(pairStart[i + 1] - pairStart[i]);
+  }
+  for (std::uint64_t key : m_hostKeys) {
+    results[std::size_t(key >> (bitsA + bitsB))].candidates.push_back(
+        {std::uint32_t((key >> bitsB) & maskA), std::uint32_t(key & maskB)});
+  }
+  for (const GpucolNearHit& h : m_hostHits) {
+    if ((h.flags & GPUCOL_HIT_INTERSECTS) == 0) continue;
+    ++s.hits;
+    const std::size_t pair = std::size_t(m_hostKeys[h.candidate] >> (bitsA + bitsB));
+    DeviceNearHit hit;
+    hit.candidate = std::uint32_t(h.candidate - pairStart[pair]);
+    hit.hasContact = (h.flags & GPUCOL_HIT_CONTACT) != 0;
+    if (hit.hasContact) {
+      hit.contact.point = Eigen::Vector3f(h.point[0], h.point[1], h.point[2]);
+      hit.contact.normalOnB = Eigen::Vector3f(h.normal[0], h.normal[1], h.normal[2]);
+      hit.contact.depth = h.depth;
+      hit.contact.onFaceOfB = (h.flags & GPUCOL_HIT_ON_FACE_OF_B) != 0;
+      hit.contact.sameFacing = (h.flags & GPUCOL_HIT_SAME_FACING) != 0;
+      hit.contact.deepestPoint = Eigen::Vector3f(h.deepest[0], h.deepest[1], h.deepest[2]);
+    }
+    results[pair].hits.push_back(hit);
+  }
+}
+
+std::uint64_t OpenClMeshPipeline::traverseBreadthFirst(std::size_t pairCount,
+                                                       const MeshBatchDeviceOptions& options,
+                                                       const cl::Buffer& entries, unsigned bitsA,
+                                                       unsigned bitsB, MeshBatchDeviceStats& s) {
+  const cl::Context& ctx = m_context.context();
+  cl::CommandQueue& queue = m_context.queue();
+  // The first front (thesis §5.4.2: optionally at depth d0), counted, scanned and written.
+  const std::uint64_t paths = std::uint64_t(1) << (2 * options.startDepth);
+  const std::uint64_t startItems = paths * pairCount;
+  if (startItems > 0xffffffffu) {
+    throw std::length_error("OpenCL mesh pipeline: start depth " + std::to_string(options.startDepth) +
+                            " with " + std::to_string(pairCount) + " pairs exceeds 2^32 work-items");
+  }
+  auto start = Clock::now();
   m_frontStart.setArg(0, m_pairs.buffer);
   m_frontStart.setArg(1, m_cache.nodes());
-  m_frontStart.setArg(2, cl_uint(pairs.size()));
+  m_frontStart.setArg(2, cl_uint(pairCount));
   m_frontStart.setArg(3, cl_uint(options.startDepth));
   m_frontStart.setArg(4, cl_uint(0));
   m_frontStart.setArg(5, m_counts.ensure(ctx, startItems * sizeof(cl_uint)));
@@ -220,7 +373,7 @@ void OpenClMeshPipeline::runBatch(const std::vector<DeviceMeshPair>& pairs,
   }
   s.traversalMs += millisecondsSince(start);
   // Root tests; below the roots the start kernel repeats ancestors' tests, which are not counted.
-  s.nodeTests += pairs.size();
+  s.nodeTests += pairCount;
 
   // Level by level until the front is empty; candidates are appended as sort keys (pair, triangleA,
   // triangleB).
@@ -287,94 +440,73 @@ void OpenClMeshPipeline::runBatch(const std::vector<DeviceMeshPair>& pairs,
     std::swap(m_front, m_next);
     frontSize = children;
   }
-  s.candidates = candidateCount;
-  if (candidateCount == 0) return;
+  return candidateCount;
+}
 
-  // Deterministic order: by pair, then (triangleA, triangleB), which is the CPU's order within each pair.
-  start = Clock::now();
-  m_hostKeys.resize(candidateCount);
-  if (options.deviceSort) {
-    m_sort.sort(m_keys.buffer, m_values.ensure(ctx, candidateCount * sizeof(cl_uint)), candidateCount,
-                keyBits);
-    queue.finish();
-  } else {
-    queue.enqueueReadBuffer(m_keys.buffer, CL_TRUE, 0, candidateCount * 8, m_hostKeys.data());
-    std::sort(m_hostKeys.begin(), m_hostKeys.end());
-    queue.enqueueWriteBuffer(m_keys.buffer, CL_TRUE, 0, candidateCount * 8, m_hostKeys.data());
-  }
-  s.sortMs = millisecondsSince(start);
+cl::Kernel& OpenClMeshPipeline::depthFirstKernel(int treeDepths) {
+  // Each expansion pops one node pair and pushes at most four one level down, and a path has at most
+  // depthA + depthB levels: 3 (depthA + depthB) + 1 entries always suffice. Rounded up to a power of two (at
+  // least 64) so that few variants get built.
+  std::size_t length = 64;
+  while (length < 3 * std::size_t(treeDepths) + 1) length *= 2;
+  auto found = m_depthFirst.find(length);
+  if (found != m_depthFirst.end()) return found->second;
+  cl::Program program = m_context.program("mesh_middle_phase", kernels::mesh_middle_phase,
+                                          "-DGPUCOL_DFS_STACK=" + std::to_string(length));
+  return m_depthFirst.emplace(length, cl::Kernel(program, "mesh_traverse_depth_first")).first->second;
+}
 
-  // Near phase: every candidate in one kernel, then the intersecting ones compacted in candidate order.
-  start = Clock::now();
-  cl::Kernel& nearTest = m_nearTest[options.nearPrefilter ? 1 : 0];
-  nearTest.setArg(0, m_pairs.buffer);
-  nearTest.setArg(1, m_cache.vertices());
-  nearTest.setArg(2, m_cache.indices());
-  nearTest.setArg(3, m_keys.buffer);
-  nearTest.setArg(4, cl_uint(candidateCount));
-  nearTest.setArg(5, cl_uint(bitsA));
-  nearTest.setArg(6, cl_uint(bitsB));
-  nearTest.setArg(7, m_hits.ensure(ctx, candidateCount * sizeof(GpucolNearHit)));
-  launch(nearTest, candidateCount);
-  queue.finish();
-  s.nearMs = millisecondsSince(start);
-
-  start = Clock::now();
-  m_nearFlags.setArg(0, m_hits.buffer);
-  m_nearFlags.setArg(1, cl_uint(candidateCount));
-  m_nearFlags.setArg(2, m_counts.ensure(ctx, candidateCount * sizeof(cl_uint)));
-  launch(m_nearFlags, candidateCount);
-  const std::uint32_t hitCount = m_scan.exclusiveScan(m_counts.buffer, candidateCount);
-  if (hitCount > 0) {
-    m_nearCompact.setArg(0, m_hits.buffer);
-    m_nearCompact.setArg(1, cl_uint(candidateCount));
-    m_nearCompact.setArg(2, m_counts.buffer);
-    m_nearCompact.setArg(3, m_compacted.ensure(ctx, std::size_t(hitCount) * sizeof(GpucolNearHit)));
-    launch(m_nearCompact, candidateCount);
+std::uint64_t OpenClMeshPipeline::traverseDepthFirst(std::size_t pairCount, int treeDepths,
+                                                     const MeshBatchDeviceOptions& options,
+                                                     const cl::Buffer& entries, unsigned bitsA,
+                                                     unsigned bitsB, MeshBatchDeviceStats& s) {
+  const cl::Context& ctx = m_context.context();
+  cl::CommandQueue& queue = m_context.queue();
+  const auto start = Clock::now();
+  // The start front: deep enough for a few thousand work-items (a CPU device balances its threads over them),
+  // as shallow as that allows (the paths below the front's dead ends are idle work-items).
+  int depth = options.depthFirstStartDepth;
+  if (depth < 0) {
+    depth = 0;
+    while (depth < kMaxStartDepth && (std::uint64_t(pairCount) << (2 * depth)) < kDepthFirstItems) ++depth;
   }
-  queue.finish();
-  s.compactionMs = millisecondsSince(start);
-  s.hits = hitCount;
-
-  start = Clock::now();
-  if (options.deviceSort) {
-    queue.enqueueReadBuffer(m_keys.buffer, CL_FALSE, 0, candidateCount * 8, m_hostKeys.data());
+  const std::uint64_t items = std::uint64_t(pairCount) << (2 * depth);
+  if (items > 0xffffffffu) {
+    throw std::length_error("OpenCL mesh pipeline: depth-first start depth " + std::to_string(depth) +
+                            " with " + std::to_string(pairCount) + " pairs exceeds 2^32 work-items");
   }
-  m_hostHits.resize(hitCount);
-  if (hitCount > 0) {
-    queue.enqueueReadBuffer(m_compacted.buffer, CL_FALSE, 0, std::size_t(hitCount) * sizeof(GpucolNearHit),
-                            m_hostHits.data());
-  }
-  queue.finish();
-  s.readbackMs = millisecondsSince(start);
-
-  // Split by pair: keys are sorted by pair first, so each pair's candidates are one run.
-  const std::uint64_t maskA = (std::uint64_t(1) << bitsA) - 1, maskB = (std::uint64_t(1) << bitsB) - 1;
-  std::vector<std::uint64_t> pairStart(pairs.size() + 1, 0);
-  for (std::uint64_t key : m_hostKeys) ++pairStart[std::size_t(key >> (bitsA + bitsB)) + 1];
-  for (std::size_t i = 0; i < pairs.size(); ++i) {
-    pairStart[i + 1] += pairStart[i];
-    results[i].candidates.reserve(pairStart[i + 1] - pairStart[i]);
-  }
-  for (std::uint64_t key : m_hostKeys) {
-    results[std::size_t(key >> (bitsA + bitsB))].candidates.push_back(
-        {std::uint32_t((key >> bitsB) & maskA), std::uint32_t(key & maskB)});
-  }
-  for (const GpucolNearHit& h : m_hostHits) {
-    const std::size_t pair = std::size_t(m_hostKeys[h.candidate] >> (bitsA + bitsB));
-    DeviceNearHit hit;
-    hit.candidate = std::uint32_t(h.candidate - pairStart[pair]);
-    hit.hasContact = (h.flags & GPUCOL_HIT_CONTACT) != 0;
-    if (hit.hasContact) {
-      hit.contact.point = Eigen::Vector3f(h.point[0], h.point[1], h.point[2]);
-      hit.contact.normalOnB = Eigen::Vector3f(h.normal[0], h.normal[1], h.normal[2]);
-      hit.contact.depth = h.depth;
-      hit.contact.onFaceOfB = (h.flags & GPUCOL_HIT_ON_FACE_OF_B) != 0;
-      hit.contact.sameFacing = (h.flags & GPUCOL_HIT_SAME_FACING) != 0;
-      hit.contact.deepestPoint = Eigen::Vector3f(h.deepest[0], h.deepest[1], h.deepest[2]);
+  cl::Kernel& kernel = depthFirstKernel(treeDepths);
+  // The key buffer keeps its size between batches; it starts at one candidate per 4 work-items.
+  std::size_t capacity = std::max<std::size_t>(m_keys.bytes, items * 2) / sizeof(cl_ulong);
+  cl_uint counters[4] = {0, 0, 0, 0};
+  for (;;) {
+    capacity = std::min<std::size_t>(capacity, 0xffffffffu);
+    queue.enqueueFillBuffer(m_counters, cl_uint(0), 0, sizeof counters);
+    kernel.setArg(0, m_pairs.buffer);
+    kernel.setArg(1, m_cache.nodes());
+    kernel.setArg(2, entries);
+    kernel.setArg(3, cl_uint(pairCount));
+    kernel.setArg(4, cl_uint(depth));
+    kernel.setArg(5, m_keys.ensure(ctx, capacity * sizeof(cl_ulong)));
+    kernel.setArg(6, cl_uint(capacity));
+    kernel.setArg(7, m_counters);
+    kernel.setArg(8, cl_uint(bitsA));
+    kernel.setArg(9, cl_uint(bitsB));
+    launch(kernel, items);
+    queue.enqueueReadBuffer(m_counters, CL_TRUE, 0, sizeof counters, counters);
+    if (counters[1] != 0) {
+      throw std::length_error("OpenCL mesh pipeline: more than 2^32 - 1 candidate pairs in one batch");
     }
-    results[pair].hits.push_back(hit);
+    if (counters[0] <= capacity) break;
+    // Overflow: nothing was lost, only not written; grow to what was counted and run the pass again.
+    capacity = std::size_t(counters[0]) + counters[0] / 4;
+    m_keys.ensure(ctx, capacity * sizeof(cl_ulong));
+    capacity = m_keys.bytes / sizeof(cl_ulong);
+    ++s.traversalReruns;
   }
+  s.nodeTests += pairCount + ((std::uint64_t(counters[3]) << 32) | counters[2]);
+  s.traversalMs += millisecondsSince(start);
+  return counters[0];
 }
 
 struct PipelineRegistry {

@@ -1,9 +1,9 @@
-// Middle phase of the mesh pipeline on the device (thesis §5.4.2): tree against tree, breadth-first, one level
-// per launch, segmented over every mesh pair of the batch (each front entry carries its pair, thesis §7.3).
-// Each level runs twice: a counting pass writes, per front entry, how many child node pairs overlap, how many
-// candidate triangle pairs it emits and how many box tests it made; the host scans the counts (scan.cl, Fig.
-// 5.8) and sizes the next front and the candidate list from the totals; the writing pass repeats the tests
-// and writes at the scanned offsets. So nothing has a fixed capacity.
+// Middle phase of the mesh pipeline on the device (thesis §5.4.2): tree against tree, breadth-first, one
+// level per launch, segmented over every mesh pair of the batch (each front entry carries its pair, thesis
+// §7.3). Each level runs twice: a counting pass writes, per front entry, how many child node pairs overlap,
+// how many candidate triangle pairs it emits and how many box tests it made; the host scans the counts
+// (scan.cl, Fig. 5.8) and sizes the next front and the candidate list from the totals; the writing pass
+// repeats the tests and writes at the scanned offsets. So nothing has a fixed capacity.
 //
 // The box tests are those of plugin/src/bvh/tree_traversal.cpp (BoxCarrier::carry and overlaps) with the
 // same operations in the same order and no contraction, so the device finds exactly the CPU's candidates.
@@ -42,7 +42,8 @@ bool mesh_overlaps(__global const float* lo, __global const float* hi, const Car
          (lo[2] <= b->max[2]) & (b->min[2] <= hi[2]);
 }
 
-bool mesh_nodes_overlap(__global const GpucolMeshPair* p, __global const GpucolTreeNode* nodes, uint a, uint b) {
+bool mesh_nodes_overlap(__global const GpucolMeshPair* p, __global const GpucolTreeNode* nodes, uint a,
+                        uint b) {
   __global const GpucolTreeNode* na = nodes + p->nodesA + a;
   __global const GpucolTreeNode* nb = nodes + p->nodesB + b;
   const CarriedBox box = mesh_carry(p, nb->min, nb->max);
@@ -111,10 +112,11 @@ __kernel void mesh_front_start(__global const GpucolMeshPair* pairs, __global co
 // Writing pass: `counts` holds the exclusive scan of those 3n values; children go to next[counts[i]] and
 // candidates to keys[keyBase + counts[n + i] - childTotal] (childTotal = counts[n], the scan's value there).
 __kernel void mesh_front_expand(__global const GpucolMeshPair* pairs, __global const GpucolTreeNode* nodes,
-                                __global const GpucolLeafEntry* entries, __global const GpucolFrontEntry* front,
-                                const uint n, const uint write, __global uint* counts,
-                                __global GpucolFrontEntry* next, __global ulong* keys, const uint keyBase,
-                                const uint childTotal, const uint bitsA, const uint bitsB) {
+                                __global const GpucolLeafEntry* entries,
+                                __global const GpucolFrontEntry* front, const uint n, const uint write,
+                                __global uint* counts, __global GpucolFrontEntry* next, __global ulong* keys,
+                                const uint keyBase, const uint childTotal, const uint bitsA,
+                                const uint bitsB) {
   const uint i = get_global_id(0);
   if (i >= n) return;
   const GpucolFrontEntry entry = front[i];
@@ -195,7 +197,8 @@ __kernel void mesh_front_expand(__global const GpucolMeshPair* pairs, __global c
       if (na->count == 1u) {
         ++tests;
         if (mesh_overlaps(na->min, na->max, &triB)) {
-          if (write) keys[keyAt + candidates] = mesh_candidate_key(entry.pair, na->first, triangleB, bitsA, bitsB);
+          if (write)
+            keys[keyAt + candidates] = mesh_candidate_key(entry.pair, na->first, triangleB, bitsA, bitsB);
           ++candidates;
         }
         continue;
@@ -204,7 +207,8 @@ __kernel void mesh_front_expand(__global const GpucolMeshPair* pairs, __global c
         __global const GpucolLeafEntry* ea = entries + p->entriesA + na->first + k;
         ++tests;
         if (mesh_overlaps(ea->min, ea->max, &triB)) {
-          if (write) keys[keyAt + candidates] = mesh_candidate_key(entry.pair, ea->triangle, triangleB, bitsA, bitsB);
+          if (write)
+            keys[keyAt + candidates] = mesh_candidate_key(entry.pair, ea->triangle, triangleB, bitsA, bitsB);
           ++candidates;
         }
       }
@@ -216,3 +220,158 @@ __kernel void mesh_front_expand(__global const GpucolMeshPair* pairs, __global c
     counts[2u * n + i] = tests;
   }
 }
+
+// The depth-first alternative to the level-by-level descent above: one launch for the whole middle phase.
+// Work-item = (pair, path) as in mesh_front_start: it walks its path `startDepth` levels down (the
+// breadth-first front, with the same rules so that every front entry comes from exactly one path), then
+// descends from its entry depth-first with a private stack, as a CPU thread would (tree_traversal.cpp,
+// Alg. 5.1). Candidates are appended at an atomic counter: keys[n] for n < capacity; the host reads the
+// counter and, when it went past the capacity, grows the buffer and runs the pass again, so nothing is ever
+// dropped. The order of the appended keys varies between runs; the radix sort that follows gives the
+// deterministic order.
+//
+// counters[0] = candidates appended, counters[1] = 1 when the counter wrapped past 2^32 - 1 (the host then
+// refuses the batch), counters[2] / counters[3] = low / high word of the box tests. The tests are counted as
+// the breadth-first descent counts them: each overlapping node pair's child tests once, by the path whose
+// remaining bits are all zero below that pair (the root test is the host's).
+//
+// GPUCOL_DFS_STACK (a build option) is the stack's length: the host builds the kernel with at least
+// 3 (depthA + depthB) + 1 entries for the deepest trees of the batch (each expansion pops one pair and pushes
+// at most four, one level further down), so the stack cannot overflow.
+#ifdef GPUCOL_DFS_STACK
+
+void mesh_count_tests(__global uint* counters, uint tests) {
+  if (tests == 0u) return;
+  const uint old = atomic_add(&counters[2], tests);
+  if (old + tests < old) atomic_inc(&counters[3]);
+}
+
+void mesh_append_key(__global uint* counters, __global ulong* keys, uint capacity, ulong key) {
+  const uint at = atomic_inc(&counters[0]);
+  if (at == 0xffffffffu) counters[1] = 1u;
+  if (at < capacity) keys[at] = key;
+}
+
+__kernel void mesh_traverse_depth_first(__global const GpucolMeshPair* pairs,
+                                        __global const GpucolTreeNode* nodes,
+                                        __global const GpucolLeafEntry* entries, const uint pairCount,
+                                        const uint startDepth, __global ulong* keys, const uint capacity,
+                                        __global uint* counters, const uint bitsA, const uint bitsB) {
+  const uint item = get_global_id(0);
+  const uint pathsPerPair = 1u << (2u * startDepth);
+  if (item >= pairCount * pathsPerPair) return;
+  const uint pair = item >> (2u * startDepth);
+  const uint path = item & (pathsPerPair - 1u);
+  __global const GpucolMeshPair* p = pairs + pair;
+  __global const GpucolTreeNode* treeA = nodes + p->nodesA;
+  __global const GpucolTreeNode* treeB = nodes + p->nodesB;
+  uint tests = 0u;
+
+  // The path down to the start front. The root test repeats the host's (which sends only overlapping pairs),
+  // so that this kernel alone decides, as mesh_front_start does.
+  uint a = 0u, b = 0u;
+  bool found = mesh_nodes_overlap(p, nodes, a, b);
+  for (uint level = 0u; found && level < startDepth; ++level) {
+    const uint rest = path >> (2u * level);
+    __global const GpucolTreeNode* na = treeA + a;
+    __global const GpucolTreeNode* nb = treeB + b;
+    const bool leafA = na->count != 0u;
+    const bool leafB = nb->count != 0u;
+    if (leafA && leafB) {
+      found = rest == 0u;
+      break;
+    }
+    if (rest == 0u) tests += (leafA || leafB) ? 2u : 4u;
+    const uint bitA = rest & 1u;
+    const uint bitB = (rest >> 1) & 1u;
+    if (leafA) {
+      found = bitA == 0u;
+    } else {
+      a = bitA ? na->first : a + 1u;
+    }
+    if (leafB) {
+      found = found && bitB == 0u;
+    } else {
+      b = bitB ? nb->first : b + 1u;
+    }
+    found = found && mesh_nodes_overlap(p, nodes, a, b);
+  }
+  if (!found) {
+    mesh_count_tests(counters, tests);
+    return;
+  }
+
+  uint2 stack[GPUCOL_DFS_STACK];
+  uint top = 0u;
+  stack[top++] = (uint2)(a, b);
+  while (top > 0u) {
+    const uint2 top2 = stack[--top];
+    a = top2.x;
+    b = top2.y;
+    __global const GpucolTreeNode* na = treeA + a;
+    __global const GpucolTreeNode* nb = treeB + b;
+    const bool leafA = na->count != 0u;
+    const bool leafB = nb->count != 0u;
+    if (!leafA && !leafB) {
+      const uint childrenA[2] = {a + 1u, na->first};
+      const uint childrenB[2] = {b + 1u, nb->first};
+      for (int k = 0; k < 2; ++k) {
+        __global const GpucolTreeNode* cb = treeB + childrenB[k];
+        const CarriedBox box = mesh_carry(p, cb->min, cb->max);
+        for (int m = 0; m < 2; ++m) {
+          __global const GpucolTreeNode* ca = treeA + childrenA[m];
+          if (mesh_overlaps(ca->min, ca->max, &box)) stack[top++] = (uint2)(childrenA[m], childrenB[k]);
+        }
+      }
+      tests += 4u;
+    } else if (leafA && !leafB) {
+      const uint childrenB[2] = {b + 1u, nb->first};
+      for (int k = 0; k < 2; ++k) {
+        __global const GpucolTreeNode* cb = treeB + childrenB[k];
+        const CarriedBox box = mesh_carry(p, cb->min, cb->max);
+        if (mesh_overlaps(na->min, na->max, &box)) stack[top++] = (uint2)(a, childrenB[k]);
+      }
+      tests += 2u;
+    } else if (!leafA && leafB) {
+      const uint childrenA[2] = {a + 1u, na->first};
+      const CarriedBox box = mesh_carry(p, nb->min, nb->max);
+      for (int m = 0; m < 2; ++m) {
+        __global const GpucolTreeNode* ca = treeA + childrenA[m];
+        if (mesh_overlaps(ca->min, ca->max, &box)) stack[top++] = (uint2)(childrenA[m], b);
+      }
+      tests += 2u;
+    } else if (na->count == 1u && nb->count == 1u) {
+      mesh_append_key(counters, keys, capacity, mesh_candidate_key(pair, na->first, nb->first, bitsA, bitsB));
+    } else {
+      // Leaves of several triangles test their triangles' boxes, as mesh_front_expand does.
+      for (uint j = 0u; j < nb->count; ++j) {
+        CarriedBox triB;
+        uint triangleB = nb->first;
+        if (nb->count == 1u) {
+          triB = mesh_carry(p, nb->min, nb->max);
+        } else {
+          __global const GpucolLeafEntry* eb = entries + p->entriesB + nb->first + j;
+          triB = mesh_carry(p, eb->min, eb->max);
+          triangleB = eb->triangle;
+        }
+        if (na->count == 1u) {
+          ++tests;
+          if (mesh_overlaps(na->min, na->max, &triB))
+            mesh_append_key(counters, keys, capacity,
+                            mesh_candidate_key(pair, na->first, triangleB, bitsA, bitsB));
+          continue;
+        }
+        for (uint k = 0u; k < na->count; ++k) {
+          __global const GpucolLeafEntry* ea = entries + p->entriesA + na->first + k;
+          ++tests;
+          if (mesh_overlaps(ea->min, ea->max, &triB))
+            mesh_append_key(counters, keys, capacity,
+                            mesh_candidate_key(pair, ea->triangle, triangleB, bitsA, bitsB));
+        }
+      }
+    }
+  }
+  mesh_count_tests(counters, tests);
+}
+
+#endif  // GPUCOL_DFS_STACK

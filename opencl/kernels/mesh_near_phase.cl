@@ -8,15 +8,15 @@
 // pair as the CPU does and its contacts carry the same bits up to the final float rounding. The triangles are
 // built in A's scaled frame as plugin/src/bullet/collide_meshes.cpp builds them (triangleOfA, triangleOfB).
 //
-// With -DGPUCOL_NEAR_PREFILTER the float plane test of triangle_plane.h (floatCertainlyApartBranchFree, its
-// error bound proven there) runs first and skips the double test for pairs it proves apart; without it every
-// candidate takes the double path, as the thesis's GPU kernel took every candidate through contact generation.
+// The early-out is a stage of its own (mesh_near_prefilter): the float plane and interval tests of
+// triangle_plane.h (floatCertainlyApartBranchFree, floatIntervalsApartBranchFree, their error bounds proven
+// there), straight-line code that a CPU device runs as vector code across work-items, then a compaction by
+// scan, and the double test only on the survivors. Without it every candidate takes the double path, as the
+// thesis's GPU kernel took every candidate through contact generation.
 #include "opencl/shared/mesh_pipeline_types.h"
 
 #pragma OPENCL EXTENSION cl_khr_fp64 : enable
 #pragma OPENCL FP_CONTRACT OFF
-
-#define GPUCOL_HIT_INTERSECTS 0x80000000u
 
 // triangle_plane.h: kDegenerateSin2, kSnapRelative, kFloatSideMargin and its factor range.
 #define DEGENERATE_SIN2 1e-12
@@ -24,6 +24,10 @@
 #define FLOAT_SIDE_MARGIN (64.0f / 16777216.0f)
 #define FLOAT_SIDE_MIN_FACTOR 0x1p-40f
 #define FLOAT_SIDE_MAX_FACTOR 0x1p40f
+// triangle_plane.h: kFloatIntervalMinFactor, kFloatIntervalMaxFactor, kFloatLineMinimum.
+#define FLOAT_INTERVAL_MIN_FACTOR 0x1p-20f
+#define FLOAT_INTERVAL_MAX_FACTOR 0x1p20f
+#define FLOAT_LINE_MINIMUM 0x1p-10f
 
 typedef struct V3 {
   double x[3];
@@ -45,9 +49,13 @@ V3 v3_cross(V3 a, V3 b) {
 }
 
 // Eigen's order for a dot product of 3 doubles (measured: its vectorised sum adds the first two terms first).
-double v3_dot(V3 a, V3 b) { return (a.x[0] * b.x[0] + a.x[1] * b.x[1]) + a.x[2] * b.x[2]; }
+double v3_dot(V3 a, V3 b) {
+  return (a.x[0] * b.x[0] + a.x[1] * b.x[1]) + a.x[2] * b.x[2];
+}
 
-double v3_max_abs(V3 a) { return fmax(fmax(fabs(a.x[0]), fabs(a.x[1])), fabs(a.x[2])); }
+double v3_max_abs(V3 a) {
+  return fmax(fmax(fabs(a.x[0]), fabs(a.x[1])), fabs(a.x[2]));
+}
 
 // triangle_plane.h TrianglePlane / makePlane.
 typedef struct Plane {
@@ -64,7 +72,8 @@ Plane make_plane(V3 v0, V3 v1, V3 v2) {
   plane.origin = v0;
   plane.normal = v3_cross(e1, e2);
   plane.errorScale = v3_max_abs(e1) * v3_max_abs(e2);
-  plane.degenerate = !(v3_dot(plane.normal, plane.normal) > DEGENERATE_SIN2 * v3_dot(e1, e1) * v3_dot(e2, e2));
+  plane.degenerate =
+      !(v3_dot(plane.normal, plane.normal) > DEGENERATE_SIN2 * v3_dot(e1, e1) * v3_dot(e2, e2));
   return plane;
 }
 
@@ -80,9 +89,15 @@ void signed_distances(const Plane* plane, V3 q0, V3 q1, V3 q2, double* d) {
   for (int i = 0; i < 3; ++i) d[i] = fabs(d[i]) <= tolerance ? 0.0 : d[i];
 }
 
-bool same_strict_sign(double x, double y) { return (x > 0.0 && y > 0.0) || (x < 0.0 && y < 0.0); }
-bool all_on_one_side(const double* d) { return same_strict_sign(d[0], d[1]) && same_strict_sign(d[0], d[2]); }
-bool all_in_plane(const double* d) { return d[0] == 0.0 && d[1] == 0.0 && d[2] == 0.0; }
+bool same_strict_sign(double x, double y) {
+  return (x > 0.0 && y > 0.0) || (x < 0.0 && y < 0.0);
+}
+bool all_on_one_side(const double* d) {
+  return same_strict_sign(d[0], d[1]) && same_strict_sign(d[0], d[2]);
+}
+bool all_in_plane(const double* d) {
+  return d[0] == 0.0 && d[1] == 0.0 && d[2] == 0.0;
+}
 
 int lone_vertex(const double* d) {
   if (same_strict_sign(d[0], d[1])) return 2;
@@ -113,7 +128,9 @@ double orient2d(double ax, double ay, double bx, double by, double cx, double cy
   return (bx - ax) * (cy - ay) - (by - ay) * (cx - ax);
 }
 
-bool straddles(double x, double y) { return (x <= 0.0 && y >= 0.0) || (x >= 0.0 && y <= 0.0); }
+bool straddles(double x, double y) {
+  return (x <= 0.0 && y >= 0.0) || (x >= 0.0 && y <= 0.0);
+}
 
 bool inside_or_on(const double* tx, const double* ty, double px, double py) {
   const double o0 = orient2d(tx[0], ty[0], tx[1], ty[1], px, py);
@@ -166,38 +183,6 @@ bool coplanar_overlap(const V3* a, const V3* b, int dropAxis, V3* point) {
   return true;
 }
 
-// triangle_plane.h floatPlaneSide: bit 1 all on one side, bit 2 some off the plane, by a proven margin.
-uint float_plane_side(const float* v0, const float* v1, const float* v2, const float* q0, const float* q1,
-                      const float* q2) {
-  float e1[3], e2[3], n[3], r[3][3];
-  for (int i = 0; i < 3; ++i) {
-    e1[i] = v1[i] - v0[i];
-    e2[i] = v2[i] - v0[i];
-    r[0][i] = q0[i] - v0[i];
-    r[1][i] = q1[i] - v0[i];
-    r[2][i] = q2[i] - v0[i];
-  }
-  n[0] = e1[1] * e2[2] - e1[2] * e2[1];
-  n[1] = e1[2] * e2[0] - e1[0] * e2[2];
-  n[2] = e1[0] * e2[1] - e1[1] * e2[0];
-  const float edge1 = fmax(fmax(fabs(e1[0]), fabs(e1[1])), fabs(e1[2]));
-  const float edge2 = fmax(fmax(fabs(e2[0]), fabs(e2[1])), fabs(e2[2]));
-  float d[3];
-  float extent = 0.0f;
-  for (int k = 0; k < 3; ++k) {
-    d[k] = (n[0] * r[k][0] + n[1] * r[k][1]) + n[2] * r[k][2];
-    extent = fmax(extent, fmax(fmax(fabs(r[k][0]), fabs(r[k][1])), fabs(r[k][2])));
-  }
-  const bool inRange = (edge1 >= FLOAT_SIDE_MIN_FACTOR) & (edge1 <= FLOAT_SIDE_MAX_FACTOR) &
-                       (edge2 >= FLOAT_SIDE_MIN_FACTOR) & (edge2 <= FLOAT_SIDE_MAX_FACTOR) &
-                       (extent >= FLOAT_SIDE_MIN_FACTOR) & (extent <= FLOAT_SIDE_MAX_FACTOR);
-  const float m = FLOAT_SIDE_MARGIN * edge1 * edge2 * extent;
-  const bool above = (d[0] > m) & (d[1] > m) & (d[2] > m);
-  const bool below = (d[0] < -m) & (d[1] < -m) & (d[2] < -m);
-  const bool off = (fabs(d[0]) > m) | (fabs(d[1]) > m) | (fabs(d[2]) > m);
-  return (inRange & (above | below) ? 1u : 0u) | (inRange & off ? 2u : 0u);
-}
-
 // Vertex of a mesh from the arena.
 void mesh_vertex(__global const float* vertices, uint firstVertex, uint vertex, float* out) {
   __global const float* p = vertices + 3u * (firstVertex + vertex);
@@ -206,21 +191,14 @@ void mesh_vertex(__global const float* vertices, uint firstVertex, uint vertex, 
   out[2] = p[2];
 }
 
-// One candidate: the hit record (flags with GPUCOL_HIT_INTERSECTS when the triangles intersect). The
-// candidate index is written by the compaction.
-__kernel void mesh_near_test(__global const GpucolMeshPair* pairs, __global const float* vertices,
-                             __global const uint* indices, __global const ulong* keys, const uint n,
-                             const uint bitsA, const uint bitsB, __global GpucolNearHit* hits) {
-  const uint i = get_global_id(0);
-  if (i >= n) return;
-  const ulong key = keys[i];
+// The triangles of candidate `key` in A's scaled frame, in float, as collide_meshes.cpp builds them.
+void mesh_candidate_triangles(__global const GpucolMeshPair* pairs, __global const float* vertices,
+                              __global const uint* indices, const ulong key, const uint bitsA,
+                              const uint bitsB, float af[3][3], float bf[3][3]) {
   const uint pair = (uint)(key >> (bitsA + bitsB));
   const uint triangleA = (uint)((key >> bitsB) & ((1ul << bitsA) - 1ul));
   const uint triangleB = (uint)(key & ((1ul << bitsB) - 1ul));
   __global const GpucolMeshPair* p = pairs + pair;
-
-  // The triangles in A's scaled frame, in float, as collide_meshes.cpp builds them.
-  float af[3][3], bf[3][3];
   __global const uint* cornerA = indices + 3u * (p->trianglesA + triangleA);
   __global const uint* cornerB = indices + 3u * (p->trianglesB + triangleB);
   for (int c = 0; c < 3; ++c) {
@@ -229,42 +207,166 @@ __kernel void mesh_near_test(__global const GpucolMeshPair* pairs, __global cons
     for (int k = 0; k < 3; ++k) af[c][k] = p->scaleA[k] * v[k];
     mesh_vertex(vertices, p->verticesB, cornerB[c], v);
     for (int k = 0; k < 3; ++k) {
-      // Eigen's order for a 3x3 float matrix times a vector (its unrolled sum pairs the last two terms first).
+      // Eigen's order for a 3x3 float matrix times a vector (its unrolled sum pairs the last two terms
+      // first).
       bf[c][k] = (p->bLinear[3 * k] * v[0] + (p->bLinear[3 * k + 1] * v[1] + p->bLinear[3 * k + 2] * v[2])) +
                  p->bTranslation[k];
     }
   }
-  if (p->flipA) {
-    for (int k = 0; k < 3; ++k) {
-      const float t = af[1][k];
-      af[1][k] = af[2][k];
-      af[2][k] = t;
-    }
+  // Mirrored scalings swap vertices 1 and 2 (selects rather than branches: the prefilter stays vector code).
+  const bool flipA = p->flipA != 0u, flipB = p->flipB != 0u;
+  for (int k = 0; k < 3; ++k) {
+    const float a1 = af[1][k], a2 = af[2][k], b1 = bf[1][k], b2 = bf[2][k];
+    af[1][k] = flipA ? a2 : a1;
+    af[2][k] = flipA ? a1 : a2;
+    bf[1][k] = flipB ? b2 : b1;
+    bf[2][k] = flipB ? b1 : b2;
   }
-  if (p->flipB) {
-    for (int k = 0; k < 3; ++k) {
-      const float t = bf[1][k];
-      bf[1][k] = bf[2][k];
-      bf[2][k] = t;
-    }
-  }
+}
+
+// The early-out works on float3 values, not arrays: a CPU device keeps them in (vector) registers, where
+// arrays picked by a select would stay in memory and stop the vectorisation across work-items.
+float3 f3_cross(float3 a, float3 b) {
+  return (float3)(a.y * b.z - a.z * b.y, a.z * b.x - a.x * b.z, a.x * b.y - a.y * b.x);
+}
+float f3_dot(float3 a, float3 b) {
+  return (a.x * b.x + a.y * b.y) + a.z * b.z;
+}
+float f3_max_abs(float3 v) {
+  return fmax(fmax(fabs(v.x), fabs(v.y)), fabs(v.z));
+}
+bool f3_interval_factor(float x) {
+  return (x >= FLOAT_INTERVAL_MIN_FACTOR) & (x <= FLOAT_INTERVAL_MAX_FACTOR);
+}
+
+// triangle_plane.h floatPlaneSide of q0, q1, q2 against the plane of (v0, v1, v2), on float3 values.
+uint f3_plane_side(float3 v0, float3 v1, float3 v2, float3 q0, float3 q1, float3 q2) {
+  const float3 e1 = v1 - v0, e2 = v2 - v0;
+  const float3 n = f3_cross(e1, e2);
+  const float edge1 = f3_max_abs(e1), edge2 = f3_max_abs(e2);
+  const float3 r0 = q0 - v0, r1 = q1 - v0, r2 = q2 - v0;
+  const float d0 = f3_dot(n, r0), d1 = f3_dot(n, r1), d2 = f3_dot(n, r2);
+  const float extent = fmax(fmax(f3_max_abs(r0), f3_max_abs(r1)), f3_max_abs(r2));
+  const bool inRange = (edge1 >= FLOAT_SIDE_MIN_FACTOR) & (edge1 <= FLOAT_SIDE_MAX_FACTOR) &
+                       (edge2 >= FLOAT_SIDE_MIN_FACTOR) & (edge2 <= FLOAT_SIDE_MAX_FACTOR) &
+                       (extent >= FLOAT_SIDE_MIN_FACTOR) & (extent <= FLOAT_SIDE_MAX_FACTOR);
+  const float m = FLOAT_SIDE_MARGIN * edge1 * edge2 * extent;
+  const bool above = (d0 > m) & (d1 > m) & (d2 > m);
+  const bool below = (d0 < -m) & (d1 < -m) & (d2 < -m);
+  const bool off = (fabs(d0) > m) | (fabs(d1) > m) | (fabs(d2) > m);
+  return (inRange & (above | below) ? 1u : 0u) | (inRange & off ? 2u : 0u);
+}
+
+// One triangle's interval on the line's axis (coordinates p, distances d to the other plane, margin m) and
+// the bound on its endpoints' error: floatIntervalsApartBranchFree's `interval`. Its two reciprocals are
+// taken in double and rounded to float: OpenCL allows a float division 2.5 ulp of error, the proof counts on
+// about one.
+float3 f3_interval(float3 p, float3 d, float m, float edges, float largest) {
+  const float u = 1.0f / 16777216.0f;
+  const bool lone2 = (d.x > 0) == (d.y > 0), lone1 = !lone2 & ((d.x > 0) == (d.z > 0));
+  const float dLone = lone2 ? d.z : (lone1 ? d.y : d.x);
+  const float pLone = lone2 ? p.z : (lone1 ? p.y : p.x);
+  const float dNext = lone2 ? d.x : (lone1 ? d.z : d.y);
+  const float pNext = lone2 ? p.x : (lone1 ? p.z : p.y);
+  const float dLast = lone2 ? d.y : (lone1 ? d.x : d.z);
+  const float pLast = lone2 ? p.y : (lone1 ? p.x : p.z);
+  const float inverse1 = (float)(1.0 / (double)(dLone - dNext));
+  const float inverse2 = (float)(1.0 / (double)(dLone - dLast));
+  const float t1 = pLone + (pNext - pLone) * (dLone * inverse1);
+  const float t2 = pLone + (pLast - pLone) * (dLone * inverse2);
+  const float inverseSmallest = fmax(fabs(inverse1), fabs(inverse2));
+  return (float3)(fmin(t1, t2), fmax(t1, t2),
+                  edges * (4.0f * m * inverseSmallest + 8.0f * u) + 4.0f * u * largest);
+}
+
+// triangle_plane.h floatIntervalsApartBranchFree, the same expressions (its proof bounds every rounding, so
+// the order of a sum does not matter; selects stand for its selectFloat).
+uint f3_intervals_apart(float3 a0, float3 a1, float3 a2, float3 b0, float3 b1, float3 b2) {
+  const float3 e1 = a1 - a0, e2 = a2 - a0, f1 = b1 - b0, f2 = b2 - b0;
+  const float3 nA = f3_cross(e1, e2), nB = f3_cross(f1, f2);
+  const float ea1 = f3_max_abs(e1), ea2 = f3_max_abs(e2), eb1 = f3_max_abs(f1), eb2 = f3_max_abs(f2);
+  const float3 rb0 = b0 - a0, rb1 = b1 - a0, rb2 = b2 - a0;
+  const float3 ra0 = a0 - b0, ra1 = a1 - b0, ra2 = a2 - b0;
+  const float3 dB = (float3)(f3_dot(nA, rb0), f3_dot(nA, rb1), f3_dot(nA, rb2));
+  const float3 dA = (float3)(f3_dot(nB, ra0), f3_dot(nB, ra1), f3_dot(nB, ra2));
+  const float extentB = fmax(fmax(f3_max_abs(rb0), f3_max_abs(rb1)), f3_max_abs(rb2));
+  const float extentA = fmax(fmax(f3_max_abs(ra0), f3_max_abs(ra1)), f3_max_abs(ra2));
+  const float mB = FLOAT_SIDE_MARGIN * ea1 * ea2 * extentB;
+  const float mA = FLOAT_SIDE_MARGIN * eb1 * eb2 * extentA;
+  bool valid = f3_interval_factor(ea1) & f3_interval_factor(ea2) & f3_interval_factor(eb1) &
+               f3_interval_factor(eb2) & f3_interval_factor(extentA) & f3_interval_factor(extentB);
+  valid &= (fabs(dB.x) > 2.0f * mB) & (fabs(dB.y) > 2.0f * mB) & (fabs(dB.z) > 2.0f * mB);
+  valid &= (fabs(dA.x) > 2.0f * mA) & (fabs(dA.y) > 2.0f * mA) & (fabs(dA.z) > 2.0f * mA);
+  valid &= !((dB.x > 0) & (dB.y > 0) & (dB.z > 0)) & !((dB.x < 0) & (dB.y < 0) & (dB.z < 0));
+  valid &= !((dA.x > 0) & (dA.y > 0) & (dA.z > 0)) & !((dA.x < 0) & (dA.y < 0) & (dA.z < 0));
+
+  const float3 direction = f3_cross(nA, nB);
+  const float dx = fabs(direction.x), dy = fabs(direction.y), dz = fabs(direction.z);
+  const bool useX = (dx >= dy) & (dx >= dz), useY = !useX & (dy >= dz);
+  valid &= fmax(fmax(dx, dy), dz) >= FLOAT_LINE_MINIMUM * (ea1 * ea2) * (eb1 * eb2);
+
+  const float largest = fmax(fmax(fmax(f3_max_abs(a0), f3_max_abs(a1)), fmax(f3_max_abs(a2), f3_max_abs(b0))),
+                             fmax(f3_max_abs(b1), f3_max_abs(b2)));
+  const float edgesA = fmax(fmax(ea1, ea2), f3_max_abs(a2 - a1));
+  const float edgesB = fmax(fmax(eb1, eb2), f3_max_abs(b2 - b1));
+  const float3 pA =
+      useX ? (float3)(a0.x, a1.x, a2.x) : (useY ? (float3)(a0.y, a1.y, a2.y) : (float3)(a0.z, a1.z, a2.z));
+  const float3 pB =
+      useX ? (float3)(b0.x, b1.x, b2.x) : (useY ? (float3)(b0.y, b1.y, b2.y) : (float3)(b0.z, b1.z, b2.z));
+  const float3 iA = f3_interval(pA, dA, mA, edgesA, largest);
+  const float3 iB = f3_interval(pB, dB, mB, edgesB, largest);
+  const float tolerance = 2.0f * (iA.z + iB.z);
+  return (valid & ((iA.x > iB.y + tolerance) | (iB.x > iA.y + tolerance))) ? 1u : 0u;
+}
+
+// The early-out stage: survives[i] = 0 when float arithmetic proves candidate i's triangles apart as the
+// double test would find them (floatCertainlyApartBranchFree, then floatIntervalsApartBranchFree), else 1.
+// Both tests always run, and there is no bounds test either (the work-items past n repeat the last candidate
+// into the padding of `survives`, which holds the launch's global size): no branch, so that a CPU device
+// makes vector code of it.
+__kernel void mesh_near_prefilter(__global const GpucolMeshPair* pairs, __global const float* vertices,
+                                  __global const uint* indices, __global const ulong* keys, const uint n,
+                                  const uint bitsA, const uint bitsB, __global uint* survives) {
+  const uint item = get_global_id(0);
+  float af[3][3], bf[3][3];
+  mesh_candidate_triangles(pairs, vertices, indices, keys[min(item, n - 1u)], bitsA, bitsB, af, bf);
+  const float3 a0 = (float3)(af[0][0], af[0][1], af[0][2]), a1 = (float3)(af[1][0], af[1][1], af[1][2]),
+               a2 = (float3)(af[2][0], af[2][1], af[2][2]);
+  const float3 b0 = (float3)(bf[0][0], bf[0][1], bf[0][2]), b1 = (float3)(bf[1][0], bf[1][1], bf[1][2]),
+               b2 = (float3)(bf[2][0], bf[2][1], bf[2][2]);
+  const uint sideB = f3_plane_side(a0, a1, a2, b0, b1, b2);
+  const uint sideA = f3_plane_side(b0, b1, b2, a0, a1, a2);
+  const uint planesApart = (sideB | ((sideB >> 1) & sideA)) & 1u;
+  survives[item] = 1u - (planesApart | f3_intervals_apart(a0, a1, a2, b0, b1, b2));
+}
+
+// The survivors' candidate indices in candidate order: `offsets` is the exclusive scan of
+// mesh_near_prefilter's flags (`total` their sum), so candidate i survived when the next offset is larger.
+__kernel void mesh_near_gather(__global const uint* offsets, const uint n, const uint total,
+                               __global uint* survivors) {
+  const uint i = get_global_id(0);
+  if (i >= n) return;
+  const uint next = i + 1u < n ? offsets[i + 1u] : total;
+  if (next != offsets[i]) survivors[offsets[i]] = i;
+}
+
+// One candidate (the list's j-th when `useList`, else the j-th): its hit record, with GPUCOL_HIT_INTERSECTS
+// in the flags when the triangles intersect.
+__kernel void mesh_near_test(__global const GpucolMeshPair* pairs, __global const float* vertices,
+                             __global const uint* indices, __global const ulong* keys,
+                             __global const uint* list, const uint useList, const uint n, const uint bitsA,
+                             const uint bitsB, __global GpucolNearHit* hits) {
+  const uint j = get_global_id(0);
+  if (j >= n) return;
+  const uint i = useList ? list[j] : j;
+  float af[3][3], bf[3][3];
+  mesh_candidate_triangles(pairs, vertices, indices, keys[i], bitsA, bitsB, af, bf);
 
   GpucolNearHit hit;
   hit.candidate = i;
   hit.flags = 0u;
   for (int k = 0; k < 3; ++k) hit.point[k] = hit.normal[k] = hit.deepest[k] = 0.0f;
   hit.depth = 0.0f;
-
-#ifdef GPUCOL_NEAR_PREFILTER
-  {
-    const uint sideB = float_plane_side(af[0], af[1], af[2], bf[0], bf[1], bf[2]);
-    const uint sideA = float_plane_side(bf[0], bf[1], bf[2], af[0], af[1], af[2]);
-    if (((sideB | ((sideB >> 1) & sideA)) & 1u) != 0u) {
-      hits[i] = hit;
-      return;
-    }
-  }
-#endif
 
   V3 a[3], b[3];
   for (int c = 0; c < 3; ++c) {
@@ -373,23 +475,5 @@ __kernel void mesh_near_test(__global const GpucolMeshPair* pairs, __global cons
       hit.depth = (float)depth;
     }
   }
-  hits[i] = hit;
-}
-
-// Writes the intersecting candidates' hits in candidate order; `offsets` is the exclusive scan of the
-// intersect flags (mesh_near_flags).
-__kernel void mesh_near_flags(__global const GpucolNearHit* hits, const uint n, __global uint* flags) {
-  const uint i = get_global_id(0);
-  if (i >= n) return;
-  flags[i] = (hits[i].flags & GPUCOL_HIT_INTERSECTS) != 0u ? 1u : 0u;
-}
-
-__kernel void mesh_near_compact(__global const GpucolNearHit* hits, const uint n, __global const uint* offsets,
-                                __global GpucolNearHit* out) {
-  const uint i = get_global_id(0);
-  if (i >= n) return;
-  if ((hits[i].flags & GPUCOL_HIT_INTERSECTS) == 0u) return;
-  GpucolNearHit hit = hits[i];
-  hit.flags &= ~GPUCOL_HIT_INTERSECTS;
-  out[offsets[i]] = hit;
+  hits[j] = hit;
 }

@@ -14,7 +14,8 @@ typedef uint32_t gpucol_mesh_uint;
 /* One mesh pair of a batch. Matrices are row-major. The traversal carries B's boxes into A's unscaled mesh
    frame (linear, translation, inflation: the CPU traversal's AffineMap and carriedBoxInflation); the near
    phase builds A's triangles in A's scaled frame (scaleA, flipA) and carries B's in (bLinear, bTranslation,
-   flipB), as plugin/src/bullet/collide_meshes.cpp does. The offsets place each mesh in the resident arenas. */
+   flipB), as plugin/src/bullet/collide_meshes.cpp does. The offsets place each mesh in the resident arenas.
+ */
 typedef struct GpucolMeshPair {
   float linear[9];
   float translation[3];
@@ -63,6 +64,9 @@ typedef struct GpucolFrontEntry {
 #define GPUCOL_HIT_CONTACT 1u      /* a contact was kept for this intersecting pair */
 #define GPUCOL_HIT_ON_FACE_OF_B 2u /* TriangleContact::onFaceOfB */
 #define GPUCOL_HIT_SAME_FACING 4u  /* TriangleContact::sameFacing */
+#define GPUCOL_HIT_INTERSECTS                                                   \
+  0x80000000u /* the triangles intersect (the records of every tested candidate \
+                 come back; the host keeps these) */
 
 /* One intersecting candidate and its contact (TriangleContact, in A's scaled frame). */
 typedef struct GpucolNearHit {

@@ -459,7 +459,7 @@ bool collideOnDevice(const std::vector<MeshPairQuery>& queries, const Config& co
   // batch; node tests are counted per batch by the device (MeshBatchDeviceStats), not per pair.
   const double share = overlapping.empty() ? 0.0 : 1.0 / double(overlapping.size());
   const double middleMs = (stats.uploadMs + stats.traversalMs + stats.scanMs + stats.sortMs) * share;
-  const double nearMs = (stats.nearMs + stats.compactionMs + stats.readbackMs) * share;
+  const double nearMs = (stats.prefilterMs + stats.nearMs + stats.compactionMs + stats.readbackMs) * share;
   for (std::size_t i = 0; i < queries.size(); ++i) {
     results[i] = MeshPairResult();
     results[i].stats.nodeTests = 1;

@@ -49,12 +49,28 @@ struct DeviceMeshPairResult {
   std::vector<DeviceNearHit> hits;       ///< Intersecting candidates, in candidate order.
 };
 
+/// How the device's middle phase walks the trees.
+enum class MeshTraversal {
+  /// One launch: each work-item takes one node pair of the front `depthFirstStartDepth` levels down and
+  /// descends from it depth-first with a private stack, appending candidates at an atomic counter (the buffer
+  /// grows and the pass reruns when it overflows); the sort then orders them.
+  DepthFirst,
+  /// The thesis's §5.4.2 reference: one level per iteration (count, scan, write), from `startDepth`.
+  BreadthFirst,
+};
+
 /// How the device runs a batch (the measured options of the OpenCL pipeline; defaults are the chosen ones).
 struct MeshBatchDeviceOptions {
+  /// Middle phase walk (README, "Mesh pairs on OpenCL": depth-first was faster on PoCL at every size).
+  MeshTraversal traversal = MeshTraversal::DepthFirst;
   /// Depth at which the breadth-first traversal starts (thesis §5.4.2 used 6): the first front is every node
   /// pair that many expansions below the roots whose boxes (and ancestors' boxes) overlap.
   int startDepth = 0;
-  /// Run the float plane test of triangle_plane.h before the double test (the early-out).
+  /// Depth of the depth-first traversal's start front (0..12); -1 picks the smallest depth that gives the
+  /// launch at least 4096 work-items (pairs x 4^depth).
+  int depthFirstStartDepth = -1;
+  /// Run the float plane and interval tests of triangle_plane.h as a stage of their own, then the double
+  /// test only on the candidates they could not prove apart (the early-out).
   bool nearPrefilter = true;
   /// Keep each mesh resident on the device between batches; false re-sends every mesh every batch (the
   /// thesis's choice, §5.4.1), for the measurement.
@@ -69,14 +85,16 @@ struct MeshBatchDeviceStats {
   double traversalMs = 0;           ///< Box-test kernels of the middle phase, counting and writing passes.
   double scanMs = 0;                ///< Prefix sums of the middle phase (with their read of the totals).
   double sortMs = 0;                ///< Candidate sort (device or host).
-  double nearMs = 0;                ///< Near-phase kernel.
-  double compactionMs = 0;          ///< Flags, scan and compaction of the near phase.
+  double prefilterMs = 0;           ///< Near phase: the float early-out kernel (nearPrefilter).
+  double nearMs = 0;                ///< Near phase: the double test and contact kernel.
+  double compactionMs = 0;          ///< Near phase: scan and gather of the early-out's survivors.
   double readbackMs = 0;            ///< Candidates and hits back to the host.
   std::uint64_t uploadedBytes = 0;  ///< Bytes written to the device in this batch.
   std::uint64_t nodeTests = 0;      ///< Box tests of the middle phase, start front included.
   std::vector<std::uint64_t> frontSizes;  ///< Overlapping node pairs per level (thesis Table 6.3).
   std::uint64_t candidates = 0;           ///< Candidate triangle pairs of the batch.
   std::uint64_t hits = 0;                 ///< Intersecting candidates of the batch.
+  std::uint64_t traversalReruns = 0;  ///< Depth-first passes rerun because the candidate buffer overflowed.
 };
 
 /// A device that runs the middle and near phases of a batch. Thread-safe (calls are serialised).
