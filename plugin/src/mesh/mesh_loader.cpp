@@ -171,8 +171,8 @@ TriangleMesh loadMesh(const std::string& path) {
   if (reachesAssimpPlyReader(bytes.data(), bytes.size(), path)) {
     // assimp's PLY reader is not safe on malformed input (see ply_precheck.h): check first. Every file it
     // would read, not only those with the exact magic line, so none reaches it unchecked.
-    checkPlyStructure(bytes.data(), bytes.size(), path);
-    scene = importer.ReadFileFromMemory(bytes.data(), bytes.size(), kPostProcess, "ply");
+    const std::string checked = checkPlyStructure(bytes.data(), bytes.size(), path);
+    scene = importer.ReadFileFromMemory(checked.data(), checked.size(), kPostProcess, "ply");
   } else {
     // Other formats may reference side files (OBJ's .mtl), so assimp opens the path itself.
     scene = importer.ReadFile(path, kPostProcess);

@@ -2,6 +2,7 @@
 
 #include <algorithm>
 #include <cctype>
+#include <cerrno>
 #include <cmath>
 #include <cstdint>
 #include <cstdlib>
@@ -19,6 +20,7 @@ namespace {
 /// One property of a PLY element: a scalar, or a list with a count type and an item type.
 struct PlyProperty {
   std::string name;
+  std::string type;   ///< The type words as written: "float", or "list uchar int".
   int size = 0;       ///< Bytes of a scalar or of one list item in the binary formats.
   int countSize = 0;  ///< Bytes of the list count; 0 for a scalar.
   bool countSigned = false;
@@ -236,7 +238,7 @@ bool reachesAssimpPlyReader(const char* data, std::size_t size, const std::strin
   return true;
 }
 
-void checkPlyStructure(const char* data, std::size_t size, const std::string& path) {
+std::string checkPlyStructure(const char* data, std::size_t size, const std::string& path) {
   if (!looksLikePly(data, size)) {
     // Show how it does start, escaped, so a stray byte after "ply" or before it can be seen.
     std::ostringstream out;
@@ -255,6 +257,7 @@ void checkPlyStructure(const char* data, std::size_t size, const std::string& pa
   std::size_t offset = 0;
   bool formatSeen = false, ended = false;
   PlyFormat format = PlyFormat::kAscii;
+  std::string formatName;
   std::vector<PlyElement> elements;
   std::size_t line = 0;
   while (!ended) {
@@ -282,15 +285,20 @@ void checkPlyStructure(const char* data, std::size_t size, const std::string& pa
         format = PlyFormat::kBinaryBig;
       else
         fail(path, "unknown format '" + name + "'");
+      formatName = name;
       formatSeen = true;
     } else if (keyword == "element") {
       PlyElement element;
       std::string count;
       in >> element.name >> count;
       char* endCount = nullptr;
+      errno = 0;
       element.count = std::strtoull(count.c_str(), &endCount, 10);
       if (element.name.empty() || count.empty() || *endCount != '\0' || count[0] == '-')
         fail(path, "bad element line '" + text + "'");
+      // assimp keeps counts in 32 bits (wrapping larger ones), and gpucol's indices are 32-bit too.
+      if (element.count > UINT32_MAX || errno == ERANGE)
+        fail(path, "element '" + element.name + "' count " + count + " is above 4294967295");
       elements.push_back(element);
     } else if (keyword == "property") {
       if (elements.empty()) fail(path, "property before any element: '" + text + "'");
@@ -300,6 +308,7 @@ void checkPlyStructure(const char* data, std::size_t size, const std::string& pa
       if (type == "list") {
         std::string countType, itemType;
         in >> countType >> itemType >> property.name;
+        property.type = "list " + countType + " " + itemType;
         property.countSize = typeSize(countType);
         property.size = typeSize(itemType);
         property.countSigned = countType == "char" || countType == "short" || countType == "int" ||
@@ -309,6 +318,7 @@ void checkPlyStructure(const char* data, std::size_t size, const std::string& pa
           fail(path, "bad list property line '" + text + "'");
       } else {
         in >> property.name;
+        property.type = type;
         property.size = typeSize(type);
         if (property.size == 0) fail(path, "unknown property type in '" + text + "'");
       }
@@ -325,6 +335,18 @@ void checkPlyStructure(const char* data, std::size_t size, const std::string& pa
     checkBinary(elements, reinterpret_cast<const unsigned char*>(data), size, offset,
                 format == PlyFormat::kBinaryBig, path);
   }
+  // The header again, in the one layout where assimp's reader sees what this check saw. assimp ends an
+  // element's property list at the first other line, so a comment or two blank lines between properties
+  // shorten the record it reads (binary: it then aborts on an assert in Triangulate), and it reads a binary
+  // body from one byte too early after "end_header\r\n". Comments and obj_info lines carry no geometry.
+  std::ostringstream header;
+  header << "ply\nformat " << formatName << " 1.0\n";
+  for (const PlyElement& element : elements) {
+    header << "element " << element.name << ' ' << element.count << '\n';
+    for (const PlyProperty& p : element.properties) header << "property " << p.type << ' ' << p.name << '\n';
+  }
+  header << "end_header\n";
+  return header.str().append(data + offset, size - offset);
 }
 
 }  // namespace gpucol
