@@ -64,10 +64,11 @@ GPUCOL_MAPPING_INLINE gpucol_u64 gpucol_pair_row_guess_double(gpucol_u64 n, gpuc
 }
 #endif
 
-/* Row guess from a single-precision "magic constant" inverse square root with Newton steps (paper §3.3,
+/* Row guess from a single-precision "magic constant" inverse square root with `steps` Newton steps (paper §3.3,
    Lomont's constant 0x5f375a86). Cheaper on some GPUs, less accurate: the integer fix-up above absorbs
-   the error. The discriminant is rounded to float first, which is where most of the error comes from. */
-GPUCOL_MAPPING_INLINE gpucol_u64 gpucol_pair_row_guess_newton(gpucol_u64 n, gpucol_u64 k) {
+   the error. The discriminant is rounded to float first, which is where most of the error comes from.
+   `gpucol-bench accuracy` measures how often each number of steps guesses the wrong row. */
+GPUCOL_MAPPING_INLINE gpucol_u64 gpucol_pair_row_guess_newton_steps(gpucol_u64 n, gpucol_u64 k, int steps) {
   gpucol_u64 m = 2u * n - 1u;
   float d = (float)(m * m - 8u * k);
   if (d <= 0.0f) return n - 2u;
@@ -82,12 +83,16 @@ GPUCOL_MAPPING_INLINE gpucol_u64 gpucol_pair_row_guess_newton(gpucol_u64 n, gpuc
   memcpy(&y, &bits, sizeof y);
 #endif
   float half = 0.5f * d;
-  y = y * (1.5f - half * y * y);
-  y = y * (1.5f - half * y * y);
-  y = y * (1.5f - half * y * y);
+  for (int i = 0; i < steps; ++i) y = y * (1.5f - half * y * y);
   float r = d * y; /* sqrt(d) = d / sqrt(d) */
   float a = ((float)m - r) * 0.5f;
   return a <= 0.0f ? 0u : (gpucol_u64)a;
+}
+
+/* The guess the pair finders use: three Newton steps (measured in `gpucol-bench accuracy`: fewer steps leave
+   more guesses for the fix-up to move). */
+GPUCOL_MAPPING_INLINE gpucol_u64 gpucol_pair_row_guess_newton(gpucol_u64 n, gpucol_u64 k) {
+  return gpucol_pair_row_guess_newton_steps(n, k, 3);
 }
 
 /* Pair index k (0 <= k < n(n-1)/2, n >= 2) → (a, b), a < b < n, exact for every k (eq. 1 guess + fix). */
