@@ -158,6 +158,47 @@ TEST(GridBroadphase, PairCacheMatchesBruteForceOverStepsNoGrid) {
   EXPECT_FALSE(bp.stats().usedGrid);
 }
 
+TEST(GridBroadphase, FiltersEditedOnTheProxyAreTakenUp) {
+  // Bullet code may change m_collisionFilterGroup/Mask on a proxy after creating it, without any setAabb:
+  // the next step takes the new filters (pairs vanish, static-static pairs go, and come back when
+  // restored). 20,000 boxes, so the per-step scan of the filters runs over more than one parallel task.
+  gpucol::Config config;
+  config.bruteForceBelow = 100;
+  gpucol::GridBroadphase bp(config);
+  btDefaultCollisionConfiguration configuration;
+  btCollisionDispatcher dispatcher(&configuration);
+  std::mt19937 rng(5);
+  std::vector<Box> boxes(20000);
+  for (std::size_t i = 0; i < boxes.size(); ++i) {
+    randomBox(rng, boxes[i], 30.0f);
+    boxes[i].proxy =
+        bp.createProxy(boxes[i].lo, boxes[i].hi, BOX_SHAPE_PROXYTYPE,
+                       reinterpret_cast<void*>(std::intptr_t(i)), boxes[i].group, boxes[i].mask, &dispatcher);
+  }
+  bp.calculateOverlappingPairs(&dispatcher);
+  const std::set<IdPair> original = bruteForce(boxes);
+  ASSERT_EQ(cachePairs(bp.getOverlappingPairCache()), original);
+  for (int round = 0; round < 2; ++round) {
+    for (std::size_t i = 0; i < boxes.size(); ++i) {
+      Box& b = boxes[i];
+      if (round == 0 && i % 3 == 1) b.mask = 0;                                 // collides with nothing
+      if (round == 0 && i % 3 == 2) b.group = btBroadphaseProxy::StaticFilter;  // static: no static pairs
+      if (round == 1) b.group = btBroadphaseProxy::DefaultFilter, b.mask = btBroadphaseProxy::AllFilter;
+      b.proxy->m_collisionFilterGroup = b.group;
+      b.proxy->m_collisionFilterMask = b.mask;
+    }
+    bp.calculateOverlappingPairs(&dispatcher);
+    const std::set<IdPair> expected = bruteForce(boxes);
+    EXPECT_EQ(cachePairs(bp.getOverlappingPairCache()), expected) << "round " << round;
+    if (round == 0) {
+      EXPECT_LT(expected.size(),
+                original.size() / 2);  // about a third remain: default-default, default-static
+    } else {
+      EXPECT_EQ(expected, original);
+    }
+  }
+}
+
 TEST(GridBroadphase, StaticAndSleepingProxiesAreNotRebinned) {
   // A static ground, static boxes (StaticFilter), sleeping boxes whose unchanged AABB Bullet re-sends every
   // step, and a few moving ones: after the first step only the moving proxies are re-binned (stats), and
