@@ -284,6 +284,29 @@ TEST(LoadMesh, PlyTextWithControlBytesAndEmptyElementsIsRefused) {
   EXPECT_EQ(loadMesh(dir.write("crlf.ply", crlf)).triangleCount(), 1u);
 }
 
+TEST(LoadMesh, PlyFaceWithoutCornersIsRefused) {
+  // Found by tests/fuzz/mesh_loader_fuzzer (bunny-948.ply with 19 face counts set to 0): assimp 5.2.5 marks a
+  // face of no corners as a polygon, and Triangulate aborts on an assert when no face has more than three.
+  const std::string header =
+      "element vertex 3\nproperty float x\nproperty float y\nproperty float z\nelement face 2\n"
+      "property list uchar int vertex_indices\nend_header\n";
+  test::TempDir dir;
+  const std::string ascii =
+      dir.write("ascii.ply", "ply\nformat ascii 1.0\n" + header + "0 0 0\n1 0 0\n0 1 0\n3 0 1 2\n0\n");
+  expectPromptError(ascii, ascii +
+                               ": malformed PLY file: element 'face' record 1 has an empty list "
+                               "'vertex_indices' (a face without corners)");
+  const float xyz[9] = {0, 0, 0, 1, 0, 0, 0, 1, 0};
+  const std::int32_t face[3] = {0, 1, 2};
+  std::string binary = "ply\nformat binary_little_endian 1.0\n" + header;
+  binary.append(reinterpret_cast<const char*>(xyz), sizeof xyz);
+  binary.push_back(0);
+  binary.push_back(3);
+  binary.append(reinterpret_cast<const char*>(face), sizeof face);
+  const std::string first = dir.write("binary.ply", binary);
+  expectPromptError(first, first + ": malformed PLY file: element 'face' record 0 has an empty list");
+}
+
 TEST(LoadMesh, PlyHeaderCommentsAndBlankLinesBetweenPropertiesLoad) {
   // assimp ends an element's property list at the first other line, so it read these binary files with a
   // 4-byte vertex record and aborted on an assert; the header it now gets holds only format, element and
@@ -375,7 +398,10 @@ TEST(LoadMesh, MalformedPlyHeadersAndAsciiBodies) {
   const std::string nan = dir.write("nan.ply", head + "0 0 0\n1 nan 0\n0 1 0\n3 0 1 2\n");
   EXPECT_CONTAINS(loadError(nan), nan +
                                       ": malformed PLY file: element 'vertex' record 1 (line 2 of the body): "
-                                      "property 'y' has the value 'nan', not a finite number");
+                                      "property 'y' has the value 'nan', not a finite decimal number");
+  // strtod reads hexadecimal, assimp does not.
+  const std::string hex = dir.write("hex.ply", head + "0 0 0\n0x10 0 0\n0 1 0\n3 0 1 2\n");
+  EXPECT_CONTAINS(loadError(hex), "property 'x' has the value '0x10', not a finite decimal number");
   // In a binary file a NaN is a well-formed float; validation names the vertex and the coordinate.
   std::string binary =
       "ply\nformat binary_little_endian 1.0\nelement vertex 3\nproperty float x\nproperty float y\n"

@@ -71,6 +71,25 @@ void requirePlainText(const std::string& text, const char* where, std::size_t li
   }
 }
 
+/// True for the list assimp reads a face's corners from: 'vertex_indices' or 'vertex_index' of element
+/// 'face'.
+bool isFaceCornerList(const PlyElement& element, const PlyProperty& p) {
+  return p.countSize != 0 && element.name == "face" &&
+         (p.name == "vertex_indices" || p.name == "vertex_index");
+}
+
+/// Throws for a face with no corners: assimp gives it the polygon type, and its Triangulate step then aborts
+/// on an assert (numOut != mNumFaces) when no face has more than three corners. A face needs three corners
+/// anyway.
+void requireCorners(const PlyElement& element, const PlyProperty& p, std::uint64_t record, std::int64_t items,
+                    const std::string& path) {
+  if (items != 0 || !isFaceCornerList(element, p)) return;
+  std::ostringstream out;
+  out << "element 'face' record " << record << " has an empty list '" << p.name
+      << "' (a face without corners)";
+  fail(path, out.str());
+}
+
 /// Reads an unsigned or signed list count of `bytes` bytes in the file's byte order.
 std::int64_t readCount(const unsigned char* p, int bytes, bool isSigned, bool bigEndian) {
   std::uint64_t value = 0;
@@ -122,6 +141,7 @@ void checkBinary(const std::vector<PlyElement>& elements, const unsigned char* d
                 << "' has a negative list length " << items;
             fail(path, out.str());
           }
+          requireCorners(element, p, i, items, path);
           need += std::uint64_t(items) * std::uint64_t(p.size);
         }
         if (size - offset < need) {
@@ -182,6 +202,7 @@ void checkAscii(const std::vector<PlyElement>& elements, const char* data, std::
               << " of the body): list '" << p.name << "' has no valid length";
           fail(path, out.str());
         }
+        requireCorners(element, p, i, items, path);
         if (std::size_t(items) > tokens.size()) break;  // reported as a count mismatch below
         owner.insert(owner.end(), 1 + std::size_t(items), &p);
       }
@@ -193,14 +214,16 @@ void checkAscii(const std::vector<PlyElement>& elements, const char* data, std::
       }
       for (std::size_t k = 0; k < tokens.size(); ++k) {
         // assimp's number parser misreads words such as "nan" and shifts the record, so only finite
-        // numbers pass.
+        // numbers pass, and only decimal ones: strtod also takes hexadecimal ("0x10"), which assimp reads
+        // as 0 followed by garbage.
         char* end = nullptr;
         const double value = std::strtod(tokens[k].c_str(), &end);
-        if (*end != '\0' || !std::isfinite(value)) {
+        if (*end != '\0' || !std::isfinite(value) ||
+            tokens[k].find_first_not_of("0123456789+-.eE") != std::string::npos) {
           std::ostringstream out;
           out << "element '" << element.name << "' record " << i << " (line " << line
               << " of the body): property '" << owner[k]->name << "' has the value '" << tokens[k]
-              << "', not a finite number";
+              << "', not a finite decimal number";
           fail(path, out.str());
         }
       }
