@@ -163,6 +163,16 @@ std::size_t stackBound(const AabbTree& a, const AabbTree& b) {
   return 3 * (static_cast<std::size_t>(a.depth()) + static_cast<std::size_t>(b.depth())) + 1;
 }
 
+/// Traverser::expand is inlined into both of its loops (the depth-first run and the breadth-first levels)
+/// whatever the compiler's size estimate says: called, it saved and restored six registers per expansion, and
+/// inlining took 0.87M of 14.7M instructions off one query of the thesis scene (armadillo-27674, one thread,
+/// valgrind).
+#if defined(__GNUC__)
+#define GPUCOL_TRAVERSAL_INLINE inline __attribute__((always_inline))
+#else
+#define GPUCOL_TRAVERSAL_INLINE inline
+#endif
+
 /// Depth-first simultaneous descent from a set of overlapping node pairs (thesis Alg. 5.1), with an explicit
 /// stack.
 ///
@@ -181,8 +191,8 @@ class Traverser {
 
   /// Expands one overlapping pair by one level: children pairs that overlap are written from `top` on (room
   /// for four is needed), leaf pairs go to `out`. Returns the new top.
-  NodePair* expand(const NodePair& pair, NodePair* top, std::vector<TrianglePair>& out,
-                   std::uint64_t& tests) const {
+  GPUCOL_TRAVERSAL_INLINE NodePair* expand(const NodePair& pair, NodePair* top, std::vector<TrianglePair>& out,
+                                           std::uint64_t& tests) const {
     const AabbNode& na = m_nodesA[pair.a];
     const AabbNode& nb = m_nodesB[pair.b];
     const bool leafA = na.isLeaf();
