@@ -308,9 +308,9 @@ TEST(LoadMesh, PlyFaceWithoutCornersIsRefused) {
 }
 
 TEST(LoadMesh, PlyHeaderCommentsAndBlankLinesBetweenPropertiesLoad) {
-  // assimp ends an element's property list at the first other line, so it read these binary files with a
-  // 4-byte vertex record and aborted on an assert; the header it now gets holds only format, element and
-  // property lines.
+  // assimp ends an element's property list at the first other line, so it read the first three binary files
+  // with a 4-byte vertex record and aborted on an assert; the header it now gets holds only format, element
+  // and property lines. The fourth ("\r\n" line ends) always loaded and must still.
   const float xyz[9] = {0, 0, 0, 1, 0, 0, 0, 1, 0};
   const std::int32_t face[3] = {0, 1, 2};
   std::string body(reinterpret_cast<const char*>(xyz), sizeof xyz);

@@ -360,8 +360,8 @@ std::string checkPlyStructure(const char* data, std::size_t size, const std::str
   }
   // The header again, in the one layout where assimp's reader sees what this check saw. assimp ends an
   // element's property list at the first other line, so a comment or two blank lines between properties
-  // shorten the record it reads (binary: it then aborts on an assert in Triangulate), and it reads a binary
-  // body from one byte too early after "end_header\r\n". Comments and obj_info lines carry no geometry.
+  // shorten the record it reads (binary: it then aborts on an assert in Triangulate). Comments and obj_info
+  // lines carry no geometry.
   std::ostringstream header;
   header << "ply\nformat " << formatName << " 1.0\n";
   for (const PlyElement& element : elements) {
