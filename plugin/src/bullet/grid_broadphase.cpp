@@ -73,8 +73,9 @@ struct GridBroadphase::Impl {
   bool openClTried = false;
   std::vector<std::uint64_t> accepted;  // sorted keys of the pairs in the cache after the last step
   std::vector<std::uint64_t> found;
-  std::vector<std::uint64_t> next;
-  std::vector<std::uint64_t> removedKeys;  // vanished pairs of a cache with deferred removal (sorted)
+  std::vector<std::uint64_t> added;        // pairs new this step (sorted)
+  std::vector<std::uint64_t> refused;      // of those, the ones the cache's filter refused (sorted)
+  std::vector<std::uint64_t> removedKeys;  // pairs vanished this step (sorted)
 
   /// The finder's view of the proxies (called once per search: it consumes nonFiniteChanged).
   ProxyArrays view() {
@@ -162,7 +163,10 @@ struct GridBroadphase::Impl {
     return proxies.size() * sizeof(GridProxy) +
            flags.capacity() * (6 * sizeof(float) + 2 * sizeof(std::int32_t) + 3) +
            (freeSlots.capacity() + pendingFree.capacity()) * 4 +
-           (accepted.capacity() + found.capacity() + next.capacity()) * 8 + finder.stats().scratchBytes;
+           (accepted.capacity() + found.capacity() + added.capacity() + refused.capacity() +
+            removedKeys.capacity()) *
+               8 +
+           finder.stats().scratchBytes;
   }
 };
 
@@ -334,33 +338,50 @@ void GridBroadphase::calculateOverlappingPairs(btDispatcher* dispatcher) {
   st.cellSize = finder.stats().cellSize;
   st.overlappingPairs = d.found.size();
 
-  d.next.clear();
+  // The pairs in the cache after this step are `found` less the additions the cache refuses: the diff
+  // collects the changes, the cache gets the removals then the additions (each in key order), and `found`
+  // becomes the new `accepted`, without a third pair-sized list.
+  d.added.clear();
   d.removedKeys.clear();
+  diffSortedPairs(
+      d.accepted, d.found, [&](std::uint64_t key) { d.added.push_back(key); },
+      [&](std::uint64_t key) {
+        // Pairs of destroyed proxies were removed by destroyProxy already.
+        if (!d.freedSinceSearch[std::uint32_t(key >> 32)] && !d.freedSinceSearch[std::uint32_t(key)])
+          d.removedKeys.push_back(key);
+      },
+      [](std::uint64_t) {});
   auto proxy0 = [&](std::uint64_t key) { return &d.proxies[std::uint32_t(key >> 32)]; };
   auto proxy1 = [&](std::uint64_t key) { return &d.proxies[std::uint32_t(key)]; };
   btOverlappingPairCache* cache = d.pairCache;
-  diffSortedPairs(
-      d.accepted, d.found,
-      [&](std::uint64_t key) {
-        // The cache's own filter (overlap filter callback) has the last word; a rejected pair is asked
-        // again next step while it still overlaps, since the callback may change its mind.
-        if (!cache->needsBroadphaseCollision(proxy0(key), proxy1(key))) return;
-        cache->addOverlappingPair(proxy0(key), proxy1(key));
-        d.next.push_back(key);
-        ++st.added;
-      },
-      [&](std::uint64_t key) {
-        // Pairs of destroyed proxies were removed by destroyProxy already.
-        if (d.freedSinceSearch[std::uint32_t(key >> 32)] || d.freedSinceSearch[std::uint32_t(key)]) return;
-        ++st.removed;
-        if (cache->hasDeferredRemoval())
-          d.removedKeys.push_back(key);  // handled below, in one pass over the cache
-        else
-          cache->removeOverlappingPair(proxy0(key), proxy1(key), dispatcher);
-      },
-      [&](std::uint64_t key) { d.next.push_back(key); });
-  d.accepted.swap(d.next);
-  if (!d.removedKeys.empty()) d.removeDeferred(dispatcher);
+  st.removed = d.removedKeys.size();
+  if (!cache->hasDeferredRemoval()) {
+    for (const std::uint64_t key : d.removedKeys)
+      cache->removeOverlappingPair(proxy0(key), proxy1(key), dispatcher);
+  }
+  d.refused.clear();
+  for (const std::uint64_t key : d.added) {
+    // The cache's own filter (overlap filter callback) has the last word; a refused pair is asked again
+    // next step while it still overlaps, since the callback may change its mind.
+    if (!cache->needsBroadphaseCollision(proxy0(key), proxy1(key))) {
+      d.refused.push_back(key);
+      continue;
+    }
+    cache->addOverlappingPair(proxy0(key), proxy1(key));
+    ++st.added;
+  }
+  if (!d.refused.empty()) {
+    // Both lists are sorted: drop the refused keys from `found` in one walk.
+    std::size_t r = 0, kept = 0;
+    for (const std::uint64_t key : d.found) {
+      while (r < d.refused.size() && d.refused[r] < key) ++r;
+      if (r == d.refused.size() || d.refused[r] != key) d.found[kept++] = key;
+    }
+    d.found.resize(kept);
+  }
+  d.accepted.swap(d.found);
+  if (!cache->hasDeferredRemoval()) d.removedKeys.clear();
+  if (!d.removedKeys.empty()) d.removeDeferred(dispatcher);  // handled in one pass over the cache
   for (std::uint32_t s : d.pendingFree) {
     d.freedSinceSearch[s] = 0;
     d.freeSlots.push_back(s);
