@@ -43,6 +43,11 @@ double millisecondsSince(Clock::time_point start) {
 /// Largest start depth: 4^d paths per pair must stay far below the 2^32 work-items of one launch.
 constexpr int kMaxStartDepth = 12;
 
+/// Largest work-group the pipeline launches (OpenClMeshPipeline::groupSize): 64 work-items are several vector
+/// widths on a CPU device and whole wavefronts on GPUs, and leave the 4096 work-items of a one-pair
+/// depth-first launch 64 groups to spread over the compute units.
+constexpr std::size_t kGroupSizeCap = 64;
+
 /// Work-items the depth-first traversal's automatic start depth aims for (MeshBatchDeviceOptions).
 constexpr std::uint64_t kDepthFirstItems = 4096;
 
@@ -79,7 +84,6 @@ class OpenClMeshPipeline final : public MeshBatchDevice {
       m_nearPrefilter = cl::Kernel(nearProgram, "mesh_near_prefilter");
       m_nearGather = cl::Kernel(nearProgram, "mesh_near_gather");
       m_nearTest = cl::Kernel(nearProgram, "mesh_near_test");
-      m_computeUnits = m_context.device().getInfo<CL_DEVICE_MAX_COMPUTE_UNITS>();
       m_counters = cl::Buffer(m_context.context(), CL_MEM_READ_WRITE, 4 * sizeof(cl_uint));
       // Kernels read the leaf entry arena even when no tree has entries: give it one element.
       m_emptyEntries = cl::Buffer(m_context.context(), CL_MEM_READ_ONLY, sizeof(GpucolLeafEntry));
@@ -114,14 +118,12 @@ class OpenClMeshPipeline final : public MeshBatchDevice {
   }
 
  private:
-  /// The work-group size for `items` work-items of `kernel`: the device's largest for it, halved until every
-  /// compute unit gets several groups (a CPU device runs one work-group per thread, and PoCL's largest group,
-  /// 4096, would put a whole small batch on one core; the depth-first kernel's work-items also differ widely
-  /// in work).
-  std::size_t groupSize(const cl::Kernel& kernel, std::uint64_t items) const {
-    std::size_t local = m_context.workGroupSize(kernel);
-    while (local > 1 && (items + local - 1) / local < 16 * std::uint64_t(m_computeUnits)) local /= 2;
-    return local;
+  /// The work-group size of `kernel`: the device's largest for it, capped at kGroupSizeCap. One size per
+  /// kernel whatever the batch: PoCL compiles a kernel again for every new local size (a few hundred ms), and
+  /// a CPU device runs one work-group per thread, so its largest group (4096) would put a whole small batch
+  /// on one core; the depth-first kernel's work-items also differ widely in work.
+  std::size_t groupSize(const cl::Kernel& kernel, std::uint64_t) const {
+    return std::min<std::size_t>(m_context.workGroupSize(kernel), kGroupSizeCap);
   }
 
   /// The global size launch() uses for `items` work-items of `kernel`.
@@ -154,11 +156,10 @@ class OpenClMeshPipeline final : public MeshBatchDevice {
   OpenClRadixSort m_sort;
   cl::Kernel m_frontStart, m_frontExpand, m_nearPrefilter, m_nearGather, m_nearTest;
   std::map<std::size_t, cl::Kernel> m_depthFirst;  // by stack length
-  cl_uint m_computeUnits = 1;
   cl::Buffer m_emptyEntries, m_counters;
   DeviceArray m_pairs, m_counts, m_front, m_next, m_keys, m_values, m_hits, m_survivors;
   std::vector<GpucolMeshPair> m_hostPairs;
-  std::vector<std::uint64_t> m_hostKeys;
+  std::vector<std::uint64_t> m_hostKeys, m_sortedKeys;
   std::vector<GpucolNearHit> m_hostHits;
 };
 
@@ -233,19 +234,18 @@ void OpenClMeshPipeline::runBatch(const std::vector<DeviceMeshPair>& pairs,
   s.candidates = candidateCount;
   if (candidateCount == 0) return;
 
-  // Deterministic order: by pair, then (triangleA, triangleB), which is the CPU's order within each pair.
-  start = Clock::now();
+  // Deterministic order: by pair, then (triangleA, triangleB), which is the CPU's order within each pair. On
+  // the device before the near phase, or (deviceSort false) on the host after it: the near phase does not
+  // care about the order, and the host sorts the keys it reads back anyway without the device sort's launches
+  // and waits (ten radix passes of 4 bits for 40-bit keys, a scan with a wait in each).
   m_hostKeys.resize(candidateCount);
   if (options.deviceSort) {
+    start = Clock::now();
     m_sort.sort(m_keys.buffer, m_values.ensure(ctx, candidateCount * sizeof(cl_uint)), candidateCount,
                 keyBits);
     queue.finish();
-  } else {
-    queue.enqueueReadBuffer(m_keys.buffer, CL_TRUE, 0, candidateCount * 8, m_hostKeys.data());
-    std::sort(m_hostKeys.begin(), m_hostKeys.end());
-    queue.enqueueWriteBuffer(m_keys.buffer, CL_TRUE, 0, candidateCount * 8, m_hostKeys.data());
+    s.sortMs = millisecondsSince(start);
   }
-  s.sortMs = millisecondsSince(start);
 
   // Near phase: the float early-out over every candidate, the survivors compacted in candidate order, then
   // the double test and contact generation on them. Its hit records come back in that order; the host keeps
@@ -295,9 +295,7 @@ void OpenClMeshPipeline::runBatch(const std::vector<DeviceMeshPair>& pairs,
   s.nearMs += millisecondsSince(start);
 
   start = Clock::now();
-  if (options.deviceSort) {
-    queue.enqueueReadBuffer(m_keys.buffer, CL_FALSE, 0, candidateCount * 8, m_hostKeys.data());
-  }
+  queue.enqueueReadBuffer(m_keys.buffer, CL_FALSE, 0, candidateCount * 8, m_hostKeys.data());
   m_hostHits.resize(tested);
   if (tested > 0) {
     queue.enqueueReadBuffer(m_hits.buffer, CL_FALSE, 0, std::size_t(tested) * sizeof(GpucolNearHit),
@@ -305,6 +303,23 @@ void OpenClMeshPipeline::runBatch(const std::vector<DeviceMeshPair>& pairs,
   }
   queue.finish();
   s.readbackMs = millisecondsSince(start);
+
+  if (!options.deviceSort) {
+    // The keys in order, and each hit's candidate index moved to its key's place in that order (keys are
+    // unique: a triangle pair is found once), the hits sorted along.
+    start = Clock::now();
+    m_sortedKeys = m_hostKeys;
+    std::sort(m_sortedKeys.begin(), m_sortedKeys.end());
+    for (GpucolNearHit& h : m_hostHits) {
+      const std::uint64_t key = m_hostKeys[h.candidate];
+      h.candidate = std::uint32_t(std::lower_bound(m_sortedKeys.begin(), m_sortedKeys.end(), key) -
+                                  m_sortedKeys.begin());
+    }
+    std::sort(m_hostHits.begin(), m_hostHits.end(),
+              [](const GpucolNearHit& l, const GpucolNearHit& r) { return l.candidate < r.candidate; });
+    std::swap(m_hostKeys, m_sortedKeys);
+    s.sortMs = millisecondsSince(start);
+  }
 
   // Split by pair: keys are sorted by pair first, so each pair's candidates are one run.
   const std::uint64_t maskA = (std::uint64_t(1) << bitsA) - 1, maskB = (std::uint64_t(1) << bitsB) - 1;

@@ -18,6 +18,10 @@
 #pragma OPENCL EXTENSION cl_khr_fp64 : enable
 #pragma OPENCL FP_CONTRACT OFF
 
+// Helpers of the early-out are always inlined: a call left in the work-item loop stops a CPU device's
+// vectorisation across work-items (PoCL's inliner judged them too costly).
+#define GPUCOL_INLINE __attribute__((always_inline))
+
 // triangle_plane.h: kDegenerateSin2, kSnapRelative, kFloatSideMargin and its factor range.
 #define DEGENERATE_SIN2 1e-12
 #define SNAP_RELATIVE 1e-12
@@ -184,7 +188,7 @@ bool coplanar_overlap(const V3* a, const V3* b, int dropAxis, V3* point) {
 }
 
 // Vertex of a mesh from the arena.
-void mesh_vertex(__global const float* vertices, uint firstVertex, uint vertex, float* out) {
+GPUCOL_INLINE void mesh_vertex(__global const float* vertices, uint firstVertex, uint vertex, float* out) {
   __global const float* p = vertices + 3u * (firstVertex + vertex);
   out[0] = p[0];
   out[1] = p[1];
@@ -192,9 +196,10 @@ void mesh_vertex(__global const float* vertices, uint firstVertex, uint vertex, 
 }
 
 // The triangles of candidate `key` in A's scaled frame, in float, as collide_meshes.cpp builds them.
-void mesh_candidate_triangles(__global const GpucolMeshPair* pairs, __global const float* vertices,
-                              __global const uint* indices, const ulong key, const uint bitsA,
-                              const uint bitsB, float af[3][3], float bf[3][3]) {
+GPUCOL_INLINE void mesh_candidate_triangles(__global const GpucolMeshPair* pairs,
+                                            __global const float* vertices, __global const uint* indices,
+                                            const ulong key, const uint bitsA, const uint bitsB,
+                                            float af[3][3], float bf[3][3]) {
   const uint pair = (uint)(key >> (bitsA + bitsB));
   const uint triangleA = (uint)((key >> bitsB) & ((1ul << bitsA) - 1ul));
   const uint triangleB = (uint)(key & ((1ul << bitsB) - 1ul));
@@ -224,27 +229,41 @@ void mesh_candidate_triangles(__global const GpucolMeshPair* pairs, __global con
   }
 }
 
-// The early-out works on float3 values, not arrays: a CPU device keeps them in (vector) registers, where
-// arrays picked by a select would stay in memory and stop the vectorisation across work-items.
-float3 f3_cross(float3 a, float3 b) {
-  return (float3)(a.y * b.z - a.z * b.y, a.z * b.x - a.x * b.z, a.x * b.y - a.y * b.x);
+// The early-out works on F3 values, plain structs of three floats rather than F3 or arrays: a CPU device
+// vectorises the kernel across work-items only when every value is a scalar it can widen (LLVM's loop
+// vectoriser refuses F3 operations, and arrays picked by a select stay in memory).
+typedef struct F3 {
+  float x, y, z;
+} F3;
+GPUCOL_INLINE F3 f3(float x, float y, float z) {
+  F3 r;
+  r.x = x;
+  r.y = y;
+  r.z = z;
+  return r;
 }
-float f3_dot(float3 a, float3 b) {
+GPUCOL_INLINE F3 f3_sub(F3 a, F3 b) {
+  return f3(a.x - b.x, a.y - b.y, a.z - b.z);
+}
+GPUCOL_INLINE F3 f3_cross(F3 a, F3 b) {
+  return f3(a.y * b.z - a.z * b.y, a.z * b.x - a.x * b.z, a.x * b.y - a.y * b.x);
+}
+GPUCOL_INLINE float f3_dot(F3 a, F3 b) {
   return (a.x * b.x + a.y * b.y) + a.z * b.z;
 }
-float f3_max_abs(float3 v) {
+GPUCOL_INLINE float f3_max_abs(F3 v) {
   return fmax(fmax(fabs(v.x), fabs(v.y)), fabs(v.z));
 }
-bool f3_interval_factor(float x) {
+GPUCOL_INLINE bool f3_interval_factor(float x) {
   return (x >= FLOAT_INTERVAL_MIN_FACTOR) & (x <= FLOAT_INTERVAL_MAX_FACTOR);
 }
 
-// triangle_plane.h floatPlaneSide of q0, q1, q2 against the plane of (v0, v1, v2), on float3 values.
-uint f3_plane_side(float3 v0, float3 v1, float3 v2, float3 q0, float3 q1, float3 q2) {
-  const float3 e1 = v1 - v0, e2 = v2 - v0;
-  const float3 n = f3_cross(e1, e2);
+// triangle_plane.h floatPlaneSide of q0, q1, q2 against the plane of (v0, v1, v2), on F3 values.
+GPUCOL_INLINE uint f3_plane_side(F3 v0, F3 v1, F3 v2, F3 q0, F3 q1, F3 q2) {
+  const F3 e1 = f3_sub(v1, v0), e2 = f3_sub(v2, v0);
+  const F3 n = f3_cross(e1, e2);
   const float edge1 = f3_max_abs(e1), edge2 = f3_max_abs(e2);
-  const float3 r0 = q0 - v0, r1 = q1 - v0, r2 = q2 - v0;
+  const F3 r0 = f3_sub(q0, v0), r1 = f3_sub(q1, v0), r2 = f3_sub(q2, v0);
   const float d0 = f3_dot(n, r0), d1 = f3_dot(n, r1), d2 = f3_dot(n, r2);
   const float extent = fmax(fmax(f3_max_abs(r0), f3_max_abs(r1)), f3_max_abs(r2));
   const bool inRange = (edge1 >= FLOAT_SIDE_MIN_FACTOR) & (edge1 <= FLOAT_SIDE_MAX_FACTOR) &
@@ -261,7 +280,7 @@ uint f3_plane_side(float3 v0, float3 v1, float3 v2, float3 q0, float3 q1, float3
 // the bound on its endpoints' error: floatIntervalsApartBranchFree's `interval`. Its two reciprocals are
 // taken in double and rounded to float: OpenCL allows a float division 2.5 ulp of error, the proof counts on
 // about one.
-float3 f3_interval(float3 p, float3 d, float m, float edges, float largest) {
+GPUCOL_INLINE F3 f3_interval(F3 p, F3 d, float m, float edges, float largest) {
   const float u = 1.0f / 16777216.0f;
   const bool lone2 = (d.x > 0) == (d.y > 0), lone1 = !lone2 & ((d.x > 0) == (d.z > 0));
   const float dLone = lone2 ? d.z : (lone1 ? d.y : d.x);
@@ -275,20 +294,19 @@ float3 f3_interval(float3 p, float3 d, float m, float edges, float largest) {
   const float t1 = pLone + (pNext - pLone) * (dLone * inverse1);
   const float t2 = pLone + (pLast - pLone) * (dLone * inverse2);
   const float inverseSmallest = fmax(fabs(inverse1), fabs(inverse2));
-  return (float3)(fmin(t1, t2), fmax(t1, t2),
-                  edges * (4.0f * m * inverseSmallest + 8.0f * u) + 4.0f * u * largest);
+  return f3(fmin(t1, t2), fmax(t1, t2), edges * (4.0f * m * inverseSmallest + 8.0f * u) + 4.0f * u * largest);
 }
 
 // triangle_plane.h floatIntervalsApartBranchFree, the same expressions (its proof bounds every rounding, so
 // the order of a sum does not matter; selects stand for its selectFloat).
-uint f3_intervals_apart(float3 a0, float3 a1, float3 a2, float3 b0, float3 b1, float3 b2) {
-  const float3 e1 = a1 - a0, e2 = a2 - a0, f1 = b1 - b0, f2 = b2 - b0;
-  const float3 nA = f3_cross(e1, e2), nB = f3_cross(f1, f2);
+GPUCOL_INLINE uint f3_intervals_apart(F3 a0, F3 a1, F3 a2, F3 b0, F3 b1, F3 b2) {
+  const F3 e1 = f3_sub(a1, a0), e2 = f3_sub(a2, a0), f1 = f3_sub(b1, b0), f2 = f3_sub(b2, b0);
+  const F3 nA = f3_cross(e1, e2), nB = f3_cross(f1, f2);
   const float ea1 = f3_max_abs(e1), ea2 = f3_max_abs(e2), eb1 = f3_max_abs(f1), eb2 = f3_max_abs(f2);
-  const float3 rb0 = b0 - a0, rb1 = b1 - a0, rb2 = b2 - a0;
-  const float3 ra0 = a0 - b0, ra1 = a1 - b0, ra2 = a2 - b0;
-  const float3 dB = (float3)(f3_dot(nA, rb0), f3_dot(nA, rb1), f3_dot(nA, rb2));
-  const float3 dA = (float3)(f3_dot(nB, ra0), f3_dot(nB, ra1), f3_dot(nB, ra2));
+  const F3 rb0 = f3_sub(b0, a0), rb1 = f3_sub(b1, a0), rb2 = f3_sub(b2, a0);
+  const F3 ra0 = f3_sub(a0, b0), ra1 = f3_sub(a1, b0), ra2 = f3_sub(a2, b0);
+  const F3 dB = f3(f3_dot(nA, rb0), f3_dot(nA, rb1), f3_dot(nA, rb2));
+  const F3 dA = f3(f3_dot(nB, ra0), f3_dot(nB, ra1), f3_dot(nB, ra2));
   const float extentB = fmax(fmax(f3_max_abs(rb0), f3_max_abs(rb1)), f3_max_abs(rb2));
   const float extentA = fmax(fmax(f3_max_abs(ra0), f3_max_abs(ra1)), f3_max_abs(ra2));
   const float mB = FLOAT_SIDE_MARGIN * ea1 * ea2 * extentB;
@@ -300,21 +318,19 @@ uint f3_intervals_apart(float3 a0, float3 a1, float3 a2, float3 b0, float3 b1, f
   valid &= !((dB.x > 0) & (dB.y > 0) & (dB.z > 0)) & !((dB.x < 0) & (dB.y < 0) & (dB.z < 0));
   valid &= !((dA.x > 0) & (dA.y > 0) & (dA.z > 0)) & !((dA.x < 0) & (dA.y < 0) & (dA.z < 0));
 
-  const float3 direction = f3_cross(nA, nB);
+  const F3 direction = f3_cross(nA, nB);
   const float dx = fabs(direction.x), dy = fabs(direction.y), dz = fabs(direction.z);
   const bool useX = (dx >= dy) & (dx >= dz), useY = !useX & (dy >= dz);
   valid &= fmax(fmax(dx, dy), dz) >= FLOAT_LINE_MINIMUM * (ea1 * ea2) * (eb1 * eb2);
 
   const float largest = fmax(fmax(fmax(f3_max_abs(a0), f3_max_abs(a1)), fmax(f3_max_abs(a2), f3_max_abs(b0))),
                              fmax(f3_max_abs(b1), f3_max_abs(b2)));
-  const float edgesA = fmax(fmax(ea1, ea2), f3_max_abs(a2 - a1));
-  const float edgesB = fmax(fmax(eb1, eb2), f3_max_abs(b2 - b1));
-  const float3 pA =
-      useX ? (float3)(a0.x, a1.x, a2.x) : (useY ? (float3)(a0.y, a1.y, a2.y) : (float3)(a0.z, a1.z, a2.z));
-  const float3 pB =
-      useX ? (float3)(b0.x, b1.x, b2.x) : (useY ? (float3)(b0.y, b1.y, b2.y) : (float3)(b0.z, b1.z, b2.z));
-  const float3 iA = f3_interval(pA, dA, mA, edgesA, largest);
-  const float3 iB = f3_interval(pB, dB, mB, edgesB, largest);
+  const float edgesA = fmax(fmax(ea1, ea2), f3_max_abs(f3_sub(a2, a1)));
+  const float edgesB = fmax(fmax(eb1, eb2), f3_max_abs(f3_sub(b2, b1)));
+  const F3 pA = useX ? f3(a0.x, a1.x, a2.x) : (useY ? f3(a0.y, a1.y, a2.y) : f3(a0.z, a1.z, a2.z));
+  const F3 pB = useX ? f3(b0.x, b1.x, b2.x) : (useY ? f3(b0.y, b1.y, b2.y) : f3(b0.z, b1.z, b2.z));
+  const F3 iA = f3_interval(pA, dA, mA, edgesA, largest);
+  const F3 iB = f3_interval(pB, dB, mB, edgesB, largest);
   const float tolerance = 2.0f * (iA.z + iB.z);
   return (valid & ((iA.x > iB.y + tolerance) | (iB.x > iA.y + tolerance))) ? 1u : 0u;
 }
@@ -324,16 +340,18 @@ uint f3_intervals_apart(float3 a0, float3 a1, float3 a2, float3 b0, float3 b1, f
 // Both tests always run, and there is no bounds test either (the work-items past n repeat the last candidate
 // into the padding of `survives`, which holds the launch's global size): no branch, so that a CPU device
 // makes vector code of it.
-__kernel void mesh_near_prefilter(__global const GpucolMeshPair* pairs, __global const float* vertices,
-                                  __global const uint* indices, __global const ulong* keys, const uint n,
-                                  const uint bitsA, const uint bitsB, __global uint* survives) {
+__kernel void mesh_near_prefilter(__global const GpucolMeshPair* restrict pairs,
+                                  __global const float* restrict vertices,
+                                  __global const uint* restrict indices, __global const ulong* restrict keys,
+                                  const uint n, const uint bitsA, const uint bitsB,
+                                  __global uint* restrict survives) {
   const uint item = get_global_id(0);
   float af[3][3], bf[3][3];
   mesh_candidate_triangles(pairs, vertices, indices, keys[min(item, n - 1u)], bitsA, bitsB, af, bf);
-  const float3 a0 = (float3)(af[0][0], af[0][1], af[0][2]), a1 = (float3)(af[1][0], af[1][1], af[1][2]),
-               a2 = (float3)(af[2][0], af[2][1], af[2][2]);
-  const float3 b0 = (float3)(bf[0][0], bf[0][1], bf[0][2]), b1 = (float3)(bf[1][0], bf[1][1], bf[1][2]),
-               b2 = (float3)(bf[2][0], bf[2][1], bf[2][2]);
+  const F3 a0 = f3(af[0][0], af[0][1], af[0][2]), a1 = f3(af[1][0], af[1][1], af[1][2]),
+           a2 = f3(af[2][0], af[2][1], af[2][2]);
+  const F3 b0 = f3(bf[0][0], bf[0][1], bf[0][2]), b1 = f3(bf[1][0], bf[1][1], bf[1][2]),
+           b2 = f3(bf[2][0], bf[2][1], bf[2][2]);
   const uint sideB = f3_plane_side(a0, a1, a2, b0, b1, b2);
   const uint sideA = f3_plane_side(b0, b1, b2, a0, a1, a2);
   const uint planesApart = (sideB | ((sideB >> 1) & sideA)) & 1u;

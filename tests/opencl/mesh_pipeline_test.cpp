@@ -124,27 +124,42 @@ TEST(MeshPipeline, RealMeshesAtRandomPoses) {
   std::cout << "[          ] " << seen.bitIdentical << " of " << seen.contacts << " contacts bit-identical\n";
 }
 
-TEST(MeshPipeline, ThesisSceneAtEveryStartDepthWithAndWithoutEarlyOut) {
+TEST(MeshPipeline, ThesisSceneBothWalksAtEveryStartDepthWithAndWithoutEarlyOut) {
   GPUCOL_REQUIRE_OPENCL(context);
   GPUCOL_REQUIRE_MESH(path, "armadillo-2766.ply");
   const auto mesh = sharedMesh(scenes::centredOnVertexCentroid(loadMesh(path)));
   MeshShape shape(mesh);
   const scenes::PairPose pose = scenes::thesisPose(*mesh);
+  Config cpu;
+  cpu.meshBackend = Backend::Cpu;
+  const std::uint64_t cpuNodeTests = collideMeshes(shape, pose.a, shape, pose.b, cpu).stats.nodeTests;
   DeviceOptionsGuard guard;
-  for (int depth : {0, 1, 3, 6}) {
-    for (bool prefilter : {true, false}) {
-      for (bool deviceSort : {true, false}) {
-        MeshBatchDeviceOptions options;
-        options.startDepth = depth;
-        options.nearPrefilter = prefilter;
-        options.deviceSort = deviceSort;
-        detail::setMeshDeviceOptions(options);
-        SCOPED_TRACE("start depth " + std::to_string(depth) + (prefilter ? ", early-out" : ", no early-out") +
-                     (deviceSort ? ", device sort" : ", host sort"));
-        const Compared seen = expectSameAsCpu({query(shape, pose.a, shape, pose.b)}, 100.0f);
-        EXPECT_GT(seen.intersecting, 100u);
-        // Larger than one work-group of this device: the launches span several groups.
-        EXPECT_GT(seen.candidates, context.device().getInfo<CL_DEVICE_MAX_WORK_GROUP_SIZE>());
+  for (MeshTraversal traversal : {MeshTraversal::DepthFirst, MeshTraversal::BreadthFirst}) {
+    for (int depth : {0, 1, 3, 6}) {
+      for (bool prefilter : {true, false}) {
+        for (bool deviceSort : {true, false}) {
+          MeshBatchDeviceOptions options;
+          options.traversal = traversal;
+          // Depth-first: the start front at the same depths (0 = one work-item walks the whole tree pair).
+          options.startDepth = depth;
+          options.depthFirstStartDepth = depth;
+          options.nearPrefilter = prefilter;
+          options.deviceSort = deviceSort;
+          detail::setMeshDeviceOptions(options);
+          SCOPED_TRACE(std::string(traversal == MeshTraversal::DepthFirst ? "depth-first" : "breadth-first") +
+                       ", start depth " + std::to_string(depth) +
+                       (prefilter ? ", early-out" : ", no early-out") +
+                       (deviceSort ? ", device sort" : ", host sort"));
+          const Compared seen = expectSameAsCpu({query(shape, pose.a, shape, pose.b)}, 100.0f);
+          EXPECT_GT(seen.intersecting, 100u);
+          // Larger than one work-group of this device: the launches span several groups.
+          EXPECT_GT(seen.candidates, context.device().getInfo<CL_DEVICE_MAX_WORK_GROUP_SIZE>());
+          // Both walks make the same box tests (the CPU's count, root test included) whatever the start
+          // depth.
+          if (traversal == MeshTraversal::DepthFirst || depth == 0) {
+            EXPECT_EQ(detail::lastMeshDeviceStats().nodeTests, cpuNodeTests);
+          }
+        }
       }
     }
   }

@@ -75,8 +75,9 @@ struct MeshBatchDeviceOptions {
   /// Keep each mesh resident on the device between batches; false re-sends every mesh every batch (the
   /// thesis's choice, §5.4.1), for the measurement.
   bool resident = true;
-  /// Sort the candidates on the device (radix sort); false sorts them on the host.
-  bool deviceSort = true;
+  /// Sort the candidates on the device (radix sort) before the near phase; false sorts them on the host after
+  /// it, as they come back (faster on PoCL at every size measured: README, "Mesh pairs on OpenCL").
+  bool deviceSort = false;
 };
 
 /// Timings and counters of the last batch (host clock around each stage; each stage ends with a wait).
