@@ -141,6 +141,34 @@ inline void forEachCell(const CellRange& r, const Grid& g, F&& f) {
     }
 }
 
+/// A box's cells on a dense grid in 8 bytes: the number of its first cell and its extra cells per axis (hi -
+/// lo, up to 255; a box that spans more is marked and walked from its CellRange instead).
+struct PackedCells {
+  std::uint32_t first;
+  std::uint8_t span[3];
+  std::uint8_t wide;  // 1: a span did not fit 8 bits
+
+  static PackedCells of(const CellRange& r, const Grid& g) {
+    PackedCells p{
+        std::uint32_t((std::uint64_t(r.lo[2]) * g.dims[1] + r.lo[1]) * g.dims[0] + r.lo[0]), {0, 0, 0}, 0};
+    for (int a = 0; a < 3; ++a) {
+      const std::uint32_t d = r.hi[a] - r.lo[a];
+      p.wide |= std::uint8_t(d > 255);
+      p.span[a] = std::uint8_t(d);
+    }
+    return p;
+  }
+  bool fits() const { return wide == 0; }
+  /// f(cell) for every cell, in the order forEachCell visits them.
+  template <typename F>
+  void forEach(const Grid& g, F&& f) const {
+    const std::uint32_t dx = g.dims[0], dxy = g.dims[0] * g.dims[1];
+    for (std::uint32_t z = 0, zc = first; z <= span[2]; ++z, zc += dxy)
+      for (std::uint32_t y = 0, yc = zc; y <= span[1]; ++y, yc += dx)
+        for (std::uint32_t x = 0; x <= span[0]; ++x) f(yc + x);
+  }
+};
+
 /// Milliseconds since the last lap (stage timings of PairFinderStats).
 class StageClock {
  public:
@@ -301,6 +329,7 @@ class CpuPairFinder final : public PairFinder {
   std::vector<std::uint32_t> m_homeOrder;  // binned slots by home cell, as of the last home sort
   std::uint32_t m_homeOrderAge = 0;        // searches since that sort
   std::vector<std::uint32_t> m_homePos;    // per slot: its index in m_homeOrder (binned slots only)
+  std::vector<PackedCells> m_packed;       // dense grid: each box's cells (stage 4 to 5)
   std::vector<std::uint8_t> m_isBinned;    // per slot: binned in this search
   // Stage 11: the last full grid search (m_cellStart, m_sorted, m_box of a dense grid) kept for later
   // searches while few proxies change.
@@ -579,11 +608,18 @@ void CpuPairFinder::binSorted(const ProxyArrays& p, const Grid& g) {
                       for (std::size_t i = r.begin(); i != r.end(); ++i)
                         copyBox(m_homePos[m_binned[i]], m_binned[i]);
                     });
-  // Stage 4: count cells per box; the total decides whether the keys fit (count, then allocate).
+  // Stage 4: count cells per box; the total decides whether the keys fit (count, then allocate). On a dense
+  // grid each box's cells are also kept as its first cell and its spans (PackedCells), so the two passes of
+  // the counting sort step through them with integer arithmetic instead of computing the range again.
+  m_packed.resize(dense ? n : 0);
   const std::uint64_t keys = tbb::parallel_reduce(
       tbb::blocked_range<std::size_t>(0, n, 4096), std::uint64_t(0),
       [&](const tbb::blocked_range<std::size_t>& r, std::uint64_t sum) {
-        for (std::size_t i = r.begin(); i != r.end(); ++i) sum += cellRange(m_box[i], g).count();
+        for (std::size_t i = r.begin(); i != r.end(); ++i) {
+          const CellRange range = cellRange(m_box[i], g);
+          sum += range.count();
+          if (dense) m_packed[i] = PackedCells::of(range, g);
+        }
         return sum;
       },
       std::plus<std::uint64_t>());
@@ -599,7 +635,13 @@ void CpuPairFinder::binSorted(const ProxyArrays& p, const Grid& g) {
     m_denseBuilt = true;
     m_sorted.resize(keys);
     countingSort(
-        n, cells, m_cellStart, [&](std::size_t i, auto&& f) { forEachCell(cellRange(m_box[i], g), g, f); },
+        n, cells, m_cellStart,
+        [&](std::size_t i, auto&& f) {
+          if (m_packed[i].fits())
+            m_packed[i].forEach(g, f);
+          else
+            forEachCell(cellRange(m_box[i], g), g, f);
+        },
         [&](std::size_t i, std::uint32_t to) { m_sorted[to] = std::uint32_t(i); });
     // Stage 6: runs of two or more proxies, compacted in parallel over blocks of cells (count, scan, fill).
     const std::size_t blocks = std::size_t((cells + kGrain - 1) / kGrain);
@@ -837,7 +879,7 @@ std::size_t CpuPairFinder::scratchBytes() const {
       m_active.capacity() * 4 + m_binned.capacity() * 4 + m_huge.capacity() * 4 + m_extent.capacity() * 4;
   bytes += m_cellStart.capacity() * 4 + m_keys.capacity() * 8 + m_sorted.capacity() * 4;
   bytes += m_box.capacity() * sizeof(LocalBox) + m_homeKeys.capacity() * 8 + m_homeOrder.capacity() * 4 +
-           m_homePos.capacity() * 4 + m_isBinned.capacity();
+           m_homePos.capacity() * 4 + m_isBinned.capacity() + m_packed.capacity() * sizeof(PackedCells);
   bytes += m_unchanged.capacity() + m_keptHuge.capacity() * 4 + m_lastPairs.capacity() * 8 +
            m_moved.capacity() * 4 + m_movedKeys.capacity() * 8 + m_sortScratch.capacity() * 8;
   bytes += m_runCell.capacity() * 4 + m_runStart.capacity() * 4 + m_runLength.capacity() * 4;
