@@ -129,44 +129,78 @@ Result notRun(const std::string& label, const std::string& why) {
   return r;
 }
 
-Result run(const std::string& label, btBroadphaseInterface& bp, Scene scene, int steps,
-           const std::function<std::size_t()>& memory = nullptr,
-           const std::function<void()>& afterStep = nullptr) {
-  btDefaultCollisionConfiguration configuration;
-  btCollisionDispatcher dispatcher(&configuration);
-  std::vector<btBroadphaseProxy*> proxies;
-  proxies.reserve(scene.centre.size());
-  for (std::size_t i = 0; i < scene.centre.size(); ++i)
-    proxies.push_back(bp.createProxy(scene.centre[i] - scene.half[i], scene.centre[i] + scene.half[i],
-                                     BOX_SHAPE_PROXYTYPE, reinterpret_cast<void*>(i),
-                                     btBroadphaseProxy::DefaultFilter, btBroadphaseProxy::AllFilter,
-                                     &dispatcher));
-  bp.calculateOverlappingPairs(&dispatcher);  // initial pairs, not timed
+/// One broad phase on its own copy of a scene: set up when made, then one timed step per call, so that
+/// several broad phases can take turns step by step (--interleave) and meet the same load on a shared
+/// machine; finish() gives the median and the pair counts.
+class Stepper {
+ public:
+  virtual ~Stepper() = default;
+  /// Advances the scene and times one step (ms).
+  virtual double step() = 0;
+  /// The result after the last step (median of the steps taken).
+  virtual Result finish() = 0;
+  /// Milliseconds of every step so far.
   std::vector<double> ms;
-  for (int t = 0; t < steps; ++t) {
-    scene.advance(scene, t);
+};
+
+/// A btBroadphaseInterface: a step is setAabb of every proxy plus calculateOverlappingPairs.
+class BulletStepper final : public Stepper {
+ public:
+  BulletStepper(std::string label, btBroadphaseInterface& bp, Scene scene,
+                std::function<std::size_t()> memory = nullptr, std::function<void()> afterStep = nullptr)
+      : m_label(std::move(label)),
+        m_bp(bp),
+        m_scene(std::move(scene)),
+        m_dispatcher(&m_configuration),
+        m_memory(std::move(memory)),
+        m_afterStep(std::move(afterStep)) {
+    m_proxies.reserve(m_scene.centre.size());
+    for (std::size_t i = 0; i < m_scene.centre.size(); ++i)
+      m_proxies.push_back(m_bp.createProxy(m_scene.centre[i] - m_scene.half[i],
+                                           m_scene.centre[i] + m_scene.half[i], BOX_SHAPE_PROXYTYPE,
+                                           reinterpret_cast<void*>(i), btBroadphaseProxy::DefaultFilter,
+                                           btBroadphaseProxy::AllFilter, &m_dispatcher));
+    m_bp.calculateOverlappingPairs(&m_dispatcher);  // initial pairs, not timed
+  }
+  double step() override {
+    m_scene.advance(m_scene, m_step++);
     const auto start = Clock::now();
-    for (std::size_t i = 0; i < proxies.size(); ++i)
-      bp.setAabb(proxies[i], scene.centre[i] - scene.half[i], scene.centre[i] + scene.half[i], &dispatcher);
-    bp.calculateOverlappingPairs(&dispatcher);
+    for (std::size_t i = 0; i < m_proxies.size(); ++i)
+      m_bp.setAabb(m_proxies[i], m_scene.centre[i] - m_scene.half[i], m_scene.centre[i] + m_scene.half[i],
+                   &m_dispatcher);
+    m_bp.calculateOverlappingPairs(&m_dispatcher);
     ms.push_back(std::chrono::duration<double, std::milli>(Clock::now() - start).count());
-    if (afterStep) afterStep();
+    if (m_afterStep) m_afterStep();
+    return ms.back();
   }
-  Result r;
-  r.broadphase = label;
-  r.medianMs = median(ms);
-  btOverlappingPairCache* cache = bp.getOverlappingPairCache();
-  r.pairs = std::size_t(cache->getNumOverlappingPairs());
-  for (int i = 0; i < cache->getNumOverlappingPairs(); ++i) {
-    const btBroadphasePair& p = cache->getOverlappingPairArray()[i];
-    r.realPairs += TestAabbAgainstAabb2(p.m_pProxy0->m_aabbMin, p.m_pProxy0->m_aabbMax,
-                                        p.m_pProxy1->m_aabbMin, p.m_pProxy1->m_aabbMax);
+  Result finish() override {
+    Result r;
+    r.broadphase = m_label;
+    r.medianMs = median(ms);
+    btOverlappingPairCache* cache = m_bp.getOverlappingPairCache();
+    r.pairs = std::size_t(cache->getNumOverlappingPairs());
+    for (int i = 0; i < cache->getNumOverlappingPairs(); ++i) {
+      const btBroadphasePair& p = cache->getOverlappingPairArray()[i];
+      r.realPairs += TestAabbAgainstAabb2(p.m_pProxy0->m_aabbMin, p.m_pProxy0->m_aabbMax,
+                                          p.m_pProxy1->m_aabbMin, p.m_pProxy1->m_aabbMax);
+    }
+    if (m_memory) r.memoryBytes = m_memory();
+    // No destroyProxy loop: Bullet's caches scan every pair per removed proxy (quadratic teardown, the same
+    // for every broad phase here); the broad phases free their proxies when they are destroyed.
+    return r;
   }
-  if (memory) r.memoryBytes = memory();
-  // No destroyProxy loop: Bullet's caches scan every pair per removed proxy (quadratic teardown, the same
-  // for every broad phase here); the broad phases free their proxies when they are destroyed.
-  return r;
-}
+
+ private:
+  std::string m_label;
+  btBroadphaseInterface& m_bp;
+  Scene m_scene;
+  btDefaultCollisionConfiguration m_configuration;
+  btCollisionDispatcher m_dispatcher;
+  std::function<std::size_t()> m_memory;
+  std::function<void()> m_afterStep;
+  std::vector<btBroadphaseProxy*> m_proxies;
+  int m_step = 0;
+};
 
 /// The scene's boxes as the plain arrays b3GpuGridBroadphase's peer reads (all active, default filters).
 struct SceneArrays {
@@ -198,33 +232,45 @@ struct SceneArrays {
 /// Bullet3's b3GpuGridBroadphase through B3GpuGridPeer: a step is writing the moved boxes and uploading
 /// them (its setAabb) plus its calculateOverlappingPairs; pairs are the peer's, real pairs those of them
 /// whose boxes overlap.
-Result runB3(const std::string& label, B3GpuGridPeer& peer, Scene scene, int steps) {
-  SceneArrays arrays(scene.centre.size());
-  arrays.store(scene);
-  peer.setBoxes(arrays.view());  // creates the proxies, not timed
-  peer.step();
-  std::vector<double> ms;
-  std::size_t found = 0;
-  for (int t = 0; t < steps; ++t) {
-    scene.advance(scene, t);
+class B3Stepper final : public Stepper {
+ public:
+  B3Stepper(std::string label, B3GpuGridPeer& peer, Scene scene)
+      : m_label(std::move(label)), m_peer(peer), m_scene(std::move(scene)), m_arrays(m_scene.centre.size()) {
+    m_arrays.store(m_scene);
+    m_peer.setBoxes(m_arrays.view());  // creates the proxies, not timed
+    m_peer.step();
+  }
+  double step() override {
+    m_scene.advance(m_scene, m_step++);
     const auto start = Clock::now();
-    arrays.store(scene);
-    peer.setBoxes(arrays.view());
-    found = peer.step();
+    m_arrays.store(m_scene);
+    m_peer.setBoxes(m_arrays.view());
+    m_found = m_peer.step();
     ms.push_back(std::chrono::duration<double, std::milli>(Clock::now() - start).count());
+    return ms.back();
   }
-  Result r;
-  r.broadphase = label;
-  r.medianMs = median(ms);
-  r.pairs = found;
-  const ProxyArrays v = arrays.view();
-  for (std::uint64_t key : peer.pairs()) {
-    const std::uint32_t a = std::uint32_t(key >> 32), b = std::uint32_t(key);
-    r.realPairs += v.minX[a] <= v.maxX[b] && v.minX[b] <= v.maxX[a] && v.minY[a] <= v.maxY[b] &&
-                   v.minY[b] <= v.maxY[a] && v.minZ[a] <= v.maxZ[b] && v.minZ[b] <= v.maxZ[a];
+  Result finish() override {
+    Result r;
+    r.broadphase = m_label;
+    r.medianMs = median(ms);
+    r.pairs = m_found;
+    const ProxyArrays v = m_arrays.view();
+    for (std::uint64_t key : m_peer.pairs()) {
+      const std::uint32_t a = std::uint32_t(key >> 32), b = std::uint32_t(key);
+      r.realPairs += v.minX[a] <= v.maxX[b] && v.minX[b] <= v.maxX[a] && v.minY[a] <= v.maxY[b] &&
+                     v.minY[b] <= v.maxY[a] && v.minZ[a] <= v.maxZ[b] && v.minZ[b] <= v.maxZ[a];
+    }
+    return r;
   }
-  return r;
-}
+
+ private:
+  std::string m_label;
+  B3GpuGridPeer& m_peer;
+  Scene m_scene;
+  SceneArrays m_arrays;
+  std::size_t m_found = 0;
+  int m_step = 0;
+};
 
 /// --stages: median wall ms per stage of GridBroadphase's steps (the rest of a step is setAabb and the scan
 /// of the proxies' filters).
@@ -273,6 +319,7 @@ struct Options {
   std::string sqrtMode = "double";
   std::string device;
   bool stages = false;
+  bool interleave = false;
   int bruteForceBelow = Config{}.bruteForceBelow;
   std::size_t peerMax = 1000000;
   // bt32BitAxisSweep3 inserts each new proxy by walking its edges down the three sorted axes: n proxies
@@ -330,7 +377,20 @@ void runAll(const Options& o) {
         if (sceneName == "sleeping") return sleepingCloud(n, 4);
         throw std::runtime_error("unknown scene " + sceneName + " (uniform, column, mixed, sleeping)");
       };
+      // Every broad phase that runs gets a stepper (and keeps its objects alive until the case is done);
+      // those that do not run get their reason in `results` at their place in the table.
       std::vector<Result> results;
+      std::vector<std::unique_ptr<Stepper>> steppers;
+      std::vector<std::size_t> slot;  // steppers[i]'s place in results
+      std::vector<std::unique_ptr<GridBroadphase>> grids;
+      std::vector<std::unique_ptr<btBroadphaseInterface>> peers;
+      std::vector<std::vector<GridBroadphaseStats>> stepStats;
+      stepStats.reserve(2);
+      auto add = [&](std::unique_ptr<Stepper> stepper) {
+        slot.push_back(results.size());
+        results.emplace_back();
+        steppers.push_back(std::move(stepper));
+      };
       GridBroadphaseTuning tuning;
       tuning.densityCellSize = o.cellRule == "density";
       tuning.bitMaskOutput = o.output == "bitmask";
@@ -345,21 +405,21 @@ void runAll(const Options& o) {
         }
         Config config = base;
         config.broadphaseBackend = backend;
-        GridBroadphase grid(config);
-        grid.setTuning(tuning);
-        std::vector<GridBroadphaseStats> stepStats;
-        results.push_back(run(
-            label, grid, make(), o.steps, [&] { return grid.stats().memoryBytes; },
-            [&] { stepStats.push_back(grid.stats()); }));
-        if (o.stages) printStages(sceneName, n, label, stepStats);
-        if (!cpu && !grid.stats().usedOpenCl) results.back().note = "ran on the CPU: OpenCL path fell back";
+        grids.push_back(std::make_unique<GridBroadphase>(config));
+        GridBroadphase* grid = grids.back().get();
+        grid->setTuning(tuning);
+        stepStats.emplace_back();
+        std::vector<GridBroadphaseStats>* stats = &stepStats.back();
+        add(std::make_unique<BulletStepper>(
+            label, *grid, make(), [grid] { return grid->stats().memoryBytes; },
+            [grid, stats] { stats->push_back(grid->stats()); }));
       }
       if (wanted("dbvt")) {
         if (n > o.peerMax) {
           results.push_back(notRun("btDbvt", "not run: above --peer-max"));
         } else {
-          btDbvtBroadphase dbvt;
-          results.push_back(run("btDbvt", dbvt, make(), o.steps));
+          peers.push_back(std::make_unique<btDbvtBroadphase>());
+          add(std::make_unique<BulletStepper>("btDbvt", *peers.back(), make()));
         }
       }
       if (wanted("sap")) {
@@ -368,8 +428,8 @@ void runAll(const Options& o) {
         } else {
           Scene sc = make();
           if (n + 2 > 2147483646u) throw std::runtime_error("too many proxies for bt32BitAxisSweep3");
-          bt32BitAxisSweep3 sap(sc.lo, sc.hi, unsigned(n + 2));
-          results.push_back(run("bt32BitAxisSweep3", sap, sc, o.steps));
+          peers.push_back(std::make_unique<bt32BitAxisSweep3>(sc.lo, sc.hi, unsigned(n + 2)));
+          add(std::make_unique<BulletStepper>("bt32BitAxisSweep3", *peers.back(), std::move(sc)));
         }
       }
       if (wanted("b3")) {
@@ -378,7 +438,23 @@ void runAll(const Options& o) {
         else if (n > o.peerMax)
           results.push_back(notRun("b3GpuGrid", "not run: above --peer-max"));
         else
-          results.push_back(runB3("b3GpuGrid", *b3, make(), o.steps));
+          add(std::make_unique<B3Stepper>("b3GpuGrid", *b3, make()));
+      }
+      // --interleave: step 1 of every broad phase, then step 2 of every one, ...; else each runs all its
+      // steps in turn.
+      if (o.interleave) {
+        for (int t = 0; t < o.steps; ++t)
+          for (auto& stepper : steppers) stepper->step();
+      } else {
+        for (auto& stepper : steppers)
+          for (int t = 0; t < o.steps; ++t) stepper->step();
+      }
+      for (std::size_t i = 0; i < steppers.size(); ++i) results[slot[i]] = steppers[i]->finish();
+      for (std::size_t g = 0; g < grids.size(); ++g) {
+        Result& r = results[slot[g]];
+        if (o.stages && r.broadphase == "gpucol-cpu") printStages(sceneName, n, r.broadphase, stepStats[g]);
+        if (r.broadphase == "gpucol-opencl" && !grids[g]->stats().usedOpenCl)
+          r.note = "ran on the CPU: OpenCL path fell back";
       }
       const double reference = !results.empty() && results[0].note.empty() ? results[0].medianMs : 0.0;
       for (const Result& r : results) {
@@ -443,7 +519,10 @@ const CommandRegistration kRegistration([](CLI::App& app) {
       "the same device");
   cmd->add_flag(
       "--stages", options->stages,
-      "also print gpucol's median wall ms per stage (search and its grid stages, diff + pair cache)");
+      "also print gpucol-cpu's median wall ms per stage (search and its grid stages, diff + pair cache)");
+  cmd->add_flag("--interleave", options->interleave,
+                "take turns: step 1 of every broad phase, then step 2, ... (so all meet the same load on a "
+                "shared machine); default: each runs all its steps in turn");
   cmd->add_option("--cell-rule", options->cellRule, "grid cell size rule: size or density")
       ->check(CLI::IsMember({"size", "density"}))
       ->capture_default_str();
