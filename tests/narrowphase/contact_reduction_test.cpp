@@ -84,6 +84,35 @@ TEST(ContactReduction, MatchesBruteForceBinning) {
   EXPECT_GE(trials, 100);
 }
 
+TEST(ContactReduction, MatchesBruteForceAroundThePackedKeyLimit) {
+  // Up to resolution 1024 the six bins are packed into one 64-bit key, above it six-element keys are compared:
+  // both routes must keep what the brute force keeps. Each contact gets two copies at other depths, so that
+  // every bin holds several contacts however fine the bins are, and only the deepest may stay.
+  std::mt19937_64 rng(7);
+  std::uniform_real_distribution<float> depth(-0.1f, 0.0f);
+  int trials = 0;
+  for (int resolution : {1023, 1024, 1025, 4096}) {
+    for (int attempt = 0; attempt < 40; ++attempt) {
+      std::vector<ReductionInput> contacts = randomContacts(rng, 40);
+      for (std::size_t i = 0; i < 40; ++i) {
+        for (int copy = 0; copy < 2; ++copy) {
+          ReductionInput c = contacts[i];
+          c.depth = depth(rng);
+          contacts.push_back(c);
+        }
+      }
+      bool nearBoundary = false;
+      const std::vector<std::uint32_t> expected = referenceReduce(contacts, resolution, nearBoundary);
+      if (nearBoundary) continue;
+      ++trials;
+      const std::vector<std::uint32_t> kept = reduceContacts(contacts, resolution);
+      EXPECT_EQ(kept, expected) << "resolution " << resolution;
+      EXPECT_LE(kept.size(), 40u) << "resolution " << resolution;
+    }
+  }
+  EXPECT_GE(trials, 100);
+}
+
 TEST(ContactReduction, NearDuplicatesCollapseToTheDeepest) {
   // Two clusters at opposite corners of the patch, each of 50 contacts that differ by 1e-4 in position
   // and normal: one contact per cluster survives, the deepest of it.
