@@ -121,6 +121,10 @@ const std::string& B3GpuGridPeer::deviceName() const {
   return m_impl->deviceName;
 }
 
+void B3GpuGridPeer::reset() {
+  m_impl->slots.clear();
+}
+
 void B3GpuGridPeer::setBoxes(const ProxyArrays& p) {
   Impl& m = *m_impl;
   std::vector<std::uint32_t> active;

@@ -1,12 +1,12 @@
 #pragma once
 
-#include "broadphase/grid_pair_finder.h"
-
 #include <cstddef>
 #include <cstdint>
 #include <memory>
 #include <string>
 #include <vector>
+
+#include "broadphase/grid_pair_finder.h"
 
 namespace gpucol::bench {
 
@@ -36,6 +36,10 @@ class B3GpuGridPeer {
   /// Gives the peer the active proxies of `proxies` (the first call, or when the active set changed,
   /// creates them; later calls only update the boxes) and uploads them: the setAabb half of a step.
   void setBoxes(const ProxyArrays& proxies);
+
+  /// Forgets the proxies, so that the next setBoxes creates them again and re-splits small and large boxes
+  /// (a new scene with the same active slots would otherwise keep the last scene's split).
+  void reset();
 
   /// calculateOverlappingPairs: the other half of a step. Returns the number of pairs found. When the
   /// pair buffer overflowed, it is doubled and the step run again (Bullet3 itself would drop them).

@@ -237,6 +237,7 @@ class B3Stepper final : public Stepper {
   B3Stepper(std::string label, B3GpuGridPeer& peer, Scene scene)
       : m_label(std::move(label)), m_peer(peer), m_scene(std::move(scene)), m_arrays(m_scene.centre.size()) {
     m_arrays.store(m_scene);
+    m_peer.reset();                    // a new scene: new proxies even when the slots are the same
     m_peer.setBoxes(m_arrays.view());  // creates the proxies, not timed
     m_peer.step();
   }
