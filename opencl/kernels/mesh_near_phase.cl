@@ -166,7 +166,10 @@ bool coplanar_overlap(const V3* a, const V3* b, int dropAxis, V3* point) {
       if (!straddles(o1, o2) || (o1 == 0.0 && o2 == 0.0)) continue;
       const double o3 = orient2d(bx[j], by[j], bx[j1], by[j1], ax[i], ay[i]);
       const double o4 = orient2d(bx[j], by[j], bx[j1], by[j1], ax[i1], ay[i1]);
-      if (!straddles(o3, o4)) continue;
+      // Both zero (they straddle) puts a's edge on b's line: collinear edges, or by rounding an edge far
+      // shorter than the other triangle (a needle 1e-44 wide gave 0 / 0 = NaN). The containment tests below
+      // find the endpoints that matter, as coplanar_triangles.cpp does since 4429c70.
+      if (!straddles(o3, o4) || o3 == o4) continue;
       const double t = o3 / (o3 - o4);
       for (int k = 0; k < 3; ++k) sum.x[k] += a[i].x[k] + (a[i1].x[k] - a[i].x[k]) * t;
       ++count;

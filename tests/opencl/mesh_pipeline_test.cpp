@@ -231,6 +231,36 @@ TEST(MeshPipeline, BoxesRestingAndTouchingFaceOnFace) {
   EXPECT_GT(seen.contacts, 20u);
 }
 
+// tests/stress/special_contacts_test.cpp's NeedleInTheOtherPlaneGivesAFiniteContact as two one-triangle
+// meshes: a needle 1e-44 wide in the other triangle's plane, where the coplanar overlap once divided 0 by 0
+// (CPU fixed in 4429c70, the kernel's copy since). The device must give the CPU's finite contact.
+TEST(MeshPipeline, NeedleInTheOtherPlaneGivesTheCpusFiniteContact) {
+  GPUCOL_REQUIRE_OPENCL(context);
+  MeshShape needle(sharedMesh(TriangleMesh::fromArrays(
+      {4.20389539e-45f, 1.12103877e-44f, 0, 0, 0, 1, 0, 0, 0}, {0, 1, 2}, "needle")));
+  MeshShape other(sharedMesh(TriangleMesh::fromArrays(
+      {1, 0, 0.5f, 0.5f, 0, 2.3509887e-38f, -6.52687105e-24f, 1.0354888e-38f, 0}, {0, 1, 2}, "other")));
+  const btTransform identity = btTransform::getIdentity();
+  DeviceOptionsGuard guard;
+  for (bool prefilter : {true, false}) {
+    MeshBatchDeviceOptions options;
+    options.nearPrefilter = prefilter;
+    detail::setMeshDeviceOptions(options);
+    SCOPED_TRACE(prefilter ? "early-out" : "no early-out");
+    const Compared seen = expectSameAsCpu({query(needle, identity, other, identity)}, 1.0f);
+    EXPECT_EQ(seen.onDevice, 1u);
+    EXPECT_EQ(seen.intersecting, 1u);
+    EXPECT_EQ(seen.contacts, 1u);
+    Config cl;
+    cl.meshBackend = Backend::OpenCL;
+    for (const MeshContact& c : collideMeshes(needle, identity, other, identity, cl).contacts) {
+      EXPECT_TRUE(std::isfinite(c.pointWorld.x()) && std::isfinite(c.pointWorld.y()) &&
+                  std::isfinite(c.pointWorld.z()));
+      EXPECT_TRUE(std::isfinite(c.depth));
+    }
+  }
+}
+
 TEST(MeshPipeline, TwoSpheresAtKnownOverlap) {
   GPUCOL_REQUIRE_OPENCL(context);
   MeshShape sphere3(sharedMesh(scenes::makeIcosphere(1.0f, 3))),
