@@ -15,6 +15,7 @@
 
 #include "gpucol_kernels/kernels.h"
 #include "opencl/host/mesh_device_cache.h"
+#include "opencl/host/mesh_host_sort.h"
 #include "opencl/host/opencl_context.h"
 #include "opencl/host/radix_sort.h"
 #include "opencl/host/scan.h"
@@ -49,8 +50,9 @@ constexpr int kMaxStartDepth = 12;
 constexpr std::size_t kGroupSizeCap = 64;
 
 /// Most candidates the host sorts (MeshBatchDeviceOptions::deviceSort false); more go to the device's radix
-/// sort. On PoCL the host's std::sort won on one pair of armadillo-399904 (44,209 candidates) and lost badly
-/// on a batch of 100 armadillo-2766 pairs (431,257 candidates: 53 ms against the device's linear-time sort).
+/// sort. On PoCL the host's std::sort (since replaced by MeshHostSort's radix sort) won on one pair of
+/// armadillo-399904 (44,209 candidates) and lost badly on a batch of 100 armadillo-2766 pairs (431,257
+/// candidates: 53 ms against the device's linear-time sort).
 constexpr std::uint64_t kHostSortMaximum = 65536;
 
 /// Work-items the depth-first traversal's automatic start depth aims for (MeshBatchDeviceOptions).
@@ -165,7 +167,9 @@ class OpenClMeshPipeline final : public MeshBatchDevice {
   DeviceArray m_pairs, m_counts, m_front, m_next, m_keys, m_values, m_hits, m_survivors;
   std::vector<GpucolMeshPair> m_hostPairs;
   std::vector<std::uint64_t> m_hostKeys, m_sortedKeys;
-  std::vector<GpucolNearHit> m_hostHits;
+  std::vector<std::uint32_t> m_rank, m_hitAt;
+  std::vector<GpucolNearHit> m_hostHits, m_rankedHits;
+  MeshHostSort m_hostSort;
 };
 
 void OpenClMeshPipeline::runBatch(const std::vector<DeviceMeshPair>& pairs,
@@ -312,17 +316,22 @@ void OpenClMeshPipeline::runBatch(const std::vector<DeviceMeshPair>& pairs,
 
   if (!deviceSort) {
     // The keys in order, and each hit's candidate index moved to its key's place in that order (keys are
-    // unique: a triangle pair is found once), the hits sorted along.
+    // unique: a triangle pair is found once). The ranks are a permutation, so the hits are put in that order
+    // by a slot per candidate instead of a second sort.
     start = Clock::now();
-    m_sortedKeys = m_hostKeys;
-    std::sort(m_sortedKeys.begin(), m_sortedKeys.end());
-    for (GpucolNearHit& h : m_hostHits) {
-      const std::uint64_t key = m_hostKeys[h.candidate];
-      h.candidate = std::uint32_t(std::lower_bound(m_sortedKeys.begin(), m_sortedKeys.end(), key) -
-                                  m_sortedKeys.begin());
+    m_hostSort.sortAndRank(m_hostKeys, keyBits, m_sortedKeys, m_rank);
+    constexpr std::uint32_t kNoHit = 0xffffffffu;
+    m_hitAt.assign(candidateCount, kNoHit);
+    for (std::size_t i = 0; i < m_hostHits.size(); ++i) {
+      const std::uint32_t ranked = m_rank[m_hostHits[i].candidate];
+      m_hostHits[i].candidate = ranked;
+      m_hitAt[ranked] = std::uint32_t(i);
     }
-    std::sort(m_hostHits.begin(), m_hostHits.end(),
-              [](const GpucolNearHit& l, const GpucolNearHit& r) { return l.candidate < r.candidate; });
+    m_rankedHits.clear();
+    for (std::uint32_t slot : m_hitAt) {
+      if (slot != kNoHit) m_rankedHits.push_back(m_hostHits[slot]);
+    }
+    std::swap(m_hostHits, m_rankedHits);
     std::swap(m_hostKeys, m_sortedKeys);
     s.sortMs = millisecondsSince(start);
   }
