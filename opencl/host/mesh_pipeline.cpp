@@ -49,12 +49,6 @@ constexpr int kMaxStartDepth = 12;
 /// depth-first launch 64 groups to spread over the compute units.
 constexpr std::size_t kGroupSizeCap = 64;
 
-/// Most candidates the host sorts (MeshBatchDeviceOptions::deviceSort false); more go to the device's radix
-/// sort. On PoCL the host's std::sort (since replaced by MeshHostSort's radix sort) won on one pair of
-/// armadillo-399904 (44,209 candidates) and lost badly on a batch of 100 armadillo-2766 pairs (431,257
-/// candidates: 53 ms against the device's linear-time sort).
-constexpr std::uint64_t kHostSortMaximum = 65536;
-
 /// Work-items the depth-first traversal's automatic start depth aims for (MeshBatchDeviceOptions).
 constexpr std::uint64_t kDepthFirstItems = 4096;
 
@@ -248,7 +242,7 @@ void OpenClMeshPipeline::runBatch(const std::vector<DeviceMeshPair>& pairs,
   // care about the order, and the host sorts the keys it reads back anyway without the device sort's launches
   // and waits (ten radix passes of 4 bits for 40-bit keys, a scan with a wait in each).
   m_hostKeys.resize(candidateCount);
-  const bool deviceSort = options.deviceSort || candidateCount > kHostSortMaximum;
+  const bool deviceSort = options.deviceSort;
   if (deviceSort) {
     start = Clock::now();
     m_sort.sort(m_keys.buffer, m_values.ensure(ctx, candidateCount * sizeof(cl_uint)), candidateCount,
