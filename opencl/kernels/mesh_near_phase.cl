@@ -198,7 +198,9 @@ GPUCOL_INLINE void mesh_vertex(__global const float* vertices, uint firstVertex,
   out[2] = p[2];
 }
 
-// The triangles of candidate `key` in A's scaled frame, in float, as collide_meshes.cpp builds them.
+// The triangles of candidate `key` in A's scaled frame, in float, as collide_meshes.cpp builds them. Its
+// loops are unrolled: left as loops, PoCL vectorised them (two floats wide) inside each work-item, and the
+// loop over the work-items, no longer innermost, stayed scalar.
 GPUCOL_INLINE void mesh_candidate_triangles(__global const GpucolMeshPair* pairs,
                                             __global const float* vertices, __global const uint* indices,
                                             const ulong key, const uint bitsA, const uint bitsB,
@@ -209,11 +211,14 @@ GPUCOL_INLINE void mesh_candidate_triangles(__global const GpucolMeshPair* pairs
   __global const GpucolMeshPair* p = pairs + pair;
   __global const uint* cornerA = indices + 3u * (p->trianglesA + triangleA);
   __global const uint* cornerB = indices + 3u * (p->trianglesB + triangleB);
+#pragma unroll
   for (int c = 0; c < 3; ++c) {
     float v[3];
     mesh_vertex(vertices, p->verticesA, cornerA[c], v);
+#pragma unroll
     for (int k = 0; k < 3; ++k) af[c][k] = p->scaleA[k] * v[k];
     mesh_vertex(vertices, p->verticesB, cornerB[c], v);
+#pragma unroll
     for (int k = 0; k < 3; ++k) {
       // Eigen's order for a 3x3 float matrix times a vector (its unrolled sum pairs the last two terms
       // first).
@@ -223,6 +228,7 @@ GPUCOL_INLINE void mesh_candidate_triangles(__global const GpucolMeshPair* pairs
   }
   // Mirrored scalings swap vertices 1 and 2 (selects rather than branches: the prefilter stays vector code).
   const bool flipA = p->flipA != 0u, flipB = p->flipB != 0u;
+#pragma unroll
   for (int k = 0; k < 3; ++k) {
     const float a1 = af[1][k], a2 = af[2][k], b1 = bf[1][k], b2 = bf[2][k];
     af[1][k] = flipA ? a2 : a1;
@@ -256,6 +262,10 @@ GPUCOL_INLINE float f3_dot(F3 a, F3 b) {
 }
 GPUCOL_INLINE float f3_max_abs(F3 v) {
   return fmax(fmax(fabs(v.x), fabs(v.y)), fabs(v.z));
+}
+// v's coordinate on the axis picked by useX / useY (else z), with scalar selects.
+GPUCOL_INLINE float f3_axis(F3 v, bool useX, bool useY) {
+  return useX ? v.x : (useY ? v.y : v.z);
 }
 GPUCOL_INLINE bool f3_interval_factor(float x) {
   return (x >= FLOAT_INTERVAL_MIN_FACTOR) & (x <= FLOAT_INTERVAL_MAX_FACTOR);
@@ -330,8 +340,11 @@ GPUCOL_INLINE uint f3_intervals_apart(F3 a0, F3 a1, F3 a2, F3 b0, F3 b1, F3 b2) 
                              fmax(f3_max_abs(b1), f3_max_abs(b2)));
   const float edgesA = fmax(fmax(ea1, ea2), f3_max_abs(f3_sub(a2, a1)));
   const float edgesB = fmax(fmax(eb1, eb2), f3_max_abs(f3_sub(b2, b1)));
-  const F3 pA = useX ? f3(a0.x, a1.x, a2.x) : (useY ? f3(a0.y, a1.y, a2.y) : f3(a0.z, a1.z, a2.z));
-  const F3 pB = useX ? f3(b0.x, b1.x, b2.x) : (useY ? f3(b0.y, b1.y, b2.y) : f3(b0.z, b1.z, b2.z));
+  // Component by component: a select of whole F3 values became branches and a phi of <2 x float> (the ABI's
+  // form of a returned F3), which kept PoCL's work-item loop scalar ("instruction return type cannot be
+  // vectorized", "control flow cannot be substituted for a select").
+  const F3 pA = f3(f3_axis(a0, useX, useY), f3_axis(a1, useX, useY), f3_axis(a2, useX, useY));
+  const F3 pB = f3(f3_axis(b0, useX, useY), f3_axis(b1, useX, useY), f3_axis(b2, useX, useY));
   const F3 iA = f3_interval(pA, dA, mA, edgesA, largest);
   const F3 iB = f3_interval(pB, dB, mB, edgesB, largest);
   const float tolerance = 2.0f * (iA.z + iB.z);
