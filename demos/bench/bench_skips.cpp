@@ -84,8 +84,8 @@ double broadphaseStepMs(GridBroadphase& bp, BoxCloud cloud, int steps, std::size
 SkipLine noGridForSmallScenes(int steps) {
   SkipLine l;
   l.skip = "no grid for small scenes";
-  l.scene = "500 moving unit boxes";
-  const BoxCloud cloud(500, std::cbrt(8.0f * 500.0f), 1);
+  l.scene = "100 moving unit boxes";
+  const BoxCloud cloud(100, std::cbrt(8.0f * 100.0f), 1);
   GridBroadphase small;  // default bruteForceBelow
   l.withMs = broadphaseStepMs(small, cloud, steps, 1, false);
   l.counter = std::string("usedGrid = ") + (small.stats().usedGrid ? "true" : "false");

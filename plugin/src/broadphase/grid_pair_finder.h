@@ -93,7 +93,7 @@ enum class MappingSqrt { Double, Newton };
 /// Knobs of one pair search.
 struct PairFinderOptions {
   /// Below this many active proxies all pairs are tested without a grid (Config::bruteForceBelow).
-  std::uint32_t bruteForceBelow = 1000;
+  std::uint32_t bruteForceBelow = 128;
   /// Cell size rule of the grid.
   CellSizeRule cellSizeRule = CellSizeRule::Size;
   /// Output form of the candidate tests.
