@@ -103,6 +103,34 @@ TEST(GridPairFinder, MixedSizesWithHugeBoxes) {
       << "the slab, pillar and the enclosing box are kept out of the grid";
 }
 
+TEST(GridPairFinder, HugeBoxesTestedThroughTheirCells) {
+  // Huge boxes covering a few hundred cells among 20,000 binned ones take the cell path of stage 3, where
+  // cells inside a huge box's range report their home entries without a test; boxes touching the huge
+  // boxes' faces (touching counts) and crossing their boundary cells check the tested part.
+  Scene s = uniformCloud(20000, 25.0f, 0.6f, 9);
+  std::mt19937 rng(9);
+  std::uniform_real_distribution<float> pos(-20.0f, 20.0f), big(3.5f, 6.0f);
+  for (int i = 0; i < 30; ++i) {
+    const float cx = pos(rng), cy = pos(rng), cz = pos(rng), hx = big(rng), hy = big(rng), hz = big(rng);
+    s.add(cx, cy, cz, hx, hy, hz);
+    s.add(cx - hx - 0.25f, cy, cz, 0.25f, 0.25f, 0.25f);  // touches the min x face
+    s.add(cx, cy + hy + 0.5f, cz, 0.5f, 0.5f, 0.5f);      // touches the max y face
+    s.add(cx, cy, cz - hz, 0.3f, 0.3f, 0.3f);             // straddles the min z face
+  }
+  const gpucol::ProxyArrays view = s.view();
+  const std::vector<std::uint64_t> reference = gpucol::findPairsBruteForce(view);
+  auto finder = gpucol::makeCpuPairFinder();
+  gpucol::PairFinderOptions o;
+  o.bruteForceBelow = 0;
+  std::vector<std::uint64_t> pairs;
+  finder->findPairs(view, o, pairs);
+  EXPECT_EQ(pairs, reference);
+  EXPECT_EQ(finder->stats().hugeProxies, 30u);
+  // Through the cells, a huge box visits far fewer entries than the 20,090 binned boxes it would test
+  // one by one.
+  EXPECT_LT(finder->stats().candidates, 30u * 20090u / 2);
+}
+
 TEST(GridPairFinder, AllInOnePlane) {
   std::mt19937 rng(4);
   std::uniform_real_distribution<float> pos(-40.0f, 40.0f), size(0.2f, 1.0f);

@@ -32,6 +32,10 @@ constexpr double kIncrementalFraction = 0.125;
 constexpr std::size_t kMovedGrain = 256;
 /// Chunks of the pair sort's parallel passes (fixed, so the passes do not depend on the thread count).
 constexpr std::size_t kSortChunks = 16;
+/// An entry of m_sorted on a dense grid: the index of its box in m_box, and kHomeEntry when the cell is the
+/// box's home cell (the cell of its min corner), which the huge boxes' tests read without loading the box.
+constexpr std::uint32_t kHomeEntry = 1u << 31;
+constexpr std::uint32_t kEntryBox = kHomeEntry - 1;
 /// Chunks per search at most, so per-chunk bookkeeping stays small next to the work.
 constexpr std::uint64_t kMaxChunks = 256;
 
@@ -272,12 +276,12 @@ inline std::uint32_t slotBitsFor(std::uint32_t count) {
 }
 
 /// Parallel counting sort of items 0..items-1 into `cells` buckets; `buckets(i, f)` calls f(cell) for each
-/// bucket item i goes into, and place(i, position) stores item i at its position in the output. Afterwards
-/// start[c]..start[c+1] (start has cells + 1 entries) is bucket c's range of the output. Threads count with
-/// atomic increments, an inclusive scan turns counts into bucket ends, and threads place items by atomic
-/// decrements, which leaves start[c] at the bucket's begin. The order inside a bucket depends on thread
-/// timing; nothing downstream does: pairs are keyed by slot and the output is sorted (stage 10), so the
-/// result is the same whatever the threads did.
+/// bucket item i goes into, and place(i, position, bucket) stores item i at its position in the output.
+/// Afterwards start[c]..start[c+1] (start has cells + 1 entries) is bucket c's range of the output. Threads
+/// count with atomic increments, an inclusive scan turns counts into bucket ends, and threads place items by
+/// atomic decrements, which leaves start[c] at the bucket's begin. The order inside a bucket depends on
+/// thread timing; nothing downstream does: pairs are keyed by slot and the output is sorted (stage 10), so
+/// the result is the same whatever the threads did.
 template <typename Buckets, typename Place>
 void countingSort(std::size_t items, std::uint64_t cells, std::vector<std::uint32_t>& start,
                   Buckets&& buckets, Place&& place) {
@@ -295,7 +299,7 @@ void countingSort(std::size_t items, std::uint64_t cells, std::vector<std::uint3
   tbb::parallel_for(
       tbb::blocked_range<std::size_t>(0, items, kGrain), [&](const tbb::blocked_range<std::size_t>& r) {
         for (std::size_t i = r.begin(); i != r.end(); ++i)
-          buckets(i, [&](std::uint32_t c) { place(i, atomicAdd(start[c], std::uint32_t(-1)) - 1); });
+          buckets(i, [&](std::uint32_t c) { place(i, atomicAdd(start[c], std::uint32_t(-1)) - 1, c); });
       });
 }
 
@@ -343,7 +347,7 @@ class CpuPairFinder final : public PairFinder {
   std::vector<std::uint32_t> m_moved;        // active slots changed since the kept search
   std::vector<std::uint64_t> m_movedKeys;    // (cell << 32) | index into m_moved, binned moved proxies
   std::vector<std::uint64_t> m_sortScratch;  // second buffer of the pair radix sort
-  std::vector<std::uint32_t> m_sorted;       // m_box indices sorted by (cell, index)
+  std::vector<std::uint32_t> m_sorted;       // m_box indices by cell (dense grid: with kHomeEntry)
   std::vector<std::uint32_t> m_runCell;      // runs of >= 2 entries: cell index
   std::vector<std::uint32_t> m_runStart;     // first entry in m_sorted
   std::vector<std::uint32_t> m_runLength;
@@ -467,7 +471,7 @@ void CpuPairFinder::incremental(const ProxyArrays& p, const PairFinderOptions& o
       }
       forEachCell(cellRange(a, g), g, [&](std::uint32_t c) {
         for (std::uint32_t e2 = m_cellStart[c], end = m_cellStart[c + 1]; e2 < end; ++e2) {
-          const LocalBox& b = m_box[m_sorted[e2]];
+          const LocalBox& b = m_box[m_sorted[e2] & kEntryBox];
           if (!m_unchanged[b.slot] || !boxesOverlap(a, b) || overlapCell(a, b, g) != c) continue;
           if (passesFilter(a, b)) out.push_back(makePairKey(sm, b.slot));
         }
@@ -578,7 +582,7 @@ void CpuPairFinder::binSorted(const ProxyArrays& p, const Grid& g) {
     m_homeOrder.resize(n);
     countingSort(
         n, cells, m_cellStart, [&](std::size_t i, auto&& f) { f(homeCell(p, m_binned[i], g)); },
-        [&](std::size_t i, std::uint32_t to) { m_homeOrder[to] = m_binned[i]; });
+        [&](std::size_t i, std::uint32_t to, std::uint32_t) { m_homeOrder[to] = m_binned[i]; });
     m_homeOrderAge = 0;
   } else {
     m_homeKeys.resize(n);
@@ -627,6 +631,9 @@ void CpuPairFinder::binSorted(const ProxyArrays& p, const Grid& g) {
   if (keys > std::numeric_limits<std::uint32_t>::max())
     throw std::runtime_error("gpucol::GridBroadphase: " + std::to_string(keys) +
                              " (cell, proxy) entries exceed the 2^32 entry limit of one grid");
+  if (n > kEntryBox)
+    throw std::runtime_error("gpucol::GridBroadphase: " + std::to_string(n) +
+                             " binned proxies exceed the 2^31 - 1 limit of one grid");
   m_runCell.clear();
   m_runStart.clear();
   m_runLength.clear();
@@ -642,7 +649,9 @@ void CpuPairFinder::binSorted(const ProxyArrays& p, const Grid& g) {
           else
             forEachCell(cellRange(m_box[i], g), g, f);
         },
-        [&](std::size_t i, std::uint32_t to) { m_sorted[to] = std::uint32_t(i); });
+        [&](std::size_t i, std::uint32_t to, std::uint32_t c) {
+          m_sorted[to] = std::uint32_t(i) | (c == m_packed[i].first ? kHomeEntry : 0u);
+        });
     // Stage 6: runs of two or more proxies, compacted in parallel over blocks of cells (count, scan, fill).
     const std::size_t blocks = std::size_t((cells + kGrain - 1) / kGrain);
     m_blockRuns.assign(blocks + 1, 0);
@@ -756,11 +765,11 @@ void CpuPairFinder::testRuns(const PairFinderOptions& options, const Grid& g) {
       const std::uint32_t m = m_runLength[run];
       const std::uint32_t* local = m_sorted.data() + m_runStart[run];
       while (i + 1 < m && k < k1) {
-        const LocalBox ba = m_box[local[i]];
+        const LocalBox ba = m_box[local[i] & kEntryBox];
         const std::uint64_t row =
             std::min<std::uint64_t>(m - j, k1 - k);  // this row's candidates in the chunk
         for (std::uint64_t t = 0; t < row; ++t) {
-          const LocalBox& bb = m_box[local[j + t]];
+          const LocalBox& bb = m_box[local[j + t] & kEntryBox];
           if (!accept(run, ba, bb)) continue;
           if (bitMask)
             m_bits[(k + t) >> 6] |= std::uint64_t(1) << ((k + t) & 63);  // 64-aligned chunks: no shared word
@@ -791,7 +800,7 @@ void CpuPairFinder::testRuns(const PairFinderOptions& options, const Grid& g) {
           gpucol_u64 a = 0, b = 0;
           locate(k, r, a, b);
           const std::uint32_t* local = m_sorted.data() + m_runStart[r];
-          out.push_back(makePairKey(m_box[local[a]].slot, m_box[local[b]].slot));
+          out.push_back(makePairKey(m_box[local[a] & kEntryBox].slot, m_box[local[b] & kEntryBox].slot));
         }
       }
     }
@@ -802,7 +811,8 @@ void CpuPairFinder::testHuge(const ProxyArrays& p, const Grid& g) {
   // Stage 3: every huge box against the other huge boxes (each pair once, from the earlier in m_huge) and
   // against the binned boxes: either one by one, or, when it covers few enough cells of a dense grid,
   // through those cells' entries with stage 9's rule (a binned box is in every cell it overlaps, so the
-  // cell of the overlap's min corner holds it; the huge box's clamped range covers that cell too).
+  // cell of the overlap's min corner holds it; the huge box's clamped range covers that cell too); inside
+  // the range, by the entries' home bit alone.
   const std::size_t h = m_huge.size();
   if (h == 0) return;
   const std::size_t firstChunk = takeChunks(h);
@@ -820,14 +830,33 @@ void CpuPairFinder::testHuge(const ProxyArrays& p, const Grid& g) {
     tested[hi] = h - hi - 1;
     const CellRange range = cellRange(a, g);
     if (m_denseBuilt && double(range.count()) * (1.0 + keysPerCell) < double(m_binned.size())) {
-      forEachCell(range, g, [&](std::uint32_t c) {
-        for (std::uint32_t e = m_cellStart[c], end = m_cellStart[c + 1]; e < end; ++e) {
-          const LocalBox& b = m_box[m_sorted[e]];
-          if (boxesOverlap(a, b) && overlapCell(a, b, g) == c && passesFilter(a, b))
-            out.push_back(makePairKey(sh, b.slot));
+      // A cell strictly inside the huge box's cell range on every axis (range.lo < x < range.hi, and so on)
+      // needs no test: cellOf is monotone, so every box listed there overlaps the huge box, and the overlap's
+      // min corner lies in this cell exactly when the listed box's home cell (its min corner's) is this one,
+      // which the entry's kHomeEntry bit says without loading the box.
+      for (std::uint32_t z = range.lo[2]; z <= range.hi[2]; ++z)
+        for (std::uint32_t y = range.lo[1]; y <= range.hi[1]; ++y) {
+          const std::uint64_t row = (std::uint64_t(z) * g.dims[1] + y) * g.dims[0];
+          const bool innerRow = z > range.lo[2] && z < range.hi[2] && y > range.lo[1] && y < range.hi[1];
+          for (std::uint32_t x = range.lo[0]; x <= range.hi[0]; ++x) {
+            const std::uint32_t c = std::uint32_t(row + x);
+            const std::uint32_t begin = m_cellStart[c], end = m_cellStart[c + 1];
+            tested[hi] += end - begin;
+            if (innerRow && x > range.lo[0] && x < range.hi[0]) {
+              for (std::uint32_t e = begin; e < end; ++e) {
+                if (!(m_sorted[e] & kHomeEntry)) continue;
+                const LocalBox& b = m_box[m_sorted[e] & kEntryBox];
+                if (passesFilter(a, b)) out.push_back(makePairKey(sh, b.slot));
+              }
+              continue;
+            }
+            for (std::uint32_t e = begin; e < end; ++e) {
+              const LocalBox& b = m_box[m_sorted[e] & kEntryBox];
+              if (boxesOverlap(a, b) && overlapCell(a, b, g) == c && passesFilter(a, b))
+                out.push_back(makePairKey(sh, b.slot));
+            }
+          }
         }
-        tested[hi] += m_cellStart[c + 1] - m_cellStart[c];
-      });
     } else {
       for (std::uint32_t s : m_binned)
         if (boxesOverlap(a, boxOf(p, s)) && passesFilter(p, sh, s)) out.push_back(makePairKey(sh, s));
