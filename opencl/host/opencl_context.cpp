@@ -64,6 +64,33 @@ std::vector<cl::Device> allDevices(std::vector<DeviceCandidate>& candidates) {
   return devices;
 }
 
+// The probe of opencl_started.h: the chosen device's type from the device lists, once per filter (the lists do
+// not change while the process runs).
+bool probeChosenDeviceIsGpu(const std::string& configured) {
+  static std::mutex mutex;
+  static std::map<std::string, bool> answers;
+  const std::string filter = effectiveDeviceFilter(configured);
+  std::lock_guard<std::mutex> lock(mutex);
+  const auto found = answers.find(filter);
+  if (found != answers.end()) return found->second;
+  bool isGpu = false;
+  try {
+    std::vector<DeviceCandidate> candidates;
+    allDevices(candidates);
+    const std::optional<std::size_t> chosen = chooseDevice(candidates, filter);
+    isGpu = chosen && candidates[*chosen].isGpu;
+  } catch (const std::exception&) {
+    isGpu = false;  // A failing platform query: the caller stays on the CPU, as with no device.
+  }
+  answers[filter] = isGpu;
+  return isGpu;
+}
+
+const bool kProbeInstalled = [] {
+  chosenDeviceIsGpuProbe() = probeChosenDeviceIsGpu;
+  return true;
+}();
+
 std::string hexHash(const char* source) {
   const std::size_t h = std::hash<std::string>{}(source);
   static const char* kDigits = "0123456789abcdef";

@@ -1,9 +1,13 @@
 #pragma once
-// How many OpenCL contexts this process has created, readable without the OpenCL module: header-only, so the
-// plugin reports it (gpucol::openClStarted) whether or not it was built with OpenCL. DESIGN.md's lazy start is
-// shown by this staying 0 in a program whose batches never want OpenCL.
+// What the plugin may ask of OpenCL without depending on the OpenCL module or setting a device up: how many
+// contexts this process has created (gpucol::openClStarted), and whether the device OpenCL would choose is a
+// GPU. Header-only, so the plugin compiles the same whether or not it was built with OpenCL. DESIGN.md's lazy
+// start: Backend::Auto asks the probe before it sets anything up, so a machine whose only device is a CPU one
+// (PoCL) never builds a context or a program for Auto, whatever the scene's size.
 #include <atomic>
 #include <cstdint>
+#include <functional>
+#include <string>
 
 namespace gpucol::opencl {
 
@@ -11,6 +15,20 @@ namespace gpucol::opencl {
 inline std::atomic<std::uint32_t>& openClContextsCreated() {
   static std::atomic<std::uint32_t> count{0};
   return count;
+}
+
+/// Says whether the device chosen for a Config::openclDevice filter is a GPU, from the platform and device
+/// lists alone (no context); false when there is no OpenCL or no such device. Installed by the OpenCL module at
+/// static initialisation; empty without it. Never throws.
+inline std::function<bool(const std::string&)>& chosenDeviceIsGpuProbe() {
+  static std::function<bool(const std::string&)> probe;
+  return probe;
+}
+
+/// The probe's answer, false when no probe is installed.
+inline bool chosenDeviceIsGpu(const std::string& configuredDevice) {
+  const auto& probe = chosenDeviceIsGpuProbe();
+  return probe ? probe(configuredDevice) : false;
 }
 
 }  // namespace gpucol::opencl

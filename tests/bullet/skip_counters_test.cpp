@@ -6,6 +6,7 @@
 
 #include <gpucol/gpucol.h>
 
+#include "opencl/host/opencl_started.h"
 #include "scenes/procedural_meshes.h"
 #include "test_world.h"
 
@@ -70,6 +71,21 @@ TEST(SkipCounters, SmallPairsStayOnTheCpuAndOpenClIsNeverStarted) {
   EXPECT_GT(pairs, 0u);
   if (startedBefore) GTEST_SKIP() << "OpenCL was started by an earlier test in this process";
   EXPECT_FALSE(openClStarted());
+}
+
+// A batch above Auto's size threshold (two 81,920-triangle spheres) goes to OpenCL only when the chosen device is a
+// GPU; the device lists alone decide that, so on a machine whose only device is a CPU one (PoCL) OpenCL is not set
+// up at all.
+TEST(SkipCounters, LargeBatchUnderAutoStartsOpenClOnlyForAGpu) {
+  if (openClStarted()) GTEST_SKIP() << "OpenCL was started by an earlier test in this process";
+  const auto sphere =
+      std::make_shared<MeshShape>(std::make_shared<const TriangleMesh>(scenes::makeIcosphere(0.5f, 6)));
+  const MeshPairResult result = collideMeshes(*sphere, pose(0, btVector3(0, 0, 0)), *sphere,
+                                              pose(0.3f, btVector3(0.9f, 0, 0)));
+  ASSERT_FALSE(result.reducedContacts.empty());
+  const bool gpu = opencl::chosenDeviceIsGpu("");
+  EXPECT_EQ(result.stats.backendUsed, gpu ? Backend::OpenCL : Backend::Cpu);
+  EXPECT_EQ(openClStarted(), gpu);
 }
 
 }  // namespace

@@ -18,6 +18,7 @@
 
 #include "bullet/mesh_device_backend.h"
 #include "bullet/warn_once.h"
+#include "opencl/host/opencl_started.h"
 #include "bvh/aabb_tree.h"
 #include "bvh/mesh_batch_device.h"
 #include "bvh/prefetch.h"
@@ -417,6 +418,9 @@ bool collideOnDevice(const std::vector<MeshPairQuery>& queries, const Config& co
   const double rootMs = millisecondsSince(start);
   // Auto: small batches stay on the CPU without touching OpenCL (it is initialised only when wanted).
   if (config.meshBackend == Backend::Auto && triangles < detail::kAutoGpuMinimumTriangles) return false;
+  // Auto also asks the device lists before setting anything up: on a machine whose only OpenCL device is a CPU
+  // one, OpenCL is never started for it.
+  if (config.meshBackend == Backend::Auto && !opencl::chosenDeviceIsGpu(config.openclDevice)) return false;
 
   MeshBatchDevice* device = nullptr;
   try {

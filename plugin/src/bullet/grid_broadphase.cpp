@@ -21,6 +21,7 @@
 #include "broadphase/grid_pair_finder.h"
 #include "broadphase/pair_diff.h"
 #include "bullet/warn_once.h"
+#include "opencl/host/opencl_started.h"
 
 namespace gpucol {
 namespace {
@@ -133,7 +134,10 @@ struct GridBroadphase::Impl {
 
   PairFinder& chooseFinder(GridBroadphaseStats& st) {
     const Backend b = config.broadphaseBackend;
-    const bool wantOpenCl = b == Backend::OpenCL || (b == Backend::Auto && liveCount >= kAutoOpenClFrom);
+    // Auto asks the device lists first, so that a machine whose only OpenCL device is a CPU one never sets
+    // OpenCL up for it (the CPU path is faster there at every size measured).
+    const bool wantOpenCl = b == Backend::OpenCL || (b == Backend::Auto && liveCount >= kAutoOpenClFrom &&
+                                                     opencl::chosenDeviceIsGpu(config.openclDevice));
     if (wantOpenCl && !openClTried) {
       openClTried = true;
       openClFinder = makeOpenClPairFinder(config);
