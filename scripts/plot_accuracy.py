@@ -73,6 +73,9 @@ def main(path, folder):
                     if r["default"] == "1":
                         ax.plot([x], [y], "*", color="black", markersize=15, zorder=5)
                     ax.annotate(r["setting"], (x, y), textcoords="offset points", xytext=(4, 4), fontsize=7)
+            times = [number(r["time_ms"]) for r in mine if r[key] != ""]
+            if times and min(times) > 0 and max(times) / min(times) > 20:
+                ax.set_xscale("log")  # scenes of very different cost side by side
             ax.set_xlabel(TIME_LABELS.get(study, "ms per query"))
             ax.set_ylabel(label)
             values = [number(r[key]) for r in mine if r[key] != ""]
