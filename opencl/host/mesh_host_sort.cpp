@@ -5,6 +5,8 @@
 #include <stdexcept>
 #include <utility>
 
+#include "opencl/host/device_array.h"
+
 namespace gpucol::opencl {
 
 namespace {
@@ -13,13 +15,6 @@ namespace {
 /// index take five passes.
 constexpr unsigned kDigitBits = 11;
 constexpr std::size_t kBuckets = std::size_t(1) << kDigitBits;
-
-/// Bits needed to write every index below `count` (at least 1).
-unsigned bitsFor(std::uint64_t count) {
-  unsigned bits = 1;
-  while (bits < 64 && ((count - 1) >> bits) != 0) ++bits;
-  return bits;
-}
 
 }  // namespace
 
@@ -31,7 +26,7 @@ void MeshHostSort::sortAndRank(const std::vector<std::uint64_t>& keys, unsigned 
   sorted.resize(n);
   rank.resize(n);
   if (n == 0) return;
-  const unsigned indexBits = bitsFor(n);
+  const unsigned indexBits = opencl::indexBits(n);
   if (keyBits + indexBits > 64) {
     // Rare (a batch whose pair and triangle indices fill the key): pairs of key and index, compared.
     std::vector<std::pair<std::uint64_t, std::uint32_t>> pairs(n);

@@ -14,6 +14,7 @@
 #include <string>
 
 #include "gpucol_kernels/kernels.h"
+#include "opencl/host/device_array.h"
 #include "opencl/host/mesh_device_cache.h"
 #include "opencl/host/mesh_host_sort.h"
 #include "opencl/host/opencl_context.h"
@@ -51,27 +52,6 @@ constexpr std::size_t kGroupSizeCap = 64;
 
 /// Work-items the depth-first traversal's automatic start depth aims for (MeshBatchDeviceOptions).
 constexpr std::uint64_t kDepthFirstItems = 4096;
-
-/// A device buffer that grows on demand (by a quarter more than asked) and is reused between batches.
-struct DeviceArray {
-  cl::Buffer buffer;
-  std::size_t bytes = 0;
-  const cl::Buffer& ensure(const cl::Context& context, std::size_t wanted) {
-    wanted = std::max<std::size_t>(wanted, 16);
-    if (bytes < wanted) {
-      buffer = cl::Buffer(context, CL_MEM_READ_WRITE, wanted + wanted / 4);
-      bytes = wanted + wanted / 4;
-    }
-    return buffer;
-  }
-};
-
-/// Bits needed to write every index below `count` (at least 1, so that a mask is never empty).
-unsigned indexBits(std::uint64_t count) {
-  unsigned bits = 1;
-  while (bits < 64 && ((count - 1) >> bits) != 0) ++bits;
-  return bits;
-}
 
 class OpenClMeshPipeline final : public MeshBatchDevice {
  public:

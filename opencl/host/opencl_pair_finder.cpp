@@ -11,6 +11,7 @@
 #include "broadphase/grid_choice.h"
 #include "broadphase/pair_mapping.h"
 #include "gpucol_kernels/kernels.h"
+#include "opencl/host/device_array.h"
 #include "opencl/host/opencl_context.h"
 #include "opencl/host/radix_sort.h"
 #include "opencl/host/scan.h"
@@ -26,28 +27,6 @@ static_assert(GPUCOL_PROXY_ACTIVE == kProxyActive && GPUCOL_PROXY_STATIC == kPro
               "proxy flag bits differ between grid_params.h and grid_pair_finder.h");
 
 namespace {
-
-/// A device buffer that grows on demand and is reused between searches.
-struct DeviceArray {
-  cl::Buffer buffer;
-  std::size_t bytes = 0;
-  const cl::Buffer& ensure(const cl::Context& context, std::size_t wanted) {
-    wanted = std::max<std::size_t>(wanted, 16);
-    if (bytes < wanted) {
-      buffer = cl::Buffer(context, CL_MEM_READ_WRITE, wanted + wanted / 4);
-      bytes = wanted + wanted / 4;
-    }
-    return buffer;
-  }
-};
-
-unsigned bitsFor(std::uint64_t maxValue) {
-  unsigned bits = 1;
-  while (bits < 64 && (maxValue >> bits) != 0) {
-    ++bits;
-  }
-  return bits;
-}
 
 class OpenClPairFinder final : public PairFinder {
  public:
@@ -197,7 +176,7 @@ void OpenClPairFinder::findPairs(const ProxyArrays& p, const PairFinderOptions& 
     const std::uint32_t activeCount = std::uint32_t(m_active.size());
     q.enqueueWriteBuffer(m_activeBuf.ensure(c, activeCount * 4), CL_FALSE, 0, activeCount * 4,
                          m_active.data());
-    const cl_uint slotBits = bitsFor(p.count - 1);
+    const cl_uint slotBits = indexBits(p.count);
     const cl_uint zero = 0;
     m_counter.ensure(c, 4);
     m_overflow.ensure(c, 4);
@@ -235,7 +214,7 @@ void OpenClPairFinder::findPairs(const ProxyArrays& p, const PairFinderOptions& 
         launch(k.writeKeys, keyCount == 0 ? 0 : binnedCount);
         // Stage 5: stable sort by cell; slots stay ascending inside a cell.
         const std::uint64_t cells = std::uint64_t(grid.dimX) * grid.dimY * grid.dimZ;
-        m_sort.sort(m_cellKeys.buffer, m_keySlots.buffer, keyCount, bitsFor(cells - 1));
+        m_sort.sort(m_cellKeys.buffer, m_keySlots.buffer, keyCount, indexBits(cells));
         // Stage 6: runs of equal cells, m(m-1)/2 candidates each, scanned.
         k.markRuns.setArg(0, m_cellKeys.buffer);
         k.markRuns.setArg(1, keyCount);

@@ -1,0 +1,35 @@
+#pragma once
+// Small host-side helpers shared by the OpenCL stages (broad phase pair finder, mesh pipeline, host sort).
+#include <algorithm>
+#include <cstddef>
+#include <cstdint>
+
+#include "opencl/host/cl_api.h"
+
+namespace gpucol::opencl {
+
+/// A device buffer that grows on demand (by a quarter more than asked, so steady growth reallocates rarely)
+/// and is reused between calls; it never shrinks.
+struct DeviceArray {
+  cl::Buffer buffer;      ///< The buffer (empty until the first ensure).
+  std::size_t bytes = 0;  ///< Its size.
+  /// The buffer, reallocated when it holds fewer than `wanted` bytes (at least 16: OpenCL refuses empty
+  /// ones).
+  const cl::Buffer& ensure(const cl::Context& context, std::size_t wanted) {
+    wanted = std::max<std::size_t>(wanted, 16);
+    if (bytes < wanted) {
+      buffer = cl::Buffer(context, CL_MEM_READ_WRITE, wanted + wanted / 4);
+      bytes = wanted + wanted / 4;
+    }
+    return buffer;
+  }
+};
+
+/// Bits needed to write every index below `count` (at least 1, so that a mask is never empty).
+inline unsigned indexBits(std::uint64_t count) {
+  unsigned bits = 1;
+  while (bits < 64 && ((count - 1) >> bits) != 0) ++bits;
+  return bits;
+}
+
+}  // namespace gpucol::opencl
