@@ -118,7 +118,8 @@ SkipLine staticPairs(int steps) {
   const BoxCloud heap(1010, 3.0f, 3);
   GridBroadphase withStatic;
   l.withMs = broadphaseStepMs(withStatic, heap, steps, 1, true, 10);
-  l.counter = "pairs in cache = " + std::to_string(withStatic.getOverlappingPairCache()->getNumOverlappingPairs());
+  l.counter = "staticProxies = " + std::to_string(withStatic.stats().staticProxies) + ", pairs in cache = " +
+              std::to_string(withStatic.getOverlappingPairCache()->getNumOverlappingPairs());
   GridBroadphase allDynamic;
   l.withoutMs = broadphaseStepMs(allDynamic, heap, steps, 1, true, heap.centre.size());
   l.without = std::to_string(allDynamic.getOverlappingPairCache()->getNumOverlappingPairs()) +

@@ -193,8 +193,10 @@ TEST(GridBroadphase, FiltersEditedOnTheProxyAreTakenUp) {
     if (round == 0) {
       EXPECT_LT(expected.size(),
                 original.size() / 2);  // about a third remain: default-default, default-static
+      EXPECT_EQ(bp.stats().staticProxies, std::uint32_t(boxes.size() / 3));  // i % 3 == 2
     } else {
       EXPECT_EQ(expected, original);
+      EXPECT_EQ(bp.stats().staticProxies, 0u);
     }
   }
 }
@@ -240,11 +242,54 @@ TEST(GridBroadphase, StaticAndSleepingProxiesAreNotRebinned) {
     ASSERT_EQ(cachePairs(bp.getOverlappingPairCache()), bruteForce(boxes)) << "step " << t;
     const gpucol::GridBroadphaseStats& st = bp.stats();
     EXPECT_EQ(st.restingProxies + st.rebinnedProxies, st.proxies) << "step " << t;
+    EXPECT_EQ(st.staticProxies, std::uint32_t(t < 3 ? count / 2 + 1 : count / 2)) << "step " << t;
     if (t >= 1) {
       // Only the moving boxes are re-binned; nothing else costs a binning or a test among the resting.
       EXPECT_EQ(st.rebinnedProxies, std::uint32_t(movingCount)) << "step " << t;
       EXPECT_EQ(st.restingProxies, st.proxies - movingCount) << "step " << t;
     }
+  }
+}
+
+TEST(GridBroadphase, StaticStaticPairsAreNeverGenerated) {
+  // A heap of 500 static boxes piled at one spot (every two overlap) and 5 dynamic boxes in it: the counter
+  // says how many proxies are static, and the cache holds only the pairs with a dynamic box, never one of the
+  // 124,750 static-static overlaps — on the grid and by brute force, on the first step and once at rest.
+  for (const int bruteForceBelow : {100, 1000}) {
+    gpucol::Config config;
+    config.bruteForceBelow = bruteForceBelow;
+    gpucol::GridBroadphase bp(config);
+    btDefaultCollisionConfiguration configuration;
+    btCollisionDispatcher dispatcher(&configuration);
+    std::mt19937 rng(8);
+    std::uniform_real_distribution<float> jitter(-0.2f, 0.2f);
+    const int staticCount = 500, dynamicCount = 5;
+    std::vector<Box> boxes(staticCount + dynamicCount);
+    for (int i = 0; i < staticCount + dynamicCount; ++i) {
+      const btVector3 c(jitter(rng), jitter(rng), jitter(rng));
+      boxes[i].lo = c - btVector3(1, 1, 1), boxes[i].hi = c + btVector3(1, 1, 1);
+      if (i < staticCount)
+        boxes[i].group = btBroadphaseProxy::StaticFilter,
+        boxes[i].mask = btBroadphaseProxy::AllFilter ^ btBroadphaseProxy::StaticFilter;
+      boxes[i].proxy =
+          bp.createProxy(boxes[i].lo, boxes[i].hi, BOX_SHAPE_PROXYTYPE,
+                         reinterpret_cast<void*>(std::intptr_t(i)), boxes[i].group, boxes[i].mask, &dispatcher);
+    }
+    for (int t = 0; t < 2; ++t) {
+      bp.calculateOverlappingPairs(&dispatcher);
+      const std::set<IdPair> pairs = cachePairs(bp.getOverlappingPairCache());
+      EXPECT_EQ(pairs, bruteForce(boxes)) << "bruteForceBelow " << bruteForceBelow << ", step " << t;
+      // Every dynamic box overlaps every other box, and nothing else is reported.
+      const std::size_t withDynamic = std::size_t(dynamicCount) * staticCount + dynamicCount * (dynamicCount - 1) / 2;
+      EXPECT_EQ(pairs.size(), withDynamic);
+      for (const IdPair& p : pairs) EXPECT_GE(p.second, staticCount) << p.first << "-" << p.second;
+      EXPECT_EQ(bp.stats().staticProxies, std::uint32_t(staticCount));
+    }
+    bp.destroyProxy(boxes[0].proxy, &dispatcher);
+    boxes[0].proxy = nullptr;
+    bp.calculateOverlappingPairs(&dispatcher);
+    EXPECT_EQ(bp.stats().staticProxies, std::uint32_t(staticCount - 1));
+    EXPECT_EQ(cachePairs(bp.getOverlappingPairCache()), bruteForce(boxes));
   }
 }
 

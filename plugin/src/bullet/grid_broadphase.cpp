@@ -9,6 +9,7 @@
 #include <tbb/parallel_reduce.h>
 
 #include <algorithm>
+#include <atomic>
 #include <chrono>
 #include <cmath>
 #include <cstdio>
@@ -66,6 +67,7 @@ struct GridBroadphase::Impl {
   bool nonFiniteChanged = false;          // a proxy entered or left that state: the next search is a full one
   std::vector<std::uint8_t> finderFlags;  // flags with the non-finite proxies' active bit cleared
   std::uint32_t liveCount = 0;
+  std::uint32_t staticCount = 0;  // live proxies with the static flag (GridBroadphaseStats::staticProxies)
   int nextUniqueId = 0;
   bool dirty = true;
 
@@ -217,6 +219,7 @@ btBroadphaseProxy* GridBroadphase::createProxy(const btVector3& aabbMin, const b
   d.group[slot] = collisionFilterGroup;
   d.mask[slot] = collisionFilterMask;
   d.flags[slot] = Impl::flagsOf(collisionFilterGroup);
+  if (d.flags[slot] & kProxyStatic) ++d.staticCount;
   d.moved[slot] = 1;
   ++d.liveCount;
   d.dirty = true;
@@ -233,6 +236,7 @@ void GridBroadphase::destroyProxy(btBroadphaseProxy* proxy, btDispatcher* dispat
   // Its pairs leave the cache now (algorithms and manifolds freed through the dispatcher); the keys in
   // `accepted` are dropped at the next search, and the slot is reused only after that search.
   d.pairCache->removeOverlappingPairsContainingProxy(proxy, dispatcher);
+  if (d.flags[slot] & kProxyStatic) --d.staticCount;
   d.flags[slot] = 0;
   d.setNonFinite(slot, false);
   d.freedSinceSearch[slot] = 1;
@@ -296,6 +300,8 @@ void GridBroadphase::calculateOverlappingPairs(btDispatcher* dispatcher) {
   Impl& d = *m_impl;
   GridBroadphaseStats st;
   st.proxies = d.liveCount;
+  // Proxies whose static bit flips in the scan below (rare: a filter edited on the proxy).
+  std::atomic<std::int64_t> staticDelta{0};
   // Filters may be edited on the proxy after creation (Bullet code does so); take them from there. In
   // parallel: each slot is written by one task only (this scan of every proxy was serial work at 1M).
   const bool filterChanged = tbb::parallel_reduce(
@@ -309,7 +315,9 @@ void GridBroadphase::calculateOverlappingPairs(btDispatcher* dispatcher) {
           if (d.group[s] != p.m_collisionFilterGroup || d.mask[s] != p.m_collisionFilterMask) {
             d.group[s] = p.m_collisionFilterGroup;
             d.mask[s] = p.m_collisionFilterMask;
+            const bool wasStatic = d.flags[s] & kProxyStatic;
             d.flags[s] = Impl::flagsOf(p.m_collisionFilterGroup);
+            if (wasStatic != bool(d.flags[s] & kProxyStatic)) staticDelta += wasStatic ? -1 : 1;
             d.moved[s] = 1;
             changed = true;
           }
@@ -317,6 +325,8 @@ void GridBroadphase::calculateOverlappingPairs(btDispatcher* dispatcher) {
         return changed;
       },
       [](bool a, bool b) { return a || b; });
+  d.staticCount = std::uint32_t(std::int64_t(d.staticCount) + staticDelta.load());
+  st.staticProxies = d.staticCount;
   if (filterChanged) d.dirty = true;
   if (!d.dirty) {
     st.overlappingPairs = d.stats.overlappingPairs;
