@@ -77,6 +77,13 @@ struct CountingCallback : btOverlappingPairCallback {
   void removeOverlappingPairsContainingProxy(btBroadphaseProxy*, btDispatcher*) override {}
 };
 
+/// Creates the proxy of boxes[id] (its client object is the id, as bruteForce and idsOf expect).
+void addProxy(btBroadphaseInterface& bp, std::vector<Box>& boxes, int id, btDispatcher* dispatcher) {
+  Box& b = boxes[std::size_t(id)];
+  b.proxy = bp.createProxy(b.lo, b.hi, BOX_SHAPE_PROXYTYPE, reinterpret_cast<void*>(std::intptr_t(id)), b.group,
+                           b.mask, dispatcher);
+}
+
 void randomBox(std::mt19937& rng, Box& b, float side) {
   std::uniform_real_distribution<float> pos(-side, side), size(0.2f, 1.2f);
   const btVector3 c(pos(rng), pos(rng), pos(rng)), h(size(rng), size(rng), size(rng));
@@ -94,9 +101,7 @@ void runSteps(gpucol::GridBroadphase& bp, btOverlappingPairCache* cache, int cou
     if (i % 7 == 0)
       boxes[i].group = btBroadphaseProxy::StaticFilter, boxes[i].mask = btBroadphaseProxy::AllFilter;
     if (i % 11 == 0) boxes[i].group = 64, boxes[i].mask = 64;
-    boxes[i].proxy =
-        bp.createProxy(boxes[i].lo, boxes[i].hi, BOX_SHAPE_PROXYTYPE,
-                       reinterpret_cast<void*>(std::intptr_t(i)), boxes[i].group, boxes[i].mask, &dispatcher);
+    addProxy(bp, boxes, i, &dispatcher);
   }
   std::uniform_real_distribution<float> step(-0.4f, 0.4f);
   for (int t = 0; t < 8; ++t) {
@@ -115,8 +120,7 @@ void runSteps(gpucol::GridBroadphase& bp, btOverlappingPairCache* cache, int cou
           b.proxy = nullptr;
         } else {
           randomBox(rng, b, 12.0f);
-          b.proxy = bp.createProxy(b.lo, b.hi, BOX_SHAPE_PROXYTYPE, reinterpret_cast<void*>(std::intptr_t(i)),
-                                   b.group, b.mask, &dispatcher);
+          addProxy(bp, boxes, i, &dispatcher);
         }
       } else if (b.proxy && !(b.group & btBroadphaseProxy::StaticFilter)) {
         const btVector3 d(step(rng), step(rng), step(rng));
@@ -171,9 +175,7 @@ TEST(GridBroadphase, FiltersEditedOnTheProxyAreTakenUp) {
   std::vector<Box> boxes(20000);
   for (std::size_t i = 0; i < boxes.size(); ++i) {
     randomBox(rng, boxes[i], 30.0f);
-    boxes[i].proxy =
-        bp.createProxy(boxes[i].lo, boxes[i].hi, BOX_SHAPE_PROXYTYPE,
-                       reinterpret_cast<void*>(std::intptr_t(i)), boxes[i].group, boxes[i].mask, &dispatcher);
+    addProxy(bp, boxes, int(i), &dispatcher);
   }
   bp.calculateOverlappingPairs(&dispatcher);
   const std::set<IdPair> original = bruteForce(boxes);
@@ -220,9 +222,7 @@ TEST(GridBroadphase, StaticAndSleepingProxiesAreNotRebinned) {
   boxes[count].lo = btVector3(-16, -16.5f, -16), boxes[count].hi = btVector3(16, -15, 16);  // ground
   boxes[count].group = btBroadphaseProxy::StaticFilter;
   for (int i = 0; i <= count; ++i)
-    boxes[i].proxy =
-        bp.createProxy(boxes[i].lo, boxes[i].hi, BOX_SHAPE_PROXYTYPE,
-                       reinterpret_cast<void*>(std::intptr_t(i)), boxes[i].group, boxes[i].mask, &dispatcher);
+    addProxy(bp, boxes, i, &dispatcher);
   std::uniform_real_distribution<float> step(-0.3f, 0.3f);
   for (int t = 0; t < 6; ++t) {
     for (int i = 0; i <= count; ++i) {
@@ -271,9 +271,7 @@ TEST(GridBroadphase, StaticStaticPairsAreNeverGenerated) {
       if (i < staticCount)
         boxes[i].group = btBroadphaseProxy::StaticFilter,
         boxes[i].mask = btBroadphaseProxy::AllFilter ^ btBroadphaseProxy::StaticFilter;
-      boxes[i].proxy =
-          bp.createProxy(boxes[i].lo, boxes[i].hi, BOX_SHAPE_PROXYTYPE,
-                         reinterpret_cast<void*>(std::intptr_t(i)), boxes[i].group, boxes[i].mask, &dispatcher);
+      addProxy(bp, boxes, i, &dispatcher);
     }
     for (int t = 0; t < 2; ++t) {
       bp.calculateOverlappingPairs(&dispatcher);
