@@ -455,8 +455,10 @@ cl::Kernel& OpenClMeshPipeline::depthFirstKernel(int treeDepths) {
   while (length < 3 * std::size_t(treeDepths) + 1) length *= 2;
   auto found = m_depthFirst.find(length);
   if (found != m_depthFirst.end()) return found->second;
-  cl::Program program = m_context.program("mesh_middle_phase", kernels::mesh_middle_phase,
-                                          "-DGPUCOL_DFS_STACK=" + std::to_string(length));
+  // A CPU device gets the prefetch hints (see GPUCOL_PREFETCH_NODE in the kernel).
+  const std::string options =
+      "-DGPUCOL_DFS_STACK=" + std::to_string(length) + (m_context.isGpu() ? "" : " -DGPUCOL_CPU_PREFETCH");
+  cl::Program program = m_context.program("mesh_middle_phase", kernels::mesh_middle_phase, options);
   return m_depthFirst.emplace(length, cl::Kernel(program, "mesh_traverse_depth_first")).first->second;
 }
 

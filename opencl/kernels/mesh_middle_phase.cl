@@ -240,23 +240,111 @@ __kernel void mesh_front_expand(__global const GpucolMeshPair* pairs, __global c
 // at most four, one level further down), so the stack cannot overflow.
 #ifdef GPUCOL_DFS_STACK
 
+// The pair's map in vector form, read once per work-item: columns of M and |M| with the translation and the
+// inflation, lane 3 zero. The depth-first kernel carries a box with 4-lane operations in the scalar code's
+// order (((M_i0 c_0 + M_i1 c_1) + M_i2 c_2) + t_i), as tree_traversal.cpp's SSE path does, so the bits are
+// mesh_carry's: a CPU device runs this divergent loop one work-item at a time, and 4 lanes are what it can
+// vectorise there.
+typedef struct Carrier4 {
+  float4 column[3];
+  float4 absColumn[3];
+  float4 translation;
+  float4 inflation;
+} Carrier4;
+
+Carrier4 mesh_carrier4(__global const GpucolMeshPair* p) {
+  Carrier4 k;
+  for (int j = 0; j < 3; ++j) {
+    k.column[j] = (float4)(p->linear[j], p->linear[3 + j], p->linear[6 + j], 0.0f);
+    k.absColumn[j] = (float4)(p->absLinear[j], p->absLinear[3 + j], p->absLinear[6 + j], 0.0f);
+  }
+  k.translation = (float4)(p->translation[0], p->translation[1], p->translation[2], 0.0f);
+  k.inflation = (float4)(p->inflation[0], p->inflation[1], p->inflation[2], 0.0f);
+  return k;
+}
+
+// A node read whole (32 bytes): its corners with lane 3 zero, `first` and `count`.
+typedef struct Node4 {
+  float4 lo;
+  float4 hi;
+  uint first;
+  uint count;
+} Node4;
+
+Node4 mesh_node4(__global const GpucolTreeNode* node) {
+  const float8 raw = vload8(0, (__global const float*)node);
+  Node4 n;
+  n.lo = (float4)(raw.s012, 0.0f);
+  n.hi = (float4)(raw.s345, 0.0f);
+  n.first = as_uint(raw.s6);
+  n.count = as_uint(raw.s7);
+  return n;
+}
+
+typedef struct Box4 {
+  float4 lo;
+  float4 hi;
+} Box4;
+
+Box4 mesh_carry4(const Carrier4* k, float4 lo, float4 hi) {
+  const float4 c = (lo + hi) * 0.5f;
+  const float4 e = (hi - lo) * 0.5f;
+  const float4 centre = ((k->column[0] * c.x + k->column[1] * c.y) + k->column[2] * c.z) + k->translation;
+  const float4 extent =
+      ((k->absColumn[0] * e.x + k->absColumn[1] * e.y) + k->absColumn[2] * e.z) + k->inflation;
+  Box4 out;
+  out.lo = centre - extent;
+  out.hi = centre + extent;
+  return out;
+}
+
+// mesh_overlaps on 4 lanes (lane 3 compares zeros and passes); 1 or 0, for branch-free pushes.
+uint mesh_overlaps4(float4 lo, float4 hi, const Box4* b) {
+  const int4 ok = (lo <= b->hi) & (b->lo <= hi);
+  return (uint)(ok.x & ok.y & ok.z) & 1u;
+}
+
+// Asks for a node to be brought into the cache. On a CPU device the traversal waits on cache misses (the node
+// arena of a 400K-triangle mesh is 25 MB), so the host builds this kernel with GPUCOL_CPU_PREFETCH there:
+// OpenCL's prefetch() is an empty function in PoCL, clang's builtin is a prefetch instruction. A hint only;
+// it never faults, so an address past the arena (a leaf's `first` is a triangle) is harmless. Elsewhere
+// nothing: a GPU hides the latency with other work-items.
+#if defined(GPUCOL_CPU_PREFETCH) && defined(__has_builtin)
+#if __has_builtin(__builtin_prefetch)
+#define GPUCOL_PREFETCH_NODE(node) __builtin_prefetch(node)
+#endif
+#endif
+#ifndef GPUCOL_PREFETCH_NODE
+#define GPUCOL_PREFETCH_NODE(node) ((void)(node))
+#endif
+
 void mesh_count_tests(__global uint* counters, uint tests) {
   if (tests == 0u) return;
   const uint old = atomic_add(&counters[2], tests);
   if (old + tests < old) atomic_inc(&counters[3]);
 }
 
-void mesh_append_key(__global uint* counters, __global ulong* keys, uint capacity, ulong key) {
-  const uint at = atomic_inc(&counters[0]);
-  if (at == 0xffffffffu) counters[1] = 1u;
-  if (at < capacity) keys[at] = key;
+// Candidates wait in a private batch of GPUCOL_DFS_BATCH and go out with one atomic_add for the batch: an
+// atomic per candidate made the two threads of a CPU device take turns at one cache line.
+#define GPUCOL_DFS_BATCH 16
+
+void mesh_flush_keys(__global uint* counters, __global ulong* keys, uint capacity, const ulong* batch,
+                     uint count) {
+  if (count == 0u) return;
+  const uint at = atomic_add(&counters[0], count);
+  if (at + count < at) counters[1] = 1u;
+  for (uint i = 0u; i < count; ++i) {
+    if (at + i >= at && at + i < capacity) keys[at + i] = batch[i];
+  }
 }
 
-__kernel void mesh_traverse_depth_first(__global const GpucolMeshPair* pairs,
-                                        __global const GpucolTreeNode* nodes,
-                                        __global const GpucolLeafEntry* entries, const uint pairCount,
-                                        const uint startDepth, __global ulong* keys, const uint capacity,
-                                        __global uint* counters, const uint bitsA, const uint bitsB) {
+__kernel void mesh_traverse_depth_first(__global const GpucolMeshPair* restrict pairs,
+                                        __global const GpucolTreeNode* restrict nodes,
+                                        __global const GpucolLeafEntry* restrict entries,
+                                        const uint pairCount, const uint startDepth,
+                                        __global ulong* restrict keys, const uint capacity,
+                                        __global uint* restrict counters, const uint bitsA,
+                                        const uint bitsB) {
   const uint item = get_global_id(0);
   const uint pathsPerPair = 1u << (2u * startDepth);
   if (item >= pairCount * pathsPerPair) return;
@@ -265,18 +353,22 @@ __kernel void mesh_traverse_depth_first(__global const GpucolMeshPair* pairs,
   __global const GpucolMeshPair* p = pairs + pair;
   __global const GpucolTreeNode* treeA = nodes + p->nodesA;
   __global const GpucolTreeNode* treeB = nodes + p->nodesB;
+  __global const GpucolLeafEntry* entriesA = entries + p->entriesA;
+  __global const GpucolLeafEntry* entriesB = entries + p->entriesB;
+  const Carrier4 carrier = mesh_carrier4(p);
+  const ulong pairKey = (ulong)pair << (bitsA + bitsB);
   uint tests = 0u;
 
   // The path down to the start front. The root test repeats the host's (which sends only overlapping pairs),
   // so that this kernel alone decides, as mesh_front_start does.
   uint a = 0u, b = 0u;
-  bool found = mesh_nodes_overlap(p, nodes, a, b);
+  Node4 na = mesh_node4(treeA), nb = mesh_node4(treeB);
+  Box4 box = mesh_carry4(&carrier, nb.lo, nb.hi);
+  bool found = mesh_overlaps4(na.lo, na.hi, &box) != 0u;
   for (uint level = 0u; found && level < startDepth; ++level) {
     const uint rest = path >> (2u * level);
-    __global const GpucolTreeNode* na = treeA + a;
-    __global const GpucolTreeNode* nb = treeB + b;
-    const bool leafA = na->count != 0u;
-    const bool leafB = nb->count != 0u;
+    const bool leafA = na.count != 0u;
+    const bool leafB = nb.count != 0u;
     if (leafA && leafB) {
       found = rest == 0u;
       break;
@@ -287,90 +379,124 @@ __kernel void mesh_traverse_depth_first(__global const GpucolMeshPair* pairs,
     if (leafA) {
       found = bitA == 0u;
     } else {
-      a = bitA ? na->first : a + 1u;
+      a = bitA ? na.first : a + 1u;
     }
     if (leafB) {
       found = found && bitB == 0u;
     } else {
-      b = bitB ? nb->first : b + 1u;
+      b = bitB ? nb.first : b + 1u;
     }
-    found = found && mesh_nodes_overlap(p, nodes, a, b);
+    na = mesh_node4(treeA + a);
+    nb = mesh_node4(treeB + b);
+    box = mesh_carry4(&carrier, nb.lo, nb.hi);
+    found = found && mesh_overlaps4(na.lo, na.hi, &box) != 0u;
   }
   if (!found) {
     mesh_count_tests(counters, tests);
     return;
   }
 
-  uint2 stack[GPUCOL_DFS_STACK];
+  ulong batch[GPUCOL_DFS_BATCH];
+  uint batched = 0u;
+  // Children are written at the top in any case and the top moves up by the box test's outcome (no branch:
+  // the tests come out about half and half), so the stack has one entry of room past the bound.
+  uint2 stack[GPUCOL_DFS_STACK + 1];
   uint top = 0u;
   stack[top++] = (uint2)(a, b);
   while (top > 0u) {
     const uint2 top2 = stack[--top];
     a = top2.x;
     b = top2.y;
-    __global const GpucolTreeNode* na = treeA + a;
-    __global const GpucolTreeNode* nb = treeB + b;
-    const bool leafA = na->count != 0u;
-    const bool leafB = nb->count != 0u;
+    na = mesh_node4(treeA + a);
+    nb = mesh_node4(treeB + b);
+    const bool leafA = na.count != 0u;
+    const bool leafB = nb.count != 0u;
     if (!leafA && !leafB) {
-      const uint childrenA[2] = {a + 1u, na->first};
-      const uint childrenB[2] = {b + 1u, nb->first};
-      for (int k = 0; k < 2; ++k) {
-        __global const GpucolTreeNode* cb = treeB + childrenB[k];
-        const CarriedBox box = mesh_carry(p, cb->min, cb->max);
-        for (int m = 0; m < 2; ++m) {
-          __global const GpucolTreeNode* ca = treeA + childrenA[m];
-          if (mesh_overlaps(ca->min, ca->max, &box)) stack[top++] = (uint2)(childrenA[m], childrenB[k]);
-        }
-      }
+      const uint a0 = a + 1u, a1 = na.first;
+      const Node4 ca0 = mesh_node4(treeA + a0), ca1 = mesh_node4(treeA + a1);
+      const uint b0 = b + 1u, b1 = nb.first;
+      const Node4 cb0 = mesh_node4(treeB + b0), cb1 = mesh_node4(treeB + b1);
+      // The children's far children (the near one is the next node) are what the pairs pushed now read when
+      // popped, as in tree_traversal.cpp.
+      GPUCOL_PREFETCH_NODE(treeA + ca0.first);
+      GPUCOL_PREFETCH_NODE(treeA + ca1.first);
+      GPUCOL_PREFETCH_NODE(treeB + cb0.first);
+      GPUCOL_PREFETCH_NODE(treeB + cb1.first);
+      const Box4 box0 = mesh_carry4(&carrier, cb0.lo, cb0.hi);
+      const Box4 box1 = mesh_carry4(&carrier, cb1.lo, cb1.hi);
+      stack[top] = (uint2)(a0, b0);
+      top += mesh_overlaps4(ca0.lo, ca0.hi, &box0);
+      stack[top] = (uint2)(a1, b0);
+      top += mesh_overlaps4(ca1.lo, ca1.hi, &box0);
+      stack[top] = (uint2)(a0, b1);
+      top += mesh_overlaps4(ca0.lo, ca0.hi, &box1);
+      stack[top] = (uint2)(a1, b1);
+      top += mesh_overlaps4(ca1.lo, ca1.hi, &box1);
       tests += 4u;
     } else if (leafA && !leafB) {
-      const uint childrenB[2] = {b + 1u, nb->first};
-      for (int k = 0; k < 2; ++k) {
-        __global const GpucolTreeNode* cb = treeB + childrenB[k];
-        const CarriedBox box = mesh_carry(p, cb->min, cb->max);
-        if (mesh_overlaps(na->min, na->max, &box)) stack[top++] = (uint2)(a, childrenB[k]);
-      }
+      const uint b0 = b + 1u, b1 = nb.first;
+      const Node4 cb0 = mesh_node4(treeB + b0), cb1 = mesh_node4(treeB + b1);
+      GPUCOL_PREFETCH_NODE(treeB + cb0.first);
+      GPUCOL_PREFETCH_NODE(treeB + cb1.first);
+      const Box4 box0 = mesh_carry4(&carrier, cb0.lo, cb0.hi);
+      const Box4 box1 = mesh_carry4(&carrier, cb1.lo, cb1.hi);
+      stack[top] = (uint2)(a, b0);
+      top += mesh_overlaps4(na.lo, na.hi, &box0);
+      stack[top] = (uint2)(a, b1);
+      top += mesh_overlaps4(na.lo, na.hi, &box1);
       tests += 2u;
     } else if (!leafA && leafB) {
-      const uint childrenA[2] = {a + 1u, na->first};
-      const CarriedBox box = mesh_carry(p, nb->min, nb->max);
-      for (int m = 0; m < 2; ++m) {
-        __global const GpucolTreeNode* ca = treeA + childrenA[m];
-        if (mesh_overlaps(ca->min, ca->max, &box)) stack[top++] = (uint2)(childrenA[m], b);
-      }
+      const uint a0 = a + 1u, a1 = na.first;
+      const Node4 ca0 = mesh_node4(treeA + a0), ca1 = mesh_node4(treeA + a1);
+      GPUCOL_PREFETCH_NODE(treeA + ca0.first);
+      GPUCOL_PREFETCH_NODE(treeA + ca1.first);
+      const Box4 boxB = mesh_carry4(&carrier, nb.lo, nb.hi);
+      stack[top] = (uint2)(a0, b);
+      top += mesh_overlaps4(ca0.lo, ca0.hi, &boxB);
+      stack[top] = (uint2)(a1, b);
+      top += mesh_overlaps4(ca1.lo, ca1.hi, &boxB);
       tests += 2u;
-    } else if (na->count == 1u && nb->count == 1u) {
-      mesh_append_key(counters, keys, capacity, mesh_candidate_key(pair, na->first, nb->first, bitsA, bitsB));
+    } else if (na.count == 1u && nb.count == 1u) {
+      batch[batched++] = pairKey | ((ulong)na.first << bitsB) | (ulong)nb.first;
     } else {
       // Leaves of several triangles test their triangles' boxes, as mesh_front_expand does.
-      for (uint j = 0u; j < nb->count; ++j) {
-        CarriedBox triB;
-        uint triangleB = nb->first;
-        if (nb->count == 1u) {
-          triB = mesh_carry(p, nb->min, nb->max);
+      for (uint j = 0u; j < nb.count; ++j) {
+        Box4 triB;
+        uint triangleB = nb.first;
+        if (nb.count == 1u) {
+          triB = mesh_carry4(&carrier, nb.lo, nb.hi);
         } else {
-          __global const GpucolLeafEntry* eb = entries + p->entriesB + nb->first + j;
-          triB = mesh_carry(p, eb->min, eb->max);
+          __global const GpucolLeafEntry* eb = entriesB + nb.first + j;
+          triB =
+              mesh_carry4(&carrier, (float4)(vload3(0, eb->min), 0.0f), (float4)(vload3(0, eb->max), 0.0f));
           triangleB = eb->triangle;
         }
-        if (na->count == 1u) {
+        for (uint k = 0u; k < na.count; ++k) {
+          float4 lo = na.lo, hi = na.hi;
+          uint triangleA = na.first;
+          if (na.count != 1u) {
+            __global const GpucolLeafEntry* ea = entriesA + na.first + k;
+            lo = (float4)(vload3(0, ea->min), 0.0f);
+            hi = (float4)(vload3(0, ea->max), 0.0f);
+            triangleA = ea->triangle;
+          }
           ++tests;
-          if (mesh_overlaps(na->min, na->max, &triB))
-            mesh_append_key(counters, keys, capacity,
-                            mesh_candidate_key(pair, na->first, triangleB, bitsA, bitsB));
-          continue;
-        }
-        for (uint k = 0u; k < na->count; ++k) {
-          __global const GpucolLeafEntry* ea = entries + p->entriesA + na->first + k;
-          ++tests;
-          if (mesh_overlaps(ea->min, ea->max, &triB))
-            mesh_append_key(counters, keys, capacity,
-                            mesh_candidate_key(pair, ea->triangle, triangleB, bitsA, bitsB));
+          if (mesh_overlaps4(lo, hi, &triB)) {
+            batch[batched++] = pairKey | ((ulong)triangleA << bitsB) | (ulong)triangleB;
+            if (batched == GPUCOL_DFS_BATCH) {
+              mesh_flush_keys(counters, keys, capacity, batch, batched);
+              batched = 0u;
+            }
+          }
         }
       }
     }
+    if (batched == GPUCOL_DFS_BATCH) {
+      mesh_flush_keys(counters, keys, capacity, batch, batched);
+      batched = 0u;
+    }
   }
+  mesh_flush_keys(counters, keys, capacity, batch, batched);
   mesh_count_tests(counters, tests);
 }
 
