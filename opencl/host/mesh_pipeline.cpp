@@ -50,6 +50,10 @@ constexpr int kMaxStartDepth = 12;
 /// depth-first launch 64 groups to spread over the compute units.
 constexpr std::size_t kGroupSizeCap = 64;
 
+/// Candidates per work-item of mesh_near_prefilter (its GPUCOL_LANES: 4, 8 or 16). 8 floats are one AVX
+/// register; measured on PoCL (thesis scene): see the README.
+constexpr std::uint64_t kPrefilterLanes = 8;
+
 /// Work-items the depth-first traversal's automatic start depth aims for (MeshBatchDeviceOptions).
 constexpr std::uint64_t kDepthFirstItems = 4096;
 
@@ -61,7 +65,8 @@ class OpenClMeshPipeline final : public MeshBatchDevice {
       cl::Program middle = m_context.program("mesh_middle_phase", kernels::mesh_middle_phase);
       m_frontStart = cl::Kernel(middle, "mesh_front_start");
       m_frontExpand = cl::Kernel(middle, "mesh_front_expand");
-      cl::Program nearProgram = m_context.program("mesh_near_phase", kernels::mesh_near_phase);
+      cl::Program nearProgram = m_context.program("mesh_near_phase", kernels::mesh_near_phase,
+                                                  "-DGPUCOL_LANES=" + std::to_string(kPrefilterLanes));
       m_nearPrefilter = cl::Kernel(nearProgram, "mesh_near_prefilter");
       m_nearGather = cl::Kernel(nearProgram, "mesh_near_gather");
       m_nearTest = cl::Kernel(nearProgram, "mesh_near_test");
@@ -244,9 +249,11 @@ void OpenClMeshPipeline::runBatch(const std::vector<DeviceMeshPair>& pairs,
     m_nearPrefilter.setArg(4, cl_uint(candidateCount));
     m_nearPrefilter.setArg(5, cl_uint(bitsA));
     m_nearPrefilter.setArg(6, cl_uint(bitsB));
-    m_nearPrefilter.setArg(
-        7, m_counts.ensure(ctx, globalSize(m_nearPrefilter, candidateCount) * sizeof(cl_uint)));
-    launch(m_nearPrefilter, candidateCount);
+    // kPrefilterLanes candidates per work-item; the flags buffer also holds the last work-group's padding.
+    const std::uint64_t prefilterItems = (candidateCount + kPrefilterLanes - 1) / kPrefilterLanes;
+    m_nearPrefilter.setArg(7, m_counts.ensure(ctx, globalSize(m_nearPrefilter, prefilterItems) *
+                                                       kPrefilterLanes * sizeof(cl_uint)));
+    launch(m_nearPrefilter, prefilterItems);
     queue.finish();
     s.prefilterMs = millisecondsSince(start);
     start = Clock::now();

@@ -238,140 +238,191 @@ GPUCOL_INLINE void mesh_candidate_triangles(__global const GpucolMeshPair* pairs
   }
 }
 
-// The early-out works on F3 values, plain structs of three floats rather than F3 or arrays: a CPU device
-// vectorises the kernel across work-items only when every value is a scalar it can widen (LLVM's loop
-// vectoriser refuses F3 operations, and arrays picked by a select stay in memory).
-typedef struct F3 {
-  float x, y, z;
-} F3;
-GPUCOL_INLINE F3 f3(float x, float y, float z) {
-  F3 r;
+// The early-out tests GPUCOL_LANES candidates per work-item, one in each lane of float vectors. PoCL does
+// not vectorise it across work-items: it runs LLVM's SLP vectoriser inside one work-item first, and the
+// two-wide code that leaves (of three-float values) makes the loop over work-items give up ("instruction
+// return type cannot be vectorized"), so one work-item used to run one candidate in scalar code. Written in
+// lanes, the vectors are there whatever the compiler does. Every lane runs the scalar code's operations in
+// its order: OpenCL's vector fmax / fmin, comparisons and conversions are those of the scalars element by
+// element (PoCL's fmax keeps the non-NaN operand in both), so each lane gives the scalar test's answer.
+// GPUCOL_LANES (4, 8 or 16) is a build option of the host, which sizes the launch by it.
+#if GPUCOL_LANES == 4
+typedef float4 FloatLanes;
+typedef int4 BoolLanes;  // -1 true, 0 false, as vector comparisons give
+#define GPUCOL_LOAD_LANES(p) vload4(0, p)
+#define GPUCOL_DOUBLE_LANES(x) convert_double4(x)
+#define GPUCOL_FLOAT_LANES(x) convert_float4(x)
+#define GPUCOL_STORE_LANES(v, i, p) vstore4(v, i, p)
+#define GPUCOL_UINT_LANES(x) as_uint4(x)
+#elif GPUCOL_LANES == 8
+typedef float8 FloatLanes;
+typedef int8 BoolLanes;
+#define GPUCOL_LOAD_LANES(p) vload8(0, p)
+#define GPUCOL_DOUBLE_LANES(x) convert_double8(x)
+#define GPUCOL_FLOAT_LANES(x) convert_float8(x)
+#define GPUCOL_STORE_LANES(v, i, p) vstore8(v, i, p)
+#define GPUCOL_UINT_LANES(x) as_uint8(x)
+#elif GPUCOL_LANES == 16
+typedef float16 FloatLanes;
+typedef int16 BoolLanes;
+#define GPUCOL_LOAD_LANES(p) vload16(0, p)
+#define GPUCOL_DOUBLE_LANES(x) convert_double16(x)
+#define GPUCOL_FLOAT_LANES(x) convert_float16(x)
+#define GPUCOL_STORE_LANES(v, i, p) vstore16(v, i, p)
+#define GPUCOL_UINT_LANES(x) as_uint16(x)
+#else
+#error "GPUCOL_LANES must be 4, 8 or 16"
+#endif
+
+// A point or vector per lane.
+typedef struct L3 {
+  FloatLanes x, y, z;
+} L3;
+GPUCOL_INLINE L3 l3(FloatLanes x, FloatLanes y, FloatLanes z) {
+  L3 r;
   r.x = x;
   r.y = y;
   r.z = z;
   return r;
 }
-GPUCOL_INLINE F3 f3_sub(F3 a, F3 b) {
-  return f3(a.x - b.x, a.y - b.y, a.z - b.z);
+GPUCOL_INLINE L3 l3_sub(L3 a, L3 b) {
+  return l3(a.x - b.x, a.y - b.y, a.z - b.z);
 }
-GPUCOL_INLINE F3 f3_cross(F3 a, F3 b) {
-  return f3(a.y * b.z - a.z * b.y, a.z * b.x - a.x * b.z, a.x * b.y - a.y * b.x);
+GPUCOL_INLINE L3 l3_cross(L3 a, L3 b) {
+  return l3(a.y * b.z - a.z * b.y, a.z * b.x - a.x * b.z, a.x * b.y - a.y * b.x);
 }
-GPUCOL_INLINE float f3_dot(F3 a, F3 b) {
+GPUCOL_INLINE FloatLanes l3_dot(L3 a, L3 b) {
   return (a.x * b.x + a.y * b.y) + a.z * b.z;
 }
-GPUCOL_INLINE float f3_max_abs(F3 v) {
+GPUCOL_INLINE FloatLanes l3_max_abs(L3 v) {
   return fmax(fmax(fabs(v.x), fabs(v.y)), fabs(v.z));
 }
-// v's coordinate on the axis picked by useX / useY (else z), with scalar selects.
-GPUCOL_INLINE float f3_axis(F3 v, bool useX, bool useY) {
-  return useX ? v.x : (useY ? v.y : v.z);
+// v's coordinate on the axis picked by useX / useY (else z).
+GPUCOL_INLINE FloatLanes l3_axis(L3 v, BoolLanes useX, BoolLanes useY) {
+  return select(select(v.z, v.y, useY), v.x, useX);
 }
-GPUCOL_INLINE bool f3_interval_factor(float x) {
+GPUCOL_INLINE BoolLanes l3_interval_factor(FloatLanes x) {
   return (x >= FLOAT_INTERVAL_MIN_FACTOR) & (x <= FLOAT_INTERVAL_MAX_FACTOR);
 }
 
-// triangle_plane.h floatPlaneSide of q0, q1, q2 against the plane of (v0, v1, v2), on F3 values.
-GPUCOL_INLINE uint f3_plane_side(F3 v0, F3 v1, F3 v2, F3 q0, F3 q1, F3 q2) {
-  const F3 e1 = f3_sub(v1, v0), e2 = f3_sub(v2, v0);
-  const F3 n = f3_cross(e1, e2);
-  const float edge1 = f3_max_abs(e1), edge2 = f3_max_abs(e2);
-  const F3 r0 = f3_sub(q0, v0), r1 = f3_sub(q1, v0), r2 = f3_sub(q2, v0);
-  const float d0 = f3_dot(n, r0), d1 = f3_dot(n, r1), d2 = f3_dot(n, r2);
-  const float extent = fmax(fmax(f3_max_abs(r0), f3_max_abs(r1)), f3_max_abs(r2));
-  const bool inRange = (edge1 >= FLOAT_SIDE_MIN_FACTOR) & (edge1 <= FLOAT_SIDE_MAX_FACTOR) &
-                       (edge2 >= FLOAT_SIDE_MIN_FACTOR) & (edge2 <= FLOAT_SIDE_MAX_FACTOR) &
-                       (extent >= FLOAT_SIDE_MIN_FACTOR) & (extent <= FLOAT_SIDE_MAX_FACTOR);
-  const float m = FLOAT_SIDE_MARGIN * edge1 * edge2 * extent;
-  const bool above = (d0 > m) & (d1 > m) & (d2 > m);
-  const bool below = (d0 < -m) & (d1 < -m) & (d2 < -m);
-  const bool off = (fabs(d0) > m) | (fabs(d1) > m) | (fabs(d2) > m);
-  return (inRange & (above | below) ? 1u : 0u) | (inRange & off ? 2u : 0u);
+// triangle_plane.h floatPlaneSide of q0, q1, q2 against the plane of (v0, v1, v2): `apart` when all three are
+// certainly on one side, `off` when one certainly is off the plane.
+GPUCOL_INLINE void l3_plane_side(L3 v0, L3 v1, L3 v2, L3 q0, L3 q1, L3 q2, BoolLanes* apart, BoolLanes* off) {
+  const L3 e1 = l3_sub(v1, v0), e2 = l3_sub(v2, v0);
+  const L3 n = l3_cross(e1, e2);
+  const FloatLanes edge1 = l3_max_abs(e1), edge2 = l3_max_abs(e2);
+  const L3 r0 = l3_sub(q0, v0), r1 = l3_sub(q1, v0), r2 = l3_sub(q2, v0);
+  const FloatLanes d0 = l3_dot(n, r0), d1 = l3_dot(n, r1), d2 = l3_dot(n, r2);
+  const FloatLanes extent = fmax(fmax(l3_max_abs(r0), l3_max_abs(r1)), l3_max_abs(r2));
+  const BoolLanes inRange = (edge1 >= FLOAT_SIDE_MIN_FACTOR) & (edge1 <= FLOAT_SIDE_MAX_FACTOR) &
+                            (edge2 >= FLOAT_SIDE_MIN_FACTOR) & (edge2 <= FLOAT_SIDE_MAX_FACTOR) &
+                            (extent >= FLOAT_SIDE_MIN_FACTOR) & (extent <= FLOAT_SIDE_MAX_FACTOR);
+  const FloatLanes m = FLOAT_SIDE_MARGIN * edge1 * edge2 * extent;
+  const BoolLanes above = (d0 > m) & (d1 > m) & (d2 > m);
+  const BoolLanes below = (d0 < -m) & (d1 < -m) & (d2 < -m);
+  *apart = inRange & (above | below);
+  *off = inRange & ((fabs(d0) > m) | (fabs(d1) > m) | (fabs(d2) > m));
 }
 
 // One triangle's interval on the line's axis (coordinates p, distances d to the other plane, margin m) and
-// the bound on its endpoints' error: floatIntervalsApartBranchFree's `interval`. Its two reciprocals are
-// taken in double and rounded to float: OpenCL allows a float division 2.5 ulp of error, the proof counts on
-// about one.
-GPUCOL_INLINE F3 f3_interval(F3 p, F3 d, float m, float edges, float largest) {
+// the bound on its endpoints' error: floatIntervalsApartBranchFree's `interval`, as (low, high, error). Its
+// two reciprocals are taken in double and rounded to float: OpenCL allows a float division 2.5 ulp of error,
+// the proof counts on about one.
+GPUCOL_INLINE L3 l3_interval(L3 p, L3 d, FloatLanes m, FloatLanes edges, FloatLanes largest) {
   const float u = 1.0f / 16777216.0f;
-  const bool lone2 = (d.x > 0) == (d.y > 0), lone1 = !lone2 & ((d.x > 0) == (d.z > 0));
-  const float dLone = lone2 ? d.z : (lone1 ? d.y : d.x);
-  const float pLone = lone2 ? p.z : (lone1 ? p.y : p.x);
-  const float dNext = lone2 ? d.x : (lone1 ? d.z : d.y);
-  const float pNext = lone2 ? p.x : (lone1 ? p.z : p.y);
-  const float dLast = lone2 ? d.y : (lone1 ? d.x : d.z);
-  const float pLast = lone2 ? p.y : (lone1 ? p.x : p.z);
-  const float inverse1 = (float)(1.0 / (double)(dLone - dNext));
-  const float inverse2 = (float)(1.0 / (double)(dLone - dLast));
-  const float t1 = pLone + (pNext - pLone) * (dLone * inverse1);
-  const float t2 = pLone + (pLast - pLone) * (dLone * inverse2);
-  const float inverseSmallest = fmax(fabs(inverse1), fabs(inverse2));
-  return f3(fmin(t1, t2), fmax(t1, t2), edges * (4.0f * m * inverseSmallest + 8.0f * u) + 4.0f * u * largest);
+  const BoolLanes lone2 = (d.x > 0) == (d.y > 0);
+  const BoolLanes lone1 = ~lone2 & ((d.x > 0) == (d.z > 0));
+  const FloatLanes dLone = select(select(d.x, d.y, lone1), d.z, lone2);
+  const FloatLanes pLone = select(select(p.x, p.y, lone1), p.z, lone2);
+  const FloatLanes dNext = select(select(d.y, d.z, lone1), d.x, lone2);
+  const FloatLanes pNext = select(select(p.y, p.z, lone1), p.x, lone2);
+  const FloatLanes dLast = select(select(d.z, d.x, lone1), d.y, lone2);
+  const FloatLanes pLast = select(select(p.z, p.x, lone1), p.y, lone2);
+  const FloatLanes inverse1 = GPUCOL_FLOAT_LANES(1.0 / GPUCOL_DOUBLE_LANES(dLone - dNext));
+  const FloatLanes inverse2 = GPUCOL_FLOAT_LANES(1.0 / GPUCOL_DOUBLE_LANES(dLone - dLast));
+  const FloatLanes t1 = pLone + (pNext - pLone) * (dLone * inverse1);
+  const FloatLanes t2 = pLone + (pLast - pLone) * (dLone * inverse2);
+  const FloatLanes inverseSmallest = fmax(fabs(inverse1), fabs(inverse2));
+  return l3(fmin(t1, t2), fmax(t1, t2), edges * (4.0f * m * inverseSmallest + 8.0f * u) + 4.0f * u * largest);
 }
 
 // triangle_plane.h floatIntervalsApartBranchFree, the same expressions (its proof bounds every rounding, so
 // the order of a sum does not matter; selects stand for its selectFloat).
-GPUCOL_INLINE uint f3_intervals_apart(F3 a0, F3 a1, F3 a2, F3 b0, F3 b1, F3 b2) {
-  const F3 e1 = f3_sub(a1, a0), e2 = f3_sub(a2, a0), f1 = f3_sub(b1, b0), f2 = f3_sub(b2, b0);
-  const F3 nA = f3_cross(e1, e2), nB = f3_cross(f1, f2);
-  const float ea1 = f3_max_abs(e1), ea2 = f3_max_abs(e2), eb1 = f3_max_abs(f1), eb2 = f3_max_abs(f2);
-  const F3 rb0 = f3_sub(b0, a0), rb1 = f3_sub(b1, a0), rb2 = f3_sub(b2, a0);
-  const F3 ra0 = f3_sub(a0, b0), ra1 = f3_sub(a1, b0), ra2 = f3_sub(a2, b0);
-  const F3 dB = f3(f3_dot(nA, rb0), f3_dot(nA, rb1), f3_dot(nA, rb2));
-  const F3 dA = f3(f3_dot(nB, ra0), f3_dot(nB, ra1), f3_dot(nB, ra2));
-  const float extentB = fmax(fmax(f3_max_abs(rb0), f3_max_abs(rb1)), f3_max_abs(rb2));
-  const float extentA = fmax(fmax(f3_max_abs(ra0), f3_max_abs(ra1)), f3_max_abs(ra2));
-  const float mB = FLOAT_SIDE_MARGIN * ea1 * ea2 * extentB;
-  const float mA = FLOAT_SIDE_MARGIN * eb1 * eb2 * extentA;
-  bool valid = f3_interval_factor(ea1) & f3_interval_factor(ea2) & f3_interval_factor(eb1) &
-               f3_interval_factor(eb2) & f3_interval_factor(extentA) & f3_interval_factor(extentB);
+GPUCOL_INLINE BoolLanes l3_intervals_apart(L3 a0, L3 a1, L3 a2, L3 b0, L3 b1, L3 b2) {
+  const L3 e1 = l3_sub(a1, a0), e2 = l3_sub(a2, a0), f1 = l3_sub(b1, b0), f2 = l3_sub(b2, b0);
+  const L3 nA = l3_cross(e1, e2), nB = l3_cross(f1, f2);
+  const FloatLanes ea1 = l3_max_abs(e1), ea2 = l3_max_abs(e2), eb1 = l3_max_abs(f1), eb2 = l3_max_abs(f2);
+  const L3 rb0 = l3_sub(b0, a0), rb1 = l3_sub(b1, a0), rb2 = l3_sub(b2, a0);
+  const L3 ra0 = l3_sub(a0, b0), ra1 = l3_sub(a1, b0), ra2 = l3_sub(a2, b0);
+  const L3 dB = l3(l3_dot(nA, rb0), l3_dot(nA, rb1), l3_dot(nA, rb2));
+  const L3 dA = l3(l3_dot(nB, ra0), l3_dot(nB, ra1), l3_dot(nB, ra2));
+  const FloatLanes extentB = fmax(fmax(l3_max_abs(rb0), l3_max_abs(rb1)), l3_max_abs(rb2));
+  const FloatLanes extentA = fmax(fmax(l3_max_abs(ra0), l3_max_abs(ra1)), l3_max_abs(ra2));
+  const FloatLanes mB = FLOAT_SIDE_MARGIN * ea1 * ea2 * extentB;
+  const FloatLanes mA = FLOAT_SIDE_MARGIN * eb1 * eb2 * extentA;
+  BoolLanes valid = l3_interval_factor(ea1) & l3_interval_factor(ea2) & l3_interval_factor(eb1) &
+                    l3_interval_factor(eb2) & l3_interval_factor(extentA) & l3_interval_factor(extentB);
   valid &= (fabs(dB.x) > 2.0f * mB) & (fabs(dB.y) > 2.0f * mB) & (fabs(dB.z) > 2.0f * mB);
   valid &= (fabs(dA.x) > 2.0f * mA) & (fabs(dA.y) > 2.0f * mA) & (fabs(dA.z) > 2.0f * mA);
-  valid &= !((dB.x > 0) & (dB.y > 0) & (dB.z > 0)) & !((dB.x < 0) & (dB.y < 0) & (dB.z < 0));
-  valid &= !((dA.x > 0) & (dA.y > 0) & (dA.z > 0)) & !((dA.x < 0) & (dA.y < 0) & (dA.z < 0));
+  valid &= ~((dB.x > 0) & (dB.y > 0) & (dB.z > 0)) & ~((dB.x < 0) & (dB.y < 0) & (dB.z < 0));
+  valid &= ~((dA.x > 0) & (dA.y > 0) & (dA.z > 0)) & ~((dA.x < 0) & (dA.y < 0) & (dA.z < 0));
 
-  const F3 direction = f3_cross(nA, nB);
-  const float dx = fabs(direction.x), dy = fabs(direction.y), dz = fabs(direction.z);
-  const bool useX = (dx >= dy) & (dx >= dz), useY = !useX & (dy >= dz);
+  const L3 direction = l3_cross(nA, nB);
+  const FloatLanes dx = fabs(direction.x), dy = fabs(direction.y), dz = fabs(direction.z);
+  const BoolLanes useX = (dx >= dy) & (dx >= dz), useY = ~useX & (dy >= dz);
   valid &= fmax(fmax(dx, dy), dz) >= FLOAT_LINE_MINIMUM * (ea1 * ea2) * (eb1 * eb2);
 
-  const float largest = fmax(fmax(fmax(f3_max_abs(a0), f3_max_abs(a1)), fmax(f3_max_abs(a2), f3_max_abs(b0))),
-                             fmax(f3_max_abs(b1), f3_max_abs(b2)));
-  const float edgesA = fmax(fmax(ea1, ea2), f3_max_abs(f3_sub(a2, a1)));
-  const float edgesB = fmax(fmax(eb1, eb2), f3_max_abs(f3_sub(b2, b1)));
-  // Component by component: a select of whole F3 values became branches and a phi of <2 x float> (the ABI's
-  // form of a returned F3), which kept PoCL's work-item loop scalar ("instruction return type cannot be
-  // vectorized", "control flow cannot be substituted for a select").
-  const F3 pA = f3(f3_axis(a0, useX, useY), f3_axis(a1, useX, useY), f3_axis(a2, useX, useY));
-  const F3 pB = f3(f3_axis(b0, useX, useY), f3_axis(b1, useX, useY), f3_axis(b2, useX, useY));
-  const F3 iA = f3_interval(pA, dA, mA, edgesA, largest);
-  const F3 iB = f3_interval(pB, dB, mB, edgesB, largest);
-  const float tolerance = 2.0f * (iA.z + iB.z);
-  return (valid & ((iA.x > iB.y + tolerance) | (iB.x > iA.y + tolerance))) ? 1u : 0u;
+  const FloatLanes largest =
+      fmax(fmax(fmax(l3_max_abs(a0), l3_max_abs(a1)), fmax(l3_max_abs(a2), l3_max_abs(b0))),
+           fmax(l3_max_abs(b1), l3_max_abs(b2)));
+  const FloatLanes edgesA = fmax(fmax(ea1, ea2), l3_max_abs(l3_sub(a2, a1)));
+  const FloatLanes edgesB = fmax(fmax(eb1, eb2), l3_max_abs(l3_sub(b2, b1)));
+  const L3 pA = l3(l3_axis(a0, useX, useY), l3_axis(a1, useX, useY), l3_axis(a2, useX, useY));
+  const L3 pB = l3(l3_axis(b0, useX, useY), l3_axis(b1, useX, useY), l3_axis(b2, useX, useY));
+  const L3 iA = l3_interval(pA, dA, mA, edgesA, largest);
+  const L3 iB = l3_interval(pB, dB, mB, edgesB, largest);
+  const FloatLanes tolerance = 2.0f * (iA.z + iB.z);
+  return valid & ((iA.x > iB.y + tolerance) | (iB.x > iA.y + tolerance));
 }
 
 // The early-out stage: survives[i] = 0 when float arithmetic proves candidate i's triangles apart as the
 // double test would find them (floatCertainlyApartBranchFree, then floatIntervalsApartBranchFree), else 1.
-// Both tests always run, and there is no bounds test either (the work-items past n repeat the last candidate
-// into the padding of `survives`, which holds the launch's global size): no branch, so that a CPU device
-// makes vector code of it.
+// Work-item w tests candidates GPUCOL_LANES w .. GPUCOL_LANES w + GPUCOL_LANES - 1; lanes past n repeat the
+// last candidate into the padding of `survives`, which holds GPUCOL_LANES entries per work-item of the
+// launch.
 __kernel void mesh_near_prefilter(__global const GpucolMeshPair* restrict pairs,
                                   __global const float* restrict vertices,
                                   __global const uint* restrict indices, __global const ulong* restrict keys,
                                   const uint n, const uint bitsA, const uint bitsB,
                                   __global uint* restrict survives) {
-  const uint item = get_global_id(0);
-  float af[3][3], bf[3][3];
-  mesh_candidate_triangles(pairs, vertices, indices, keys[min(item, n - 1u)], bitsA, bitsB, af, bf);
-  const F3 a0 = f3(af[0][0], af[0][1], af[0][2]), a1 = f3(af[1][0], af[1][1], af[1][2]),
-           a2 = f3(af[2][0], af[2][1], af[2][2]);
-  const F3 b0 = f3(bf[0][0], bf[0][1], bf[0][2]), b1 = f3(bf[1][0], bf[1][1], bf[1][2]),
-           b2 = f3(bf[2][0], bf[2][1], bf[2][2]);
-  const uint sideB = f3_plane_side(a0, a1, a2, b0, b1, b2);
-  const uint sideA = f3_plane_side(b0, b1, b2, a0, a1, a2);
-  const uint planesApart = (sideB | ((sideB >> 1) & sideA)) & 1u;
-  survives[item] = 1u - (planesApart | f3_intervals_apart(a0, a1, a2, b0, b1, b2));
+  const uint first = (uint)get_global_id(0) * GPUCOL_LANES;
+  // Corner k of A (coordinates 3k .. 3k + 2) and of B (9 + 3k ..), lane by lane.
+  float corners[18][GPUCOL_LANES];
+  for (int lane = 0; lane < GPUCOL_LANES; ++lane) {
+    float af[3][3], bf[3][3];
+    mesh_candidate_triangles(pairs, vertices, indices, keys[min(first + (uint)lane, n - 1u)], bitsA, bitsB,
+                             af, bf);
+#pragma unroll
+    for (int c = 0; c < 3; ++c) {
+#pragma unroll
+      for (int k = 0; k < 3; ++k) {
+        corners[3 * c + k][lane] = af[c][k];
+        corners[9 + 3 * c + k][lane] = bf[c][k];
+      }
+    }
+  }
+  L3 t[6];
+#pragma unroll
+  for (int c = 0; c < 6; ++c) {
+    t[c] = l3(GPUCOL_LOAD_LANES(corners[3 * c]), GPUCOL_LOAD_LANES(corners[3 * c + 1]),
+              GPUCOL_LOAD_LANES(corners[3 * c + 2]));
+  }
+  BoolLanes apartB, offB, apartA, offA;
+  l3_plane_side(t[0], t[1], t[2], t[3], t[4], t[5], &apartB, &offB);
+  l3_plane_side(t[3], t[4], t[5], t[0], t[1], t[2], &apartA, &offA);
+  const BoolLanes apart = apartB | (offB & apartA) | l3_intervals_apart(t[0], t[1], t[2], t[3], t[4], t[5]);
+  // apart is -1 or 0: survives is 0 or 1.
+  GPUCOL_STORE_LANES(GPUCOL_UINT_LANES(apart + 1), get_global_id(0), survives);
 }
 
 // The survivors' candidate indices in candidate order: `offsets` is the exclusive scan of
