@@ -50,7 +50,7 @@ constexpr int kMaxStartDepth = 12;
 /// depth-first launch 64 groups to spread over the compute units.
 constexpr std::size_t kGroupSizeCap = 64;
 
-/// Candidates per work-item of mesh_near_prefilter (its GPUCOL_LANES: 4, 8 or 16). 8 floats are one AVX
+/// Candidates per work-item of mesh_near_filter_test (its GPUCOL_LANES: 4, 8 or 16). 8 floats are one AVX
 /// register; measured on PoCL (thesis scene): see the README.
 constexpr std::uint64_t kPrefilterLanes = 8;
 
@@ -67,8 +67,7 @@ class OpenClMeshPipeline final : public MeshBatchDevice {
       m_frontExpand = cl::Kernel(middle, "mesh_front_expand");
       cl::Program nearProgram = m_context.program("mesh_near_phase", kernels::mesh_near_phase,
                                                   "-DGPUCOL_LANES=" + std::to_string(kPrefilterLanes));
-      m_nearPrefilter = cl::Kernel(nearProgram, "mesh_near_prefilter");
-      m_nearGather = cl::Kernel(nearProgram, "mesh_near_gather");
+      m_nearFilterTest = cl::Kernel(nearProgram, "mesh_near_filter_test");
       m_nearTest = cl::Kernel(nearProgram, "mesh_near_test");
       m_counters = cl::Buffer(m_context.context(), CL_MEM_READ_WRITE, 4 * sizeof(cl_uint));
       // Kernels read the leaf entry arena even when no tree has entries: give it one element.
@@ -140,10 +139,10 @@ class OpenClMeshPipeline final : public MeshBatchDevice {
   MeshDeviceCache m_cache;
   OpenClScan m_scan;
   OpenClRadixSort m_sort;
-  cl::Kernel m_frontStart, m_frontExpand, m_nearPrefilter, m_nearGather, m_nearTest;
+  cl::Kernel m_frontStart, m_frontExpand, m_nearFilterTest, m_nearTest;
   std::map<std::size_t, cl::Kernel> m_depthFirst;  // by stack length
   cl::Buffer m_emptyEntries, m_counters;
-  DeviceArray m_pairs, m_counts, m_front, m_next, m_keys, m_values, m_hits, m_survivors;
+  DeviceArray m_pairs, m_counts, m_front, m_next, m_keys, m_values, m_hits;
   std::vector<GpucolMeshPair> m_hostPairs;
   std::vector<std::uint64_t> m_hostKeys, m_sortedKeys;
   std::vector<std::uint32_t> m_rank, m_hitAt;
@@ -236,86 +235,71 @@ void OpenClMeshPipeline::runBatch(const std::vector<DeviceMeshPair>& pairs,
     s.sortMs = millisecondsSince(start);
   }
 
-  // Near phase: the float early-out over every candidate, the survivors compacted in candidate order, then
-  // the double test and contact generation on them. Its hit records come back in that order; the host keeps
-  // the intersecting ones.
-  std::uint64_t tested = candidateCount;
-  if (options.nearPrefilter) {
-    start = Clock::now();
-    m_nearPrefilter.setArg(0, m_pairs.buffer);
-    m_nearPrefilter.setArg(1, m_cache.vertices());
-    m_nearPrefilter.setArg(2, m_cache.indices());
-    m_nearPrefilter.setArg(3, m_keys.buffer);
-    m_nearPrefilter.setArg(4, cl_uint(candidateCount));
-    m_nearPrefilter.setArg(5, cl_uint(bitsA));
-    m_nearPrefilter.setArg(6, cl_uint(bitsB));
-    // kPrefilterLanes candidates per work-item; the flags buffer also holds the last work-group's padding.
-    const std::uint64_t prefilterItems = (candidateCount + kPrefilterLanes - 1) / kPrefilterLanes;
-    m_nearPrefilter.setArg(7, m_counts.ensure(ctx, globalSize(m_nearPrefilter, prefilterItems) *
-                                                       kPrefilterLanes * sizeof(cl_uint)));
-    launch(m_nearPrefilter, prefilterItems);
-    queue.finish();
-    s.prefilterMs = millisecondsSince(start);
-    start = Clock::now();
-    tested = m_scan.exclusiveScan(m_counts.buffer, candidateCount);
-    if (tested > 0) {
-      m_nearGather.setArg(0, m_counts.buffer);
-      m_nearGather.setArg(1, cl_uint(candidateCount));
-      m_nearGather.setArg(2, cl_uint(tested));
-      m_nearGather.setArg(3, m_survivors.ensure(ctx, tested * sizeof(cl_uint)));
-      launch(m_nearGather, candidateCount);
-      queue.finish();
-    }
-    s.compactionMs = millisecondsSince(start);
-  }
+  // Near phase. With the early-out: one kernel tests every candidate in float (vector lanes) and runs the
+  // double test and contact generation on the survivors, appending the intersecting ones' records in any
+  // order. Without it: every candidate's record, intersecting or not, in candidate order. The host keeps the
+  // intersecting records and puts them in candidate order below.
   start = Clock::now();
-  if (tested > 0) {
+  std::uint64_t records = candidateCount;
+  if (options.nearPrefilter) {
+    queue.enqueueFillBuffer(m_counters, cl_uint(0), 0, sizeof(cl_uint));
+    m_nearFilterTest.setArg(0, m_pairs.buffer);
+    m_nearFilterTest.setArg(1, m_cache.vertices());
+    m_nearFilterTest.setArg(2, m_cache.indices());
+    m_nearFilterTest.setArg(3, m_keys.buffer);
+    m_nearFilterTest.setArg(4, cl_uint(candidateCount));
+    m_nearFilterTest.setArg(5, cl_uint(bitsA));
+    m_nearFilterTest.setArg(6, cl_uint(bitsB));
+    m_nearFilterTest.setArg(7, m_hits.ensure(ctx, candidateCount * sizeof(GpucolNearHit)));
+    m_nearFilterTest.setArg(8, m_counters);
+    launch(m_nearFilterTest, (candidateCount + kPrefilterLanes - 1) / kPrefilterLanes);
+    cl_uint hitCount = 0;
+    queue.enqueueReadBuffer(m_counters, CL_TRUE, 0, sizeof hitCount, &hitCount);
+    records = hitCount;
+  } else {
     m_nearTest.setArg(0, m_pairs.buffer);
     m_nearTest.setArg(1, m_cache.vertices());
     m_nearTest.setArg(2, m_cache.indices());
     m_nearTest.setArg(3, m_keys.buffer);
-    m_nearTest.setArg(4, m_survivors.ensure(ctx, sizeof(cl_uint)));
-    m_nearTest.setArg(5, cl_uint(options.nearPrefilter ? 1 : 0));
-    m_nearTest.setArg(6, cl_uint(tested));
-    m_nearTest.setArg(7, cl_uint(bitsA));
-    m_nearTest.setArg(8, cl_uint(bitsB));
-    m_nearTest.setArg(9, m_hits.ensure(ctx, tested * sizeof(GpucolNearHit)));
-    launch(m_nearTest, tested);
+    m_nearTest.setArg(4, cl_uint(candidateCount));
+    m_nearTest.setArg(5, cl_uint(bitsA));
+    m_nearTest.setArg(6, cl_uint(bitsB));
+    m_nearTest.setArg(7, m_hits.ensure(ctx, candidateCount * sizeof(GpucolNearHit)));
+    launch(m_nearTest, candidateCount);
     queue.finish();
   }
   s.nearMs += millisecondsSince(start);
 
   start = Clock::now();
   queue.enqueueReadBuffer(m_keys.buffer, CL_FALSE, 0, candidateCount * 8, m_hostKeys.data());
-  m_hostHits.resize(tested);
-  if (tested > 0) {
-    queue.enqueueReadBuffer(m_hits.buffer, CL_FALSE, 0, std::size_t(tested) * sizeof(GpucolNearHit),
+  m_hostHits.resize(records);
+  if (records > 0) {
+    queue.enqueueReadBuffer(m_hits.buffer, CL_FALSE, 0, std::size_t(records) * sizeof(GpucolNearHit),
                             m_hostHits.data());
   }
   queue.finish();
   s.readbackMs = millisecondsSince(start);
 
-  if (!deviceSort) {
-    // The keys in order, and each hit's candidate index moved to its key's place in that order (keys are
-    // unique: a triangle pair is found once). The ranks are a permutation, so the hits are put in that order
-    // by a slot per candidate instead of a second sort.
-    start = Clock::now();
-    m_hostSort.sortAndRank(m_hostKeys, keyBits, m_sortedKeys, m_rank);
-    constexpr std::uint32_t kNoHit = 0xffffffffu;
-    m_hitAt.assign(candidateCount, kNoHit);
-    for (std::size_t i = 0; i < m_hostHits.size(); ++i) {
-      const std::uint32_t ranked = m_rank[m_hostHits[i].candidate];
-      m_hostHits[i].candidate = ranked;
-      m_hitAt[ranked] = std::uint32_t(i);
-    }
-    m_rankedHits.clear();
-    for (std::uint32_t slot : m_hitAt) {
-      if (slot != kNoHit) m_rankedHits.push_back(m_hostHits[slot]);
-    }
-    std::swap(m_hostHits, m_rankedHits);
-    std::swap(m_hostKeys, m_sortedKeys);
-    s.sortMs = millisecondsSince(start);
+  // The keys in order (deviceSort false: sorted here, and each hit's candidate index moved to its key's place
+  // in that order; keys are unique, a triangle pair is found once), then the intersecting hits in candidate
+  // order: the candidate indices are a permutation, so by a slot per candidate instead of a second sort.
+  start = Clock::now();
+  if (!deviceSort) m_hostSort.sortAndRank(m_hostKeys, keyBits, m_sortedKeys, m_rank);
+  constexpr std::uint32_t kNoHit = 0xffffffffu;
+  m_hitAt.assign(candidateCount, kNoHit);
+  for (std::size_t i = 0; i < m_hostHits.size(); ++i) {
+    if ((m_hostHits[i].flags & GPUCOL_HIT_INTERSECTS) == 0) continue;
+    const std::uint32_t at = deviceSort ? m_hostHits[i].candidate : m_rank[m_hostHits[i].candidate];
+    m_hostHits[i].candidate = at;
+    m_hitAt[at] = std::uint32_t(i);
   }
+  m_rankedHits.clear();
+  for (std::uint32_t slot : m_hitAt) {
+    if (slot != kNoHit) m_rankedHits.push_back(m_hostHits[slot]);
+  }
+  std::swap(m_hostHits, m_rankedHits);
+  if (!deviceSort) std::swap(m_hostKeys, m_sortedKeys);
+  s.sortMs += millisecondsSince(start);
 
   // Split by pair: keys are sorted by pair first, so each pair's candidates are one run.
   const std::uint64_t maskA = (std::uint64_t(1) << bitsA) - 1, maskB = (std::uint64_t(1) << bitsB) - 1;

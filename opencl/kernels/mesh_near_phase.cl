@@ -1,6 +1,6 @@
-// Near phase of the mesh pipeline on the device (thesis §5.4.1): one work-item per candidate triangle pair of
-// the whole batch, Möller's test and the contact generation of §5.3.4 in one kernel, then a compaction of the
-// intersecting pairs by the scanned flags (scan.cl).
+// Near phase of the mesh pipeline on the device (thesis §5.4.1): every candidate triangle pair of the whole
+// batch in one kernel, Möller's test and the contact generation of §5.3.4, the intersecting pairs' records
+// appended at an atomic counter.
 //
 // It is plugin/src/narrowphase/triangle_contact.cpp (generateContactAndTest, with triangle_plane.h and
 // coplanar_triangles.cpp) written again in OpenCL C: double arithmetic on the float input (cl_khr_fp64, which
@@ -8,11 +8,11 @@
 // pair as the CPU does and its contacts carry the same bits up to the final float rounding. The triangles are
 // built in A's scaled frame as plugin/src/bullet/collide_meshes.cpp builds them (triangleOfA, triangleOfB).
 //
-// The early-out is a stage of its own (mesh_near_prefilter): the float plane and interval tests of
+// The early-out (mesh_near_filter_test) comes first in the same kernel: the float plane and interval tests of
 // triangle_plane.h (floatCertainlyApartBranchFree, floatIntervalsApartBranchFree, their error bounds proven
-// there), straight-line code that a CPU device runs as vector code across work-items, then a compaction by
-// scan, and the double test only on the survivors. Without it every candidate takes the double path, as the
-// thesis's GPU kernel took every candidate through contact generation.
+// there), straight-line code on vector lanes, several candidates per work-item, and the double test only on
+// the survivors. Without it (mesh_near_test) every candidate takes the double path, as the thesis's GPU
+// kernel took every candidate through contact generation.
 #include "opencl/shared/mesh_pipeline_types.h"
 
 #pragma OPENCL EXTENSION cl_khr_fp64 : enable
@@ -226,7 +226,7 @@ GPUCOL_INLINE void mesh_candidate_triangles(__global const GpucolMeshPair* pairs
                  p->bTranslation[k];
     }
   }
-  // Mirrored scalings swap vertices 1 and 2 (selects rather than branches: the prefilter stays vector code).
+  // Mirrored scalings swap vertices 1 and 2 (selects rather than branches: the early-out stays vector code).
   const bool flipA = p->flipA != 0u, flipB = p->flipB != 0u;
 #pragma unroll
   for (int k = 0; k < 3; ++k) {
@@ -385,19 +385,15 @@ GPUCOL_INLINE BoolLanes l3_intervals_apart(L3 a0, L3 a1, L3 a2, L3 b0, L3 b1, L3
   return valid & ((iA.x > iB.y + tolerance) | (iB.x > iA.y + tolerance));
 }
 
-// The early-out stage: survives[i] = 0 when float arithmetic proves candidate i's triangles apart as the
-// double test would find them (floatCertainlyApartBranchFree, then floatIntervalsApartBranchFree), else 1.
-// Work-item w tests candidates GPUCOL_LANES w .. GPUCOL_LANES w + GPUCOL_LANES - 1; lanes past n repeat the
-// last candidate into the padding of `survives`, which holds GPUCOL_LANES entries per work-item of the
-// launch.
-__kernel void mesh_near_prefilter(__global const GpucolMeshPair* restrict pairs,
-                                  __global const float* restrict vertices,
-                                  __global const uint* restrict indices, __global const ulong* restrict keys,
-                                  const uint n, const uint bitsA, const uint bitsB,
-                                  __global uint* restrict survives) {
-  const uint first = (uint)get_global_id(0) * GPUCOL_LANES;
-  // Corner k of A (coordinates 3k .. 3k + 2) and of B (9 + 3k ..), lane by lane.
-  float corners[18][GPUCOL_LANES];
+// The early-out of GPUCOL_LANES candidates from `first` (lanes past n repeat the last candidate): -1 in the
+// lanes whose triangles float arithmetic proves apart as the double test would find them
+// (floatCertainlyApartBranchFree, then floatIntervalsApartBranchFree), else 0. The triangles stay in
+// `corners`: corner c of A is rows 3c .. 3c + 2, of B rows 9 + 3c .., one lane per candidate.
+GPUCOL_INLINE BoolLanes mesh_prefilter_lanes(__global const GpucolMeshPair* restrict pairs,
+                                             __global const float* restrict vertices,
+                                             __global const uint* restrict indices,
+                                             __global const ulong* restrict keys, uint first, uint n,
+                                             uint bitsA, uint bitsB, float corners[18][GPUCOL_LANES]) {
   for (int lane = 0; lane < GPUCOL_LANES; ++lane) {
     float af[3][3], bf[3][3];
     mesh_candidate_triangles(pairs, vertices, indices, keys[min(first + (uint)lane, n - 1u)], bitsA, bitsB,
@@ -420,35 +416,14 @@ __kernel void mesh_near_prefilter(__global const GpucolMeshPair* restrict pairs,
   BoolLanes apartB, offB, apartA, offA;
   l3_plane_side(t[0], t[1], t[2], t[3], t[4], t[5], &apartB, &offB);
   l3_plane_side(t[3], t[4], t[5], t[0], t[1], t[2], &apartA, &offA);
-  const BoolLanes apart = apartB | (offB & apartA) | l3_intervals_apart(t[0], t[1], t[2], t[3], t[4], t[5]);
-  // apart is -1 or 0: survives is 0 or 1.
-  GPUCOL_STORE_LANES(GPUCOL_UINT_LANES(apart + 1), get_global_id(0), survives);
+  return apartB | (offB & apartA) | l3_intervals_apart(t[0], t[1], t[2], t[3], t[4], t[5]);
 }
 
-// The survivors' candidate indices in candidate order: `offsets` is the exclusive scan of
-// mesh_near_prefilter's flags (`total` their sum), so candidate i survived when the next offset is larger.
-__kernel void mesh_near_gather(__global const uint* offsets, const uint n, const uint total,
-                               __global uint* survivors) {
-  const uint i = get_global_id(0);
-  if (i >= n) return;
-  const uint next = i + 1u < n ? offsets[i + 1u] : total;
-  if (next != offsets[i]) survivors[offsets[i]] = i;
-}
-
-// One candidate (the list's j-th when `useList`, else the j-th): its hit record, with GPUCOL_HIT_INTERSECTS
-// in the flags when the triangles intersect.
-__kernel void mesh_near_test(__global const GpucolMeshPair* pairs, __global const float* vertices,
-                             __global const uint* indices, __global const ulong* keys,
-                             __global const uint* list, const uint useList, const uint n, const uint bitsA,
-                             const uint bitsB, __global GpucolNearHit* hits) {
-  const uint j = get_global_id(0);
-  if (j >= n) return;
-  const uint i = useList ? list[j] : j;
-  float af[3][3], bf[3][3];
-  mesh_candidate_triangles(pairs, vertices, indices, keys[i], bitsA, bitsB, af, bf);
-
+// The hit record of candidate `candidate` whose triangles are af, bf: GPUCOL_HIT_INTERSECTS in the flags when
+// they intersect, and the contact.
+GpucolNearHit mesh_near_hit(const float af[3][3], const float bf[3][3], uint candidate) {
   GpucolNearHit hit;
-  hit.candidate = i;
+  hit.candidate = candidate;
   hit.flags = 0u;
   for (int k = 0; k < 3; ++k) hit.point[k] = hit.normal[k] = hit.deepest[k] = 0.0f;
   hit.depth = 0.0f;
@@ -560,5 +535,50 @@ __kernel void mesh_near_test(__global const GpucolMeshPair* pairs, __global cons
       hit.depth = (float)depth;
     }
   }
-  hits[j] = hit;
+  return hit;
+}
+
+// Candidate j's hit record, intersecting or not (the near phase without the early-out).
+__kernel void mesh_near_test(__global const GpucolMeshPair* pairs, __global const float* vertices,
+                             __global const uint* indices, __global const ulong* keys, const uint n,
+                             const uint bitsA, const uint bitsB, __global GpucolNearHit* hits) {
+  const uint j = get_global_id(0);
+  if (j >= n) return;
+  float af[3][3], bf[3][3];
+  mesh_candidate_triangles(pairs, vertices, indices, keys[j], bitsA, bitsB, af, bf);
+  hits[j] = mesh_near_hit(af, bf, j);
+}
+
+// The early-out and the double test in one pass: work-item w tests candidates GPUCOL_LANES w .. in lanes
+// (mesh_prefilter_lanes), then runs the double test on the lanes that survive, one after the other, and
+// appends the records of the intersecting ones at hits[atomic counter] (at most one per candidate: `hits`
+// holds n, so nothing is dropped). Their order varies between runs; the host puts them in candidate order.
+// One launch and one wait: a separate early-out kernel, a scan and gather of its survivors and a test kernel
+// on them took longer on PoCL.
+__kernel void mesh_near_filter_test(__global const GpucolMeshPair* restrict pairs,
+                                    __global const float* restrict vertices,
+                                    __global const uint* restrict indices,
+                                    __global const ulong* restrict keys, const uint n, const uint bitsA,
+                                    const uint bitsB, __global GpucolNearHit* restrict hits,
+                                    __global uint* restrict hitCount) {
+  const uint first = (uint)get_global_id(0) * GPUCOL_LANES;
+  if (first >= n) return;
+  float corners[18][GPUCOL_LANES];
+  const BoolLanes apart =
+      mesh_prefilter_lanes(pairs, vertices, indices, keys, first, n, bitsA, bitsB, corners);
+  uint survives[GPUCOL_LANES];
+  GPUCOL_STORE_LANES(GPUCOL_UINT_LANES(apart + 1), 0, survives);
+  const uint lanes = min((uint)GPUCOL_LANES, n - first);
+  for (uint lane = 0u; lane < lanes; ++lane) {
+    if (survives[lane] == 0u) continue;
+    float af[3][3], bf[3][3];
+    for (int c = 0; c < 3; ++c) {
+      for (int k = 0; k < 3; ++k) {
+        af[c][k] = corners[3 * c + k][lane];
+        bf[c][k] = corners[9 + 3 * c + k][lane];
+      }
+    }
+    const GpucolNearHit hit = mesh_near_hit(af, bf, first + lane);
+    if (hit.flags & GPUCOL_HIT_INTERSECTS) hits[atomic_inc(hitCount)] = hit;
+  }
 }
