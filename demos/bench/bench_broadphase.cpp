@@ -15,6 +15,8 @@
 #include <random>
 #include <sstream>
 #include <string>
+#include <tuple>
+#include <utility>
 #include <vector>
 
 #include "b3_gpu_grid_peer.h"
@@ -118,7 +120,8 @@ struct Result {
   double medianMs = 0;
   std::size_t pairs = 0;        // pairs reported after the last step (in the cache, or by the b3 peer)
   std::size_t realPairs = 0;    // of those, the ones whose AABBs really overlap
-  std::size_t memoryBytes = 0;  // 0 where not known
+  std::size_t memoryBytes = 0;  // held between steps; 0 where not known
+  std::size_t peakBytes = 0;    // at the peak of the last step; 0 where not known
   std::string note;             // why a broad phase did not run ("" when it ran)
 };
 
@@ -147,7 +150,8 @@ class Stepper {
 class BulletStepper final : public Stepper {
  public:
   BulletStepper(std::string label, btBroadphaseInterface& bp, Scene scene,
-                std::function<std::size_t()> memory = nullptr, std::function<void()> afterStep = nullptr)
+                std::function<std::pair<std::size_t, std::size_t>()> memory = nullptr,
+                std::function<void()> afterStep = nullptr)
       : m_label(std::move(label)),
         m_bp(bp),
         m_scene(std::move(scene)),
@@ -184,7 +188,7 @@ class BulletStepper final : public Stepper {
       r.realPairs += TestAabbAgainstAabb2(p.m_pProxy0->m_aabbMin, p.m_pProxy0->m_aabbMax,
                                           p.m_pProxy1->m_aabbMin, p.m_pProxy1->m_aabbMax);
     }
-    if (m_memory) r.memoryBytes = m_memory();
+    if (m_memory) std::tie(r.memoryBytes, r.peakBytes) = m_memory();
     // No destroyProxy loop: Bullet's caches scan every pair per removed proxy (quadratic teardown, the same
     // for every broad phase here); the broad phases free their proxies when they are destroyed.
     return r;
@@ -196,7 +200,7 @@ class BulletStepper final : public Stepper {
   Scene m_scene;
   btDefaultCollisionConfiguration m_configuration;
   btCollisionDispatcher m_dispatcher;
-  std::function<std::size_t()> m_memory;
+  std::function<std::pair<std::size_t, std::size_t>()> m_memory;  // (held between steps, peak)
   std::function<void()> m_afterStep;
   std::vector<btBroadphaseProxy*> m_proxies;
   int m_step = 0;
@@ -335,7 +339,7 @@ void runAll(const Options& o) {
     csv.open(o.csv);
     if (!csv) throw std::runtime_error("cannot write " + o.csv);
     csv << "scene,n,broadphase,median_ms,ratio_vs_gpucol_cpu,pairs,real_pairs,bytes_per_proxy_minus_8_per_"
-           "pair,note\n";
+           "pair,peak_bytes_per_proxy_minus_8_per_pair,note\n";
   }
   const std::vector<std::string> runs = parseNames(o.runs);
   auto wanted = [&](const char* name) { return std::find(runs.begin(), runs.end(), name) != runs.end(); };
@@ -367,8 +371,8 @@ void runAll(const Options& o) {
     }
   }
   std::printf("OpenCL device: %s\n", deviceName.empty() ? "(none)" : deviceName.c_str());
-  std::printf("%-8s %9s %-18s %11s %9s %11s %11s %9s\n", "scene", "N", "broadphase", "median ms", "x gpucol",
-              "pairs", "real pairs", "B/proxy");
+  std::printf("%-8s %9s %-18s %11s %9s %11s %11s %9s %9s\n", "scene", "N", "broadphase", "median ms",
+              "x gpucol", "pairs", "real pairs", "B/proxy", "peak B/p");
   for (const std::string& sceneName : parseNames(o.scenes))
     for (std::size_t n : parseList(o.sizes)) {
       auto make = [&]() {
@@ -412,7 +416,8 @@ void runAll(const Options& o) {
         stepStats.emplace_back();
         std::vector<GridBroadphaseStats>* stats = &stepStats.back();
         add(std::make_unique<BulletStepper>(
-            label, *grid, make(), [grid] { return grid->stats().memoryBytes; },
+            label, *grid, make(),
+            [grid] { return std::make_pair(grid->stats().memoryBytes, grid->stats().peakBytes); },
             [grid, stats] { stats->push_back(grid->stats()); }));
       }
       if (wanted("dbvt")) {
@@ -461,24 +466,27 @@ void runAll(const Options& o) {
       for (const Result& r : results) {
         if (!r.note.empty() && r.medianMs == 0) {
           std::printf("%-8s %9zu %-18s %s\n", sceneName.c_str(), n, r.broadphase.c_str(), r.note.c_str());
-          if (csv) csv << sceneName << ',' << n << ',' << r.broadphase << ",,,,,," << r.note << '\n';
+          if (csv) csv << sceneName << ',' << n << ',' << r.broadphase << ",,,,,,," << r.note << '\n';
           continue;
         }
         // Memory is known for GridBroadphase only; the others show "-" (empty in the CSV).
-        std::string perProxy = "-", perProxyCsv;
+        std::string perProxy = "-", perProxyCsv, peak = "-", peakCsv;
         if (r.memoryBytes) {
           char text[32];
           std::snprintf(text, sizeof text, "%.1f",
                         (double(r.memoryBytes) - 8.0 * double(r.pairs)) / double(n));
           perProxy = perProxyCsv = text;
+          std::snprintf(text, sizeof text, "%.1f", (double(r.peakBytes) - 8.0 * double(r.pairs)) / double(n));
+          peak = peakCsv = text;
         }
         const double ratio = reference > 0 ? r.medianMs / reference : 0.0;
-        std::printf("%-8s %9zu %-18s %11.3f %9.2f %11zu %11zu %9s %s\n", sceneName.c_str(), n,
+        std::printf("%-8s %9zu %-18s %11.3f %9.2f %11zu %11zu %9s %9s %s\n", sceneName.c_str(), n,
                     r.broadphase.c_str(), r.medianMs, ratio, r.pairs, r.realPairs, perProxy.c_str(),
-                    r.note.c_str());
+                    peak.c_str(), r.note.c_str());
         if (csv)
           csv << sceneName << ',' << n << ',' << r.broadphase << ',' << r.medianMs << ',' << ratio << ','
-              << r.pairs << ',' << r.realPairs << ',' << perProxyCsv << ',' << r.note << '\n';
+              << r.pairs << ',' << r.realPairs << ',' << perProxyCsv << ',' << peakCsv << ',' << r.note
+              << '\n';
       }
       std::fflush(stdout);
     }
@@ -499,7 +507,8 @@ const CommandRegistration kRegistration([](CLI::App& app) {
       "whose "
       "AABBs overlap (btDbvt keeps fattened, stale pairs); 'B/proxy' = (bytes held by GridBroadphase - 8 x "
       "pairs) / "
-      "N. A broad phase that does not run says why.\n"
+      "N; 'peak B/p' = the same at the peak of the last step (GridBroadphaseStats::peakBytes). A broad phase "
+      "that does not run says why.\n"
       "Example: gpucol-bench broadphase --n 1000,10000,100000 --scenes uniform --csv bp.csv");
   cmd->add_option("--n", options->sizes, "comma-separated proxy counts (1e6 allowed)")->capture_default_str();
   cmd->add_option("--scenes", options->scenes,

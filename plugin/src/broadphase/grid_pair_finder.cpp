@@ -18,6 +18,7 @@
 
 #include "broadphase/grid_choice.h"
 #include "broadphase/pair_mapping.h"
+#include "broadphase/scratch_allocator.h"
 
 namespace gpucol {
 namespace {
@@ -291,7 +292,7 @@ inline std::uint32_t slotBitsFor(std::uint32_t count) {
 /// thread timing; nothing downstream does: pairs are keyed by slot and the output is sorted (stage 10), so
 /// the result is the same whatever the threads did.
 template <typename Buckets, typename Place>
-void countingSort(std::size_t items, std::uint64_t cells, std::vector<std::uint32_t>& start,
+void countingSort(std::size_t items, std::uint64_t cells, ScratchVector<std::uint32_t>& start,
                   Buckets&& buckets, Place&& place) {
   start.resize(cells + 1);
   tbb::parallel_for(
@@ -328,21 +329,23 @@ class CpuPairFinder final : public PairFinder {
   bool keepGrid(const ProxyArrays& p, const PairFinderOptions& options);
   void incremental(const ProxyArrays& p, const PairFinderOptions& options, std::vector<std::uint64_t>& pairs);
   std::size_t scratchBytes() const;
+  bool fewMoved(const ProxyArrays& p) const;
+  void releaseScratch();
 
   PairFinderStats m_stats;
-  std::vector<std::uint32_t> m_active;     // active slots, ascending
-  std::vector<std::uint32_t> m_binned;     // active slots that go into the grid
-  std::vector<std::uint32_t> m_huge;       // active slots kept out of the grid (stage 3)
-  std::vector<float> m_extent;             // scratch for the median extent
-  std::vector<std::uint32_t> m_cellStart;  // dense counting sort: first entry per cell (+1 sentinel)
-  std::vector<std::uint64_t> m_keys;       // sparse path: (cell << 32) | slot
-  std::vector<LocalBox> m_box;             // binned boxes ordered by (home cell, slot)
-  std::vector<std::uint64_t> m_homeKeys;   // scratch for that order on a sparse grid
-  std::vector<std::uint32_t> m_homeOrder;  // binned slots by home cell, as of the last home sort
-  std::uint32_t m_homeOrderAge = 0;        // searches since that sort
-  std::vector<std::uint32_t> m_homePos;    // per slot: its index in m_homeOrder (binned slots only)
-  std::vector<PackedCells> m_packed;       // dense grid: each box's cells (stage 4 to 5)
-  std::vector<std::uint8_t> m_isBinned;    // per slot: binned in this search
+  std::vector<std::uint32_t> m_active;       // active slots, ascending
+  std::vector<std::uint32_t> m_binned;       // active slots that go into the grid
+  std::vector<std::uint32_t> m_huge;         // active slots kept out of the grid (stage 3)
+  std::vector<float> m_extent;               // scratch for the median extent
+  ScratchVector<std::uint32_t> m_cellStart;  // dense counting sort: first entry per cell (+1 sentinel)
+  std::vector<std::uint64_t> m_keys;         // sparse path: (cell << 32) | slot
+  ScratchVector<LocalBox> m_box;             // binned boxes ordered by (home cell, slot)
+  std::vector<std::uint64_t> m_homeKeys;     // scratch for that order on a sparse grid
+  std::vector<std::uint32_t> m_homeOrder;    // binned slots by home cell, as of the last home sort
+  std::uint32_t m_homeOrderAge = 0;          // searches since that sort
+  std::vector<std::uint32_t> m_homePos;      // per slot: its index in m_homeOrder (binned slots only)
+  ScratchVector<PackedCells> m_packed;       // dense grid: each box's cells (stage 4 to 5)
+  ScratchVector<std::uint8_t> m_isBinned;    // per slot: binned in this search
   // Stage 11: the last full grid search (m_cellStart, m_sorted, m_box of a dense grid) kept for later
   // searches while few proxies change.
   bool m_kept = false;        // m_cellStart/m_sorted/m_box/m_keptHuge describe m_keptGrid
@@ -355,14 +358,14 @@ class CpuPairFinder final : public PairFinder {
   std::vector<std::uint32_t> m_moved;        // active slots changed since the kept search
   std::vector<std::uint64_t> m_movedKeys;    // (cell << 32) | index into m_moved, binned moved proxies
   std::vector<std::uint64_t> m_sortScratch;  // second buffer of the pair radix sort
-  std::vector<std::uint32_t> m_sorted;       // m_box indices by cell (dense grid: with kHomeEntry)
-  std::vector<std::uint32_t> m_runCell;      // runs of >= 2 entries: cell index
-  std::vector<std::uint32_t> m_runStart;     // first entry in m_sorted
-  std::vector<std::uint32_t> m_runLength;
-  std::vector<std::uint64_t> m_runPrefix;  // exclusive prefix sum of m(m-1)/2, plus the total at the end
-  std::vector<std::uint32_t> m_blockRuns;  // runs per block of cells, scanned (dense run compaction)
-  std::vector<std::uint32_t> m_offsets;    // sparse path: first key of each box (exclusive prefix sum)
-  std::vector<std::uint64_t> m_bits;       // bit mask output (stage 10)
+  ScratchVector<std::uint32_t> m_sorted;     // m_box indices by cell (dense grid: with kHomeEntry)
+  ScratchVector<std::uint32_t> m_runCell;    // runs of >= 2 entries: cell index
+  ScratchVector<std::uint32_t> m_runStart;   // first entry in m_sorted
+  ScratchVector<std::uint32_t> m_runLength;
+  ScratchVector<std::uint64_t> m_runPrefix;  // exclusive prefix sum of m(m-1)/2, plus the total at the end
+  std::vector<std::uint32_t> m_blockRuns;    // runs per block of cells, scanned (dense run compaction)
+  std::vector<std::uint32_t> m_offsets;      // sparse path: first key of each box (exclusive prefix sum)
+  std::vector<std::uint64_t> m_bits;         // bit mask output (stage 10)
   std::vector<std::vector<std::uint64_t>> m_chunkPairs;  // output per chunk (kept for its capacity)
   std::size_t m_chunksUsed = 0;                          // chunks of m_chunkPairs filled by this search
 
@@ -397,8 +400,11 @@ void CpuPairFinder::findPairs(const ProxyArrays& proxies, const PairFinderOption
     incremental(proxies, options, pairs);
   } else {
     grid(proxies, options, pairs);
-    // Stage 11: keep this grid (dense grids only: their cells are looked up directly).
-    m_kept = m_denseBuilt;
+    // Stage 11: keep this grid (dense grids only: their cells are looked up directly) after a first search
+    // (nothing is known about motion yet: a world starts at rest) or when few proxies changed since the
+    // last one (a scene coming to rest). Where most move, the next search is a full one anyway, and keeping
+    // the grid would only hold its memory between steps.
+    m_kept = m_denseBuilt && (proxies.moved == nullptr || fewMoved(proxies));
     if (m_kept) {
       m_keptOptions = options;
       m_unchanged.assign(proxies.count, 0);
@@ -406,9 +412,36 @@ void CpuPairFinder::findPairs(const ProxyArrays& proxies, const PairFinderOption
       m_keptHuge = m_huge;
     }
   }
-  m_lastPairs.assign(pairs.begin(), pairs.end());
+  if (m_kept)
+    m_lastPairs.assign(pairs.begin(), pairs.end());
+  else
+    std::vector<std::uint64_t>().swap(m_lastPairs);
   m_stats.rebinnedProxies = std::uint32_t(m_active.size()) - m_stats.restingProxies;
+  m_stats.peakScratchBytes = scratchBytes();
+  releaseScratch();
   m_stats.scratchBytes = scratchBytes();
+}
+
+bool CpuPairFinder::fewMoved(const ProxyArrays& p) const {
+  const std::size_t limit = std::size_t(kIncrementalFraction * double(m_active.size()));
+  std::size_t moved = 0;
+  for (std::uint32_t s : m_active)
+    if (p.moved[s] && ++moved > limit) return false;
+  return true;
+}
+
+void CpuPairFinder::releaseScratch() {
+  // Between searches the finder holds only what the next search reuses: the home-cell order of the binned
+  // boxes (locality, stage 4), and while the grid is kept (stage 11) its cells, entries, unchanged flags,
+  // huge proxies and pairs; the incremental search reads the kept boxes from the proxies through the home
+  // order, so the local box copies go too.
+  auto release = [](auto& v) { std::decay_t<decltype(v)>().swap(v); };
+  release(m_active), release(m_binned), release(m_huge), release(m_extent), release(m_keys);
+  release(m_box), release(m_homeKeys), release(m_packed), release(m_isBinned), release(m_moved);
+  release(m_movedKeys), release(m_sortScratch), release(m_runCell), release(m_runStart);
+  release(m_runLength), release(m_runPrefix), release(m_blockRuns), release(m_offsets), release(m_bits);
+  release(m_chunkPairs);
+  if (!m_kept) release(m_cellStart), release(m_sorted), release(m_unchanged), release(m_keptHuge);
 }
 
 bool CpuPairFinder::keepGrid(const ProxyArrays& p, const PairFinderOptions& options) {
@@ -455,7 +488,7 @@ void CpuPairFinder::incremental(const ProxyArrays& p, const PairFinderOptions& o
   const std::size_t moved = m_moved.size();
   const std::size_t tasks = (moved + kMovedGrain - 1) / kMovedGrain;
   const std::size_t firstChunk = takeChunks(tasks);
-  std::vector<std::uint8_t>& movedHuge = m_isBinned;  // per moved index (free here: no chooseGrid)
+  ScratchVector<std::uint8_t>& movedHuge = m_isBinned;  // per moved index (free here: no chooseGrid)
   movedHuge.resize(moved);
   for (std::size_t i = 0; i < moved; ++i) movedHuge[i] = isHuge(p, m_moved[i], g.cell, options.hugeCellLimit);
   tbb::parallel_for(std::size_t(0), tasks, [&](std::size_t t) {
@@ -479,9 +512,12 @@ void CpuPairFinder::incremental(const ProxyArrays& p, const PairFinderOptions& o
       }
       forEachCell(cellRange(a, g), g, [&](std::uint32_t c) {
         for (std::uint32_t e2 = m_cellStart[c], end = m_cellStart[c + 1]; e2 < end; ++e2) {
-          const LocalBox& b = m_box[m_sorted[e2] & kEntryBox];
-          if (!m_unchanged[b.slot] || !boxesOverlap(a, b) || overlapCell(a, b, g) != c) continue;
-          if (passesFilter(a, b)) out.push_back(makePairKey(sm, b.slot));
+          // The kept entries name boxes by their place in the home order of the kept search.
+          const std::uint32_t s = m_homeOrder[m_sorted[e2] & kEntryBox];
+          if (!m_unchanged[s]) continue;
+          const LocalBox b = boxOf(p, s);
+          if (!boxesOverlap(a, b) || overlapCell(a, b, g) != c) continue;
+          if (passesFilter(a, b)) out.push_back(makePairKey(sm, s));
         }
       });
       for (std::uint32_t h : m_keptHuge)

@@ -118,8 +118,11 @@ struct PairFinderStats {
   std::uint64_t candidates = 0;
   /// Proxies kept out of the grid as huge.
   std::uint32_t hugeProxies = 0;
-  /// Bytes of scratch memory held by the finder after the search.
+  /// Bytes the finder keeps after the search (until the next one).
   std::size_t scratchBytes = 0;
+  /// Bytes of the finder's memory at the end of the search, before it released its scratch (0: not known;
+  /// then scratchBytes is all there was).
+  std::size_t peakScratchBytes = 0;
   /// True when the search kept the last grid and binned only moved proxies (stage 11).
   bool incremental = false;
   /// Active proxies neither re-binned nor tested among themselves in this search (stage 11).

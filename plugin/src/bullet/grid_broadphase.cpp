@@ -1,11 +1,13 @@
-// gpucol::GridBroadphase: Bullet's side of the grid broad phase. Proxies live in a deque (stable
-// addresses), their AABBs and filters in structure-of-arrays form for the pair finder
-// (broadphase/grid_pair_finder.h); each step's sorted pair list is diffed against the last one so the pair
-// cache only sees additions and removals (DESIGN.md, data flow).
+// gpucol::GridBroadphase: Bullet's side of the grid broad phase. Proxies live in fixed blocks (stable
+// addresses) and are the one place a box is kept; each search copies the live boxes into a
+// structure-of-arrays view for the pair finder (broadphase/grid_pair_finder.h) and drops it afterwards.
+// Each step's sorted pair list is diffed against the last one so the pair cache only sees additions and
+// removals (DESIGN.md, data flow), handed to it as the diff finds them.
 #include "gpucol/grid_broadphase.h"
 
 #include <LinearMath/btAabbUtil2.h>
 #include <tbb/blocked_range.h>
+#include <tbb/parallel_for.h>
 #include <tbb/parallel_reduce.h>
 
 #include <algorithm>
@@ -13,14 +15,12 @@
 #include <chrono>
 #include <cmath>
 #include <cstdio>
-#include <deque>
 #include <iostream>
 #include <stdexcept>
 #include <string>
 #include <vector>
 
 #include "broadphase/grid_pair_finder.h"
-#include "broadphase/pair_diff.h"
 #include "bullet/warn_once.h"
 #include "opencl/host/opencl_started.h"
 
@@ -36,9 +36,39 @@ constexpr std::uint32_t kAutoOpenClFrom = 100000;
 /// Proxies per parallel task of the per-step scan of the proxies' filters.
 constexpr std::uint32_t kScanGrain = 16384;
 
-/// A proxy with its slot in the structure-of-arrays storage.
+/// Proxies per storage block: 2^12 proxies of 56 bytes, 224 KiB; a slot's proxy is found by a shift and a
+/// mask, and blocks never move, so the addresses Bullet holds stay valid.
+constexpr std::uint32_t kBlockBits = 12;
+constexpr std::uint32_t kBlockSize = 1u << kBlockBits;
+
+/// Bits of Impl::state, per slot.
+constexpr std::uint8_t kLive = 1;       // holds a live proxy
+constexpr std::uint8_t kMoved = 2;      // box, filter or life changed since the last search
+constexpr std::uint8_t kNonFinite = 4;  // box has a NaN or infinite component: hidden from the finder
+constexpr std::uint8_t kFreed = 8;      // destroyed since the last search: its pairs already left the cache
+
+/// A proxy with its slot in the per-slot arrays (the slot fits the base class's tail padding: 56 bytes).
 struct GridProxy : btBroadphaseProxy {
   std::uint32_t slot = 0;
+};
+
+/// The finder's view of the boxes, filled from the proxies before each search and released after it: one
+/// allocation of 26 bytes per slot, not initialised (every slot is written by the fill).
+struct ViewBuffer {
+  std::unique_ptr<unsigned char[]> bytes;
+  std::size_t slots = 0;
+  static constexpr std::size_t kBytesPerSlot = 6 * sizeof(float) + 2;
+  float* axis(int a) { return reinterpret_cast<float*>(bytes.get()) + std::size_t(a) * slots; }
+  std::uint8_t* flags() { return bytes.get() + 6 * sizeof(float) * slots; }
+  std::uint8_t* moved() { return flags() + slots; }
+  void allocate(std::size_t n) {
+    if (n != slots || !bytes) bytes.reset(new unsigned char[n * kBytesPerSlot]);
+    slots = n;
+  }
+  void release() {
+    bytes.reset();
+    slots = 0;
+  }
 };
 
 }  // namespace
@@ -50,22 +80,20 @@ struct GridBroadphase::Impl {
   btOverlappingPairCache* pairCache = nullptr;
   std::unique_ptr<btHashedOverlappingPairCache> ownedCache;
 
-  std::deque<GridProxy> proxies;  // index = slot; a deque never moves its elements when it grows
-  std::vector<float> minX, minY, minZ, maxX, maxY, maxZ;
+  // Held between steps: the proxies (the only copy of each box), the filters as of the last scan (a change
+  // is a move), a state byte per slot, the free slots and the last step's pairs.
+  std::vector<std::unique_ptr<GridProxy[]>> blocks;
+  std::uint32_t slotCount = 0;
   std::vector<std::int32_t> group, mask;
-  std::vector<std::uint8_t> flags;
-  std::vector<std::uint8_t> moved;             // per slot: box, filter or life changed since the last search
-  const PairFinder* lastFinder = nullptr;      // the finder of the last search (moved is relative to it)
-  std::vector<std::uint32_t> freeSlots;        // reusable now
-  std::vector<std::uint32_t> pendingFree;      // freed since the last search: reused only after it
-  std::vector<std::uint8_t> freedSinceSearch;  // per slot: its old pairs are already gone from the cache
+  std::vector<std::uint8_t> state;
+  const PairFinder* lastFinder = nullptr;  // the finder of the last search (kMoved is relative to it)
+  std::vector<std::uint32_t> freeSlots;    // reusable now
+  std::vector<std::uint32_t> pendingFree;  // freed since the last search: reused only after it
   // A box with a NaN or infinite component gets no pairs, as Bullet's own updateAabbs drops an overflowing
   // box: the finder's cell size, grid bounds and cell indices would turn NaN (or a float-to-int conversion of
   // NaN) and spread to every proxy. Such a proxy is hidden from the finder until its box is finite again.
-  std::vector<std::uint8_t> nonFinite;  // per slot
   std::uint32_t nonFiniteCount = 0;
-  bool nonFiniteChanged = false;          // a proxy entered or left that state: the next search is a full one
-  std::vector<std::uint8_t> finderFlags;  // flags with the non-finite proxies' active bit cleared
+  bool nonFiniteChanged = false;  // a proxy entered or left that state: the next search is a full one
   std::uint32_t liveCount = 0;
   std::uint32_t staticCount = 0;  // live proxies with the static flag (GridBroadphaseStats::staticProxies)
   int nextUniqueId = 0;
@@ -74,32 +102,21 @@ struct GridBroadphase::Impl {
   std::unique_ptr<PairFinder> cpuFinder = makeCpuPairFinder();
   std::unique_ptr<PairFinder> openClFinder;
   bool openClTried = false;
-  std::vector<std::uint64_t> accepted;  // sorted keys of the pairs in the cache after the last step
-  std::vector<std::uint64_t> found;
-  std::vector<std::uint64_t> added;        // pairs new this step (sorted)
-  std::vector<std::uint64_t> refused;      // of those, the ones the cache's filter refused (sorted)
-  std::vector<std::uint64_t> removedKeys;  // pairs vanished this step (sorted)
+  // The finder's result of the last search (sorted keys) and, of those, the ones the cache's filter refused
+  // (sorted): the cache holds `current` less `refused`.
+  std::vector<std::uint64_t> current;
+  std::vector<std::uint64_t> refused;
 
-  /// The finder's view of the proxies (called once per search: it consumes nonFiniteChanged).
-  ProxyArrays view() {
-    ProxyArrays v;
-    v.count = std::uint32_t(flags.size());
-    v.minX = minX.data(), v.minY = minY.data(), v.minZ = minZ.data();
-    v.maxX = maxX.data(), v.maxY = maxY.data(), v.maxZ = maxZ.data();
-    v.group = group.data(), v.mask = mask.data(), v.flags = flags.data();
-    v.moved = moved.data();
-    if (nonFiniteCount > 0) {
-      finderFlags = flags;
-      for (std::size_t s = 0; s < flags.size(); ++s) {
-        if (nonFinite[s]) finderFlags[s] = std::uint8_t(finderFlags[s] & ~kProxyActive);
-      }
-      v.flags = finderFlags.data();
-    }
-    // A proxy hidden or shown again is a life change the finder's incremental path does not see in `moved`.
-    if (nonFiniteChanged) v.moved = nullptr;
-    nonFiniteChanged = false;
-    return v;
-  }
+  // Scratch of one step, released at its end.
+  ViewBuffer view;
+  std::vector<std::uint64_t> found;
+  std::vector<std::uint64_t> refusedNow;
+  std::vector<std::uint64_t> removedKeys;  // deferred-removal caches only
+
+  GridProxy& proxy(std::uint32_t s) { return blocks[s >> kBlockBits][s & (kBlockSize - 1)]; }
+  const GridProxy& proxy(std::uint32_t s) const { return blocks[s >> kBlockBits][s & (kBlockSize - 1)]; }
+  /// A live proxy with a finite box (the ones queries and the finder see).
+  bool visible(std::uint32_t s) const { return (state[s] & (kLive | kNonFinite)) == kLive; }
 
   static std::uint8_t flagsOf(int filterGroup) {
     // Bullet gives static and kinematic objects the StaticFilter group
@@ -107,9 +124,68 @@ struct GridBroadphase::Impl {
     return std::uint8_t(kProxyActive | ((filterGroup & btBroadphaseProxy::StaticFilter) ? kProxyStatic : 0));
   }
 
+  /// Takes each live proxy's filter from the proxy (Bullet code may edit it after creation); with `fill`,
+  /// also writes the finder's view of every slot and clears the kMoved bits (the view carries them). In
+  /// parallel: each slot is written by one task only. Returns true when a filter changed.
+  bool scan(bool fill) {
+    // Proxies whose static bit flips here (rare: a filter edited on the proxy).
+    std::atomic<std::int64_t> staticDelta{0};
+    float* const lo[3] = {view.axis(0), view.axis(1), view.axis(2)};
+    float* const hi[3] = {view.axis(3), view.axis(4), view.axis(5)};
+    std::uint8_t* const flags = view.flags();
+    std::uint8_t* const moved = view.moved();
+    const bool changed = tbb::parallel_reduce(
+        tbb::blocked_range<std::uint32_t>(0, slotCount, kScanGrain), false,
+        [&](const tbb::blocked_range<std::uint32_t>& r, bool changed) {
+          for (std::uint32_t s = r.begin(); s != r.end(); ++s) {
+            std::uint8_t st = state[s];
+            if (st & kLive) {
+              const GridProxy& p = proxy(s);
+              if (group[s] != p.m_collisionFilterGroup || mask[s] != p.m_collisionFilterMask) {
+                const bool wasStatic = flagsOf(group[s]) & kProxyStatic;
+                if (wasStatic != bool(flagsOf(p.m_collisionFilterGroup) & kProxyStatic))
+                  staticDelta += wasStatic ? -1 : 1;
+                group[s] = p.m_collisionFilterGroup;
+                mask[s] = p.m_collisionFilterMask;
+                st |= kMoved;
+                changed = true;
+              }
+              if (fill) {
+                for (int a = 0; a < 3; ++a) lo[a][s] = p.m_aabbMin[a], hi[a][s] = p.m_aabbMax[a];
+                flags[s] = (st & kNonFinite) ? 0 : flagsOf(group[s]);
+              }
+            } else if (fill) {
+              for (int a = 0; a < 3; ++a) lo[a][s] = 0.0f, hi[a][s] = 0.0f;
+              flags[s] = 0;
+            }
+            if (fill) {
+              moved[s] = std::uint8_t((st & kMoved) != 0);
+              st = std::uint8_t(st & ~kMoved);
+            }
+            state[s] = st;
+          }
+          return changed;
+        },
+        [](bool a, bool b) { return a || b; });
+    staticCount = std::uint32_t(std::int64_t(staticCount) + staticDelta.load());
+    return changed;
+  }
+
+  /// The finder's view of the filled buffer (consumes nonFiniteChanged).
+  ProxyArrays finderView() {
+    ProxyArrays v;
+    v.count = slotCount;
+    v.minX = view.axis(0), v.minY = view.axis(1), v.minZ = view.axis(2);
+    v.maxX = view.axis(3), v.maxY = view.axis(4), v.maxZ = view.axis(5);
+    v.group = group.data(), v.mask = mask.data(), v.flags = view.flags();
+    v.moved = view.moved();
+    // A proxy hidden or shown again is a life change the finder's incremental path does not see in `moved`.
+    if (nonFiniteChanged) v.moved = nullptr;
+    nonFiniteChanged = false;
+    return v;
+  }
+
   void store(std::uint32_t s, const btVector3& lo, const btVector3& hi) {
-    minX[s] = lo.x(), minY[s] = lo.y(), minZ[s] = lo.z();
-    maxX[s] = hi.x(), maxY[s] = hi.y(), maxZ[s] = hi.z();
     bool finite = true;
     for (int a = 0; a < 3; ++a) finite = finite && std::isfinite(lo[a]) && std::isfinite(hi[a]);
     if (!finite) {
@@ -122,8 +198,8 @@ struct GridBroadphase::Impl {
   }
 
   void setNonFinite(std::uint32_t s, bool value) {
-    if (bool(nonFinite[s]) == value) return;
-    nonFinite[s] = value;
+    if (bool(state[s] & kNonFinite) == value) return;
+    state[s] = std::uint8_t(value ? state[s] | kNonFinite : state[s] & ~kNonFinite);
     nonFiniteCount += value ? 1 : -1;
     nonFiniteChanged = true;
   }
@@ -163,16 +239,19 @@ struct GridBroadphase::Impl {
     return o;
   }
 
+  void diffAndUpdateCache(btDispatcher* dispatcher, GridBroadphaseStats& st);
   void removeDeferred(btDispatcher* dispatcher);
 
-  std::size_t memoryBytes(const PairFinder& finder) const {
-    return proxies.size() * sizeof(GridProxy) +
-           flags.capacity() * (6 * sizeof(float) + 2 * sizeof(std::int32_t) + 3) +
-           (freeSlots.capacity() + pendingFree.capacity()) * 4 +
-           (accepted.capacity() + found.capacity() + added.capacity() + refused.capacity() +
-            removedKeys.capacity()) *
-               8 +
-           finder.stats().scratchBytes;
+  /// Bytes held between steps (GridBroadphaseStats::memoryBytes): proxy blocks, block table, filters, state,
+  /// free-slot lists, the last pair list and its refused part, and the finder's kept memory.
+  std::size_t heldBytes() const {
+    std::size_t bytes = blocks.size() * kBlockSize * sizeof(GridProxy) + blocks.capacity() * sizeof(void*);
+    bytes += (group.capacity() + mask.capacity()) * sizeof(std::int32_t) + state.capacity();
+    bytes += (freeSlots.capacity() + pendingFree.capacity()) * sizeof(std::uint32_t);
+    bytes += (current.capacity() + refused.capacity()) * sizeof(std::uint64_t);
+    for (const PairFinder* f : {cpuFinder.get(), openClFinder.get()})
+      if (f) bytes += f->stats().scratchBytes;
+    return bytes;
   }
 };
 
@@ -200,27 +279,23 @@ btBroadphaseProxy* GridBroadphase::createProxy(const btVector3& aabbMin, const b
     slot = d.freeSlots.back();
     d.freeSlots.pop_back();
   } else {
-    if (d.proxies.size() >= std::size_t(0xffffffffu))
+    if (d.slotCount >= 0xffffffffu)
       throw std::length_error("gpucol::GridBroadphase: more than 2^32 - 1 proxies");
-    slot = std::uint32_t(d.proxies.size());
-    d.proxies.emplace_back();
-    for (auto* v : {&d.minX, &d.minY, &d.minZ, &d.maxX, &d.maxY, &d.maxZ}) v->push_back(0.0f);
-    d.group.push_back(0), d.mask.push_back(0), d.flags.push_back(0), d.freedSinceSearch.push_back(0);
-    d.moved.push_back(0);
-    d.nonFinite.push_back(0);
+    slot = d.slotCount++;
+    if ((slot >> kBlockBits) >= d.blocks.size()) d.blocks.emplace_back(new GridProxy[kBlockSize]);
+    d.group.push_back(0), d.mask.push_back(0), d.state.push_back(0);
   }
-  GridProxy& p = d.proxies[slot];
+  GridProxy& p = d.proxy(slot);
   static_cast<btBroadphaseProxy&>(p) =
       btBroadphaseProxy(aabbMin, aabbMax, userPtr, collisionFilterGroup, collisionFilterMask);
   (void)shapeType;  // Bullet 3 proxies no longer store the shape type
   p.m_uniqueId = ++d.nextUniqueId;
   p.slot = slot;
+  d.state[slot] = kLive | kMoved;
   d.store(slot, aabbMin, aabbMax);
   d.group[slot] = collisionFilterGroup;
   d.mask[slot] = collisionFilterMask;
-  d.flags[slot] = Impl::flagsOf(collisionFilterGroup);
-  if (d.flags[slot] & kProxyStatic) ++d.staticCount;
-  d.moved[slot] = 1;
+  if (Impl::flagsOf(collisionFilterGroup) & kProxyStatic) ++d.staticCount;
   ++d.liveCount;
   d.dirty = true;
   return &p;
@@ -230,16 +305,15 @@ void GridBroadphase::destroyProxy(btBroadphaseProxy* proxy, btDispatcher* dispat
   Impl& d = *m_impl;
   GridProxy* p = static_cast<GridProxy*>(proxy);
   const std::uint32_t slot = p->slot;
-  if (slot >= d.proxies.size() || &d.proxies[slot] != p || !(d.flags[slot] & kProxyActive))
+  if (slot >= d.slotCount || &d.proxy(slot) != p || !(d.state[slot] & kLive))
     throw std::invalid_argument(
         "gpucol::GridBroadphase::destroyProxy: proxy does not belong to this broad phase");
   // Its pairs leave the cache now (algorithms and manifolds freed through the dispatcher); the keys in
-  // `accepted` are dropped at the next search, and the slot is reused only after that search.
+  // `current` are dropped at the next search, and the slot is reused only after that search.
   d.pairCache->removeOverlappingPairsContainingProxy(proxy, dispatcher);
-  if (d.flags[slot] & kProxyStatic) --d.staticCount;
-  d.flags[slot] = 0;
+  if (Impl::flagsOf(d.group[slot]) & kProxyStatic) --d.staticCount;
   d.setNonFinite(slot, false);
-  d.freedSinceSearch[slot] = 1;
+  d.state[slot] = kFreed | kMoved;
   d.pendingFree.push_back(slot);
   --d.liveCount;
   d.dirty = true;
@@ -248,17 +322,19 @@ void GridBroadphase::destroyProxy(btBroadphaseProxy* proxy, btDispatcher* dispat
 void GridBroadphase::setAabb(btBroadphaseProxy* proxy, const btVector3& aabbMin, const btVector3& aabbMax,
                              btDispatcher* /*dispatcher*/) {
   Impl& d = *m_impl;
+  // Unchanged boxes (Bullet re-sends every AABB by default, m_forceUpdateAllAabbs) leave the step clean,
+  // so a scene at rest costs no search.
+  // x, y, z only: btVector3's operator== also compares the unused fourth component.
+  const btVector3 &lo = proxy->m_aabbMin, &hi = proxy->m_aabbMax;
+  if (lo.x() == aabbMin.x() && lo.y() == aabbMin.y() && lo.z() == aabbMin.z() && hi.x() == aabbMax.x() &&
+      hi.y() == aabbMax.y() && hi.z() == aabbMax.z())
+    return;
   const std::uint32_t s = static_cast<GridProxy*>(proxy)->slot;
   proxy->m_aabbMin = aabbMin;
   proxy->m_aabbMax = aabbMax;
-  // Unchanged boxes (Bullet re-sends every AABB by default, m_forceUpdateAllAabbs) leave the step clean,
-  // so a scene at rest costs no search.
-  if (d.minX[s] != aabbMin.x() || d.minY[s] != aabbMin.y() || d.minZ[s] != aabbMin.z() ||
-      d.maxX[s] != aabbMax.x() || d.maxY[s] != aabbMax.y() || d.maxZ[s] != aabbMax.z()) {
-    d.store(s, aabbMin, aabbMax);
-    d.moved[s] = 1;
-    d.dirty = true;
-  }
+  d.state[s] |= kMoved;
+  d.store(s, aabbMin, aabbMax);
+  d.dirty = true;
 }
 
 void GridBroadphase::getAabb(btBroadphaseProxy* proxy, btVector3& aabbMin, btVector3& aabbMax) const {
@@ -273,9 +349,9 @@ void GridBroadphase::rayTest(const btVector3& rayFrom, const btVector3& /*rayTo*
   // btDbvtBroadphase reads m_lambda_max once, before its traversal, and tests boxes grown by the ray's own
   // box (bounds = [min - aabbMax, max - aabbMin]) with btRayAabb2 from t = 0; so do we, in slot order.
   const btScalar lambdaMax = rayCallback.m_lambda_max;
-  for (std::uint32_t s = 0; s < d.flags.size(); ++s) {
-    if (!(d.flags[s] & kProxyActive) || d.nonFinite[s]) continue;
-    GridProxy& p = d.proxies[s];
+  for (std::uint32_t s = 0; s < d.slotCount; ++s) {
+    if (!d.visible(s)) continue;
+    GridProxy& p = d.proxy(s);
     const btVector3 bounds[2] = {p.m_aabbMin - aabbMax, p.m_aabbMax - aabbMin};
     btScalar tmin = 0;
     if (btRayAabb2(rayFrom, rayCallback.m_rayDirectionInverse, rayCallback.m_signs, bounds, tmin, 0,
@@ -287,12 +363,15 @@ void GridBroadphase::rayTest(const btVector3& rayFrom, const btVector3& /*rayTo*
 void GridBroadphase::aabbTest(const btVector3& aabbMin, const btVector3& aabbMax,
                               btBroadphaseAabbCallback& callback) {
   Impl& d = *m_impl;
-  for (std::uint32_t s = 0; s < d.flags.size(); ++s) {
-    if (!(d.flags[s] & kProxyActive) || d.nonFinite[s]) continue;
+  for (std::uint32_t s = 0; s < d.slotCount; ++s) {
+    if (!d.visible(s)) continue;
+    GridProxy& p = d.proxy(s);
+    const btVector3& lo = p.m_aabbMin;
+    const btVector3& hi = p.m_aabbMax;
     // Touching counts, as in btDbvtAabbMm's Intersect.
-    if (d.minX[s] <= aabbMax.x() && d.maxX[s] >= aabbMin.x() && d.minY[s] <= aabbMax.y() &&
-        d.maxY[s] >= aabbMin.y() && d.minZ[s] <= aabbMax.z() && d.maxZ[s] >= aabbMin.z())
-      callback.process(&d.proxies[s]);
+    if (lo.x() <= aabbMax.x() && hi.x() >= aabbMin.x() && lo.y() <= aabbMax.y() && hi.y() >= aabbMin.y() &&
+        lo.z() <= aabbMax.z() && hi.z() >= aabbMin.z())
+      callback.process(&p);
   }
 }
 
@@ -300,44 +379,26 @@ void GridBroadphase::calculateOverlappingPairs(btDispatcher* dispatcher) {
   Impl& d = *m_impl;
   GridBroadphaseStats st;
   st.proxies = d.liveCount;
-  // Proxies whose static bit flips in the scan below (rare: a filter edited on the proxy).
-  std::atomic<std::int64_t> staticDelta{0};
-  // Filters may be edited on the proxy after creation (Bullet code does so); take them from there. In
-  // parallel: each slot is written by one task only (this scan of every proxy was serial work at 1M).
-  const bool filterChanged = tbb::parallel_reduce(
-      tbb::blocked_range<std::uint32_t>(0, std::uint32_t(d.flags.size()), kScanGrain), false,
-      [&](const tbb::blocked_range<std::uint32_t>& r, bool changed) {
-        // A deque iterator steps through the proxies; indexing the deque costs a division per proxy.
-        auto proxy = d.proxies.cbegin() + std::ptrdiff_t(r.begin());
-        for (std::uint32_t s = r.begin(); s != r.end(); ++s, ++proxy) {
-          if (!(d.flags[s] & kProxyActive)) continue;
-          const GridProxy& p = *proxy;
-          if (d.group[s] != p.m_collisionFilterGroup || d.mask[s] != p.m_collisionFilterMask) {
-            d.group[s] = p.m_collisionFilterGroup;
-            d.mask[s] = p.m_collisionFilterMask;
-            const bool wasStatic = d.flags[s] & kProxyStatic;
-            d.flags[s] = Impl::flagsOf(p.m_collisionFilterGroup);
-            if (wasStatic != bool(d.flags[s] & kProxyStatic)) staticDelta += wasStatic ? -1 : 1;
-            d.moved[s] = 1;
-            changed = true;
-          }
-        }
-        return changed;
-      },
-      [](bool a, bool b) { return a || b; });
-  d.staticCount = std::uint32_t(std::int64_t(d.staticCount) + staticDelta.load());
+  // When a box already changed, the scan fills the finder's view as it goes; otherwise it only looks for
+  // filter changes, and the view is filled when it found one.
+  if (d.dirty) d.view.allocate(d.slotCount);
+  if (d.scan(d.dirty)) {
+    d.dirty = true;
+    d.view.allocate(d.slotCount);
+    d.scan(true);
+  }
   st.staticProxies = d.staticCount;
-  if (filterChanged) d.dirty = true;
   if (!d.dirty) {
     st.overlappingPairs = d.stats.overlappingPairs;
     st.memoryBytes = d.stats.memoryBytes;
+    st.peakBytes = d.stats.memoryBytes;
     d.stats = st;
     return;
   }
   st.searched = true;
   PairFinder& finder = d.chooseFinder(st);
-  ProxyArrays view = d.view();
-  // `moved` is relative to the previous search of the same finder; after a switch of finder, all moved.
+  ProxyArrays view = d.finderView();
+  // kMoved is relative to the previous search of the same finder; after a switch of finder, all moved.
   if (&finder != d.lastFinder) view.moved = nullptr;
   const auto searchStart = std::chrono::steady_clock::now();
   finder.findPairs(view, d.options(), d.found);
@@ -347,67 +408,83 @@ void GridBroadphase::calculateOverlappingPairs(btDispatcher* dispatcher) {
   st.chooseMs = fs.chooseMs, st.binMs = fs.binMs, st.testMs = fs.testMs, st.hugeMs = fs.hugeMs;
   st.sortMs = fs.sortMs;
   d.lastFinder = &finder;
-  std::fill(d.moved.begin(), d.moved.end(), std::uint8_t(0));
-  st.usedGrid = finder.stats().usedGrid;
-  st.restingProxies = finder.stats().restingProxies;
-  st.rebinnedProxies = finder.stats().rebinnedProxies;
-  st.cellSize = finder.stats().cellSize;
+  st.usedGrid = fs.usedGrid;
+  st.restingProxies = fs.restingProxies;
+  st.rebinnedProxies = fs.rebinnedProxies;
+  st.cellSize = fs.cellSize;
   st.overlappingPairs = d.found.size();
+  // The peak: everything held after the step (this step's pair list included), plus the view, the finder's
+  // scratch at the end of its search (nothing is released before then) and the last step's pair list.
+  const std::size_t stepBytes = d.view.slots * ViewBuffer::kBytesPerSlot +
+                                std::max(fs.peakScratchBytes, fs.scratchBytes) - fs.scratchBytes;
+  d.view.release();
+  d.diffAndUpdateCache(dispatcher, st);
+  for (std::uint32_t s : d.pendingFree) {
+    d.state[s] = std::uint8_t(d.state[s] & ~kFreed);
+    d.freeSlots.push_back(s);
+  }
+  d.pendingFree.clear();
+  d.dirty = false;
+  st.memoryBytes = d.heldBytes();
+  st.peakBytes = st.memoryBytes + stepBytes + d.found.capacity() * 8;
+  std::vector<std::uint64_t>().swap(d.found);
+  st.cacheMs =
+      std::chrono::duration<double, std::milli>(std::chrono::steady_clock::now() - cacheStart).count();
+  d.stats = st;
+}
 
-  // The pairs in the cache after this step are `found` less the additions the cache refuses: the diff
-  // collects the changes, the cache gets the removals then the additions (each in key order), and `found`
-  // becomes the new `accepted`, without a third pair-sized list.
-  d.added.clear();
-  d.removedKeys.clear();
-  diffSortedPairs(
-      d.accepted, d.found, [&](std::uint64_t key) { d.added.push_back(key); },
-      [&](std::uint64_t key) {
-        // Pairs of destroyed proxies were removed by destroyProxy already.
-        if (!d.freedSinceSearch[std::uint32_t(key >> 32)] && !d.freedSinceSearch[std::uint32_t(key)])
-          d.removedKeys.push_back(key);
-      },
-      [](std::uint64_t) {});
-  auto proxy0 = [&](std::uint64_t key) { return &d.proxies[std::uint32_t(key >> 32)]; };
-  auto proxy1 = [&](std::uint64_t key) { return &d.proxies[std::uint32_t(key)]; };
-  btOverlappingPairCache* cache = d.pairCache;
-  st.removed = d.removedKeys.size();
-  if (!cache->hasDeferredRemoval()) {
-    for (const std::uint64_t key : d.removedKeys)
+/// The diff of the last pair list (`current`) with this step's (`found`), each change handed to the cache
+/// as it is found, in two walks in key order so the cache sees the removals first, then the additions (its
+/// pair array then never holds both, and ends in the same order as when the changes were listed first):
+/// pairs only in `current` that the cache holds are removed (those of destroyed proxies went with
+/// destroyProxy already); pairs only in `found`, and refused ones found again (the cache's filter callback
+/// may change its mind), are offered to the cache. Then `found` becomes `current`, and the old list is
+/// `found`, freed by the caller.
+void GridBroadphase::Impl::diffAndUpdateCache(btDispatcher* dispatcher, GridBroadphaseStats& st) {
+  btOverlappingPairCache* cache = pairCache;
+  const bool deferred = cache->hasDeferredRemoval();
+  auto proxy0 = [&](std::uint64_t key) { return &proxy(std::uint32_t(key >> 32)); };
+  auto proxy1 = [&](std::uint64_t key) { return &proxy(std::uint32_t(key)); };
+  refusedNow.clear();
+  removedKeys.clear();
+  const std::size_t before = current.size(), now = found.size();
+  // Walk 1: removals. `refused` is walked along with `current` (both sorted).
+  std::size_t r = 0;
+  for (std::size_t i = 0, j = 0; i < before; ++i) {
+    const std::uint64_t key = current[i];
+    while (j < now && found[j] < key) ++j;
+    if (j < now && found[j] == key) continue;
+    while (r < refused.size() && refused[r] < key) ++r;
+    if (r < refused.size() && refused[r] == key) continue;  // never in the cache
+    if ((state[std::uint32_t(key >> 32)] & kFreed) || (state[std::uint32_t(key)] & kFreed)) continue;
+    ++st.removed;
+    if (deferred)
+      removedKeys.push_back(key);
+    else
       cache->removeOverlappingPair(proxy0(key), proxy1(key), dispatcher);
   }
-  d.refused.clear();
-  for (const std::uint64_t key : d.added) {
-    // The cache's own filter (overlap filter callback) has the last word; a refused pair is asked again
-    // next step while it still overlaps, since the callback may change its mind.
+  // Walk 2: additions, and refused pairs asked again.
+  r = 0;
+  for (std::size_t i = 0, j = 0; j < now; ++j) {
+    const std::uint64_t key = found[j];
+    while (i < before && current[i] < key) ++i;
+    if (i < before && current[i] == key) {
+      while (r < refused.size() && refused[r] < key) ++r;
+      if (r == refused.size() || refused[r] != key) continue;  // kept in the cache
+    }
+    // The cache's own filter (overlap filter callback) has the last word.
     if (!cache->needsBroadphaseCollision(proxy0(key), proxy1(key))) {
-      d.refused.push_back(key);
+      refusedNow.push_back(key);
       continue;
     }
     cache->addOverlappingPair(proxy0(key), proxy1(key));
     ++st.added;
   }
-  if (!d.refused.empty()) {
-    // Both lists are sorted: drop the refused keys from `found` in one walk.
-    std::size_t r = 0, kept = 0;
-    for (const std::uint64_t key : d.found) {
-      while (r < d.refused.size() && d.refused[r] < key) ++r;
-      if (r == d.refused.size() || d.refused[r] != key) d.found[kept++] = key;
-    }
-    d.found.resize(kept);
-  }
-  d.accepted.swap(d.found);
-  if (!cache->hasDeferredRemoval()) d.removedKeys.clear();
-  if (!d.removedKeys.empty()) d.removeDeferred(dispatcher);  // handled in one pass over the cache
-  for (std::uint32_t s : d.pendingFree) {
-    d.freedSinceSearch[s] = 0;
-    d.freeSlots.push_back(s);
-  }
-  d.pendingFree.clear();
-  d.dirty = false;
-  st.memoryBytes = d.memoryBytes(finder);
-  st.cacheMs =
-      std::chrono::duration<double, std::milli>(std::chrono::steady_clock::now() - cacheStart).count();
-  d.stats = st;
+  current.swap(found);
+  refused.swap(refusedNow);
+  if (refusedNow.capacity() > 2 * refused.size() + 16) std::vector<std::uint64_t>().swap(refusedNow);
+  if (!removedKeys.empty()) removeDeferred(dispatcher);  // handled in one pass over the cache
+  std::vector<std::uint64_t>().swap(removedKeys);
 }
 
 /// Caches with deferred removal (btSortedOverlappingPairCache by default) ignore removeOverlappingPair and
@@ -445,14 +522,14 @@ const btOverlappingPairCache* GridBroadphase::getOverlappingPairCache() const {
 void GridBroadphase::getBroadphaseAabb(btVector3& aabbMin, btVector3& aabbMax) const {
   const Impl& d = *m_impl;
   bool any = false;
-  for (std::uint32_t s = 0; s < d.flags.size(); ++s) {
-    if (!(d.flags[s] & kProxyActive) || d.nonFinite[s]) continue;
-    const btVector3 lo(d.minX[s], d.minY[s], d.minZ[s]), hi(d.maxX[s], d.maxY[s], d.maxZ[s]);
+  for (std::uint32_t s = 0; s < d.slotCount; ++s) {
+    if (!d.visible(s)) continue;
+    const GridProxy& p = d.proxy(s);
     if (!any) {
-      aabbMin = lo, aabbMax = hi, any = true;
+      aabbMin = p.m_aabbMin, aabbMax = p.m_aabbMax, any = true;
     } else {
-      aabbMin.setMin(lo);
-      aabbMax.setMax(hi);
+      aabbMin.setMin(p.m_aabbMin);
+      aabbMax.setMax(p.m_aabbMax);
     }
   }
   if (!any) aabbMin = aabbMax = btVector3(0, 0, 0);
@@ -461,17 +538,15 @@ void GridBroadphase::getBroadphaseAabb(btVector3& aabbMin, btVector3& aabbMax) c
 void GridBroadphase::resetPool(btDispatcher* /*dispatcher*/) {
   Impl& d = *m_impl;
   if (d.liveCount != 0) return;
-  d.proxies.clear();
-  for (auto* v : {&d.minX, &d.minY, &d.minZ, &d.maxX, &d.maxY, &d.maxZ}) std::vector<float>().swap(*v);
+  std::vector<std::unique_ptr<GridProxy[]>>().swap(d.blocks);
+  d.slotCount = 0;
   std::vector<std::int32_t>().swap(d.group);
   std::vector<std::int32_t>().swap(d.mask);
-  std::vector<std::uint8_t>().swap(d.flags);
-  std::vector<std::uint8_t>().swap(d.freedSinceSearch);
-  std::vector<std::uint8_t>().swap(d.moved);
-  std::vector<std::uint8_t>().swap(d.nonFinite);
+  std::vector<std::uint8_t>().swap(d.state);
   d.nonFiniteCount = 0;
+  d.staticCount = 0;
   d.lastFinder = nullptr;
-  d.freeSlots.clear(), d.pendingFree.clear(), d.accepted.clear();
+  d.freeSlots.clear(), d.pendingFree.clear(), d.current.clear(), d.refused.clear();
   d.nextUniqueId = 0;
   d.dirty = true;
 }
