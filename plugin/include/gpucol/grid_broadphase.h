@@ -49,7 +49,7 @@ struct GridBroadphaseStats {
   std::uint32_t rebinnedProxies = 0;
   /// Edge of the grid's cubic cells (0 without grid).
   float cellSize = 0.0f;
-  /// Bytes the broad phase holds between steps: the proxies Bullet holds (56 bytes each, in blocks of 4096),
+  /// Bytes the broad phase holds between steps: the proxies Bullet holds (56 bytes each, in blocks of 256),
   /// the filter and state per slot (9 bytes), free-slot lists, the last step's sorted pair keys (8 bytes
   /// per pair, plus the few the cache's filter refused), and what the pair finder keeps between searches
   /// (the CPU finder: the home-cell order of the binned boxes, 8 bytes per proxy; while few proxies move,

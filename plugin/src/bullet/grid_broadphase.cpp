@@ -36,9 +36,10 @@ constexpr std::uint32_t kAutoOpenClFrom = 100000;
 /// Proxies per parallel task of the per-step scan of the proxies' filters.
 constexpr std::uint32_t kScanGrain = 16384;
 
-/// Proxies per storage block: 2^12 proxies of 56 bytes, 224 KiB; a slot's proxy is found by a shift and a
+/// Proxies per storage block: 2^8 proxies of 56 bytes, 14 KiB (small scenes do not pay for a large last
+/// block: 4096 per block held 229 bytes per proxy at 1,000 proxies); a slot's proxy is found by a shift and a
 /// mask, and blocks never move, so the addresses Bullet holds stay valid.
-constexpr std::uint32_t kBlockBits = 12;
+constexpr std::uint32_t kBlockBits = 8;
 constexpr std::uint32_t kBlockSize = 1u << kBlockBits;
 
 /// Bits of Impl::state, per slot.
