@@ -23,10 +23,43 @@ static_assert(sizeof(GpucolGridParams) == 32, "GpucolGridParams layout differs f
 static_assert(offsetof(GpucolGridParams, invCell) == 12 && offsetof(GpucolGridParams, dimX) == 16 &&
                   offsetof(GpucolGridParams, dimZ) == 24,
               "GpucolGridParams offsets differ from the kernels'");
+static_assert(sizeof(GpucolProxyUpdate) == 40 && offsetof(GpucolProxyUpdate, group) == 24 &&
+                  offsetof(GpucolProxyUpdate, slot) == 32 && offsetof(GpucolProxyUpdate, flags) == 36,
+              "GpucolProxyUpdate layout differs from the kernels'");
 static_assert(GPUCOL_PROXY_ACTIVE == kProxyActive && GPUCOL_PROXY_STATIC == kProxyStatic,
               "proxy flag bits differ between grid_params.h and grid_pair_finder.h");
 
 namespace {
+
+/// Stage 11: the kept grid is reused while at most this fraction of the active proxies changed since it was
+/// built (measured on PoCL, see the README's broad phase section); beyond it a full search is about as fast.
+constexpr double kIncrementalFraction = 0.125;
+
+/// Stage 3's test on the host, as the CPU finder makes it: a box that covers more than `limit` cells of edge
+/// `cell` (estimated from its extents) is tested against all instead of being binned.
+bool isHuge(const ProxyArrays& p, std::uint32_t s, float cell, std::uint32_t limit) {
+  const double inv = 1.0 / double(cell);
+  const double covered = (double(p.maxX[s] - p.minX[s]) * inv + 1.0) *
+                         (double(p.maxY[s] - p.minY[s]) * inv + 1.0) *
+                         (double(p.maxZ[s] - p.minZ[s]) * inv + 1.0);
+  return covered > double(limit);
+}
+
+/// Stages 4-6 of one list of binned proxies on the device: their (cell, slot) entries sorted by cell, the
+/// runs of equal cells, and the runs' scanned candidate counts. A full search fills one and keeps it for
+/// stage 11; the proxies moved since then get their own.
+struct Bins {
+  DeviceArray slots, counts, cellKeys, keySlots, runHeads, runStart, runCell, runPairs;
+  std::uint32_t count = 0;       ///< Binned proxies.
+  std::uint32_t keys = 0;        ///< (cell, slot) entries.
+  std::uint32_t runs = 0;        ///< Runs of equal cells (runStart has runs + 1 entries).
+  std::uint32_t candidates = 0;  ///< Sum of m(m-1)/2 over the runs.
+  /// Device bytes held.
+  std::size_t bytes() const {
+    return slots.bytes + counts.bytes + cellKeys.bytes + keySlots.bytes + runHeads.bytes + runStart.bytes +
+           runCell.bytes + runPairs.bytes;
+  }
+};
 
 class OpenClPairFinder final : public PairFinder {
  public:
@@ -41,13 +74,24 @@ class OpenClPairFinder final : public PairFinder {
 
  private:
   struct Kernels {
-    cl::Kernel countCells, writeKeys, markRuns, writeRuns, countRunPairs, testCandidates, testHuge, bruteTest;
+    cl::Kernel countCells, writeKeys, markRuns, writeRuns, countRunPairs, testCandidates, testHuge, bruteTest,
+        updateProxies, testMoved;
   };
   Kernels& kernels(bool newton);
   void chooseGrid(const ProxyArrays& p, const PairFinderOptions& options, GpucolGridParams& g);
   void upload(const ProxyArrays& p);
+  bool keepGrid(const ProxyArrays& p, const PairFinderOptions& options);
+  void sendChanges(const ProxyArrays& p, Kernels& k);
+  void bin(Kernels& k, const std::vector<std::uint32_t>& slots, const GpucolGridParams& grid, Bins& b);
+  void testBins(Kernels& k, Bins& b, const cl::Buffer& out, std::uint32_t capacity, cl_uint slotBits);
+  void testHuge(Kernels& k, const DeviceArray& huge, std::uint32_t hugeCount, const DeviceArray& isHuge,
+                const cl::Buffer& out, std::uint32_t capacity, cl_uint slotBits);
+  void fullSearch(const ProxyArrays& p, const PairFinderOptions& options, Kernels& k,
+                  std::vector<std::uint64_t>& pairs);
+  void incremental(const ProxyArrays& p, const PairFinderOptions& options, Kernels& k,
+                   std::vector<std::uint64_t>& pairs);
+  void readPairs(cl_uint slotBits, std::vector<std::uint64_t>& pairs);
   void setProxyArgs(cl::Kernel& kernel);
-  std::size_t launchSize(const cl::Kernel& kernel, std::uint64_t items, std::size_t& local);
   void launch(cl::Kernel& kernel, std::uint64_t items);
   void launchStrided(cl::Kernel& kernel, std::uint64_t items);
 
@@ -64,9 +108,27 @@ class OpenClPairFinder final : public PairFinder {
   std::vector<float> m_extent;
   std::vector<std::uint64_t> m_packed;
   DeviceArray m_minX, m_minY, m_minZ, m_maxX, m_maxY, m_maxZ, m_group, m_mask, m_flags;
-  DeviceArray m_grid, m_activeBuf, m_binnedBuf, m_hugeBuf, m_isHugeBuf, m_counts, m_cellKeys, m_keySlots,
-      m_runHeads, m_runStart, m_runCell, m_runPairs, m_pairs, m_pairValues, m_counter, m_overflow;
-  std::uint32_t m_lastPairs = 0;
+  DeviceArray m_grid, m_activeBuf, m_hugeBuf, m_isHugeBuf, m_pairs, m_pairValues, m_counter, m_overflow;
+  Bins m_bins;                    // the last full grid search's entries and runs (kept for stage 11)
+  std::uint32_t m_lastPairs = 0;  // pairs the device found in the last search (sizes the next output)
+
+  // Stage 11: what the device keeps of the last full grid search, and what changed since.
+  bool m_kept = false;                     // m_bins, m_grid, m_hugeBuf and m_restingBuf describe that search
+  PairFinderOptions m_keptOptions;         // the options it ran with
+  GpucolGridParams m_keptGrid{};           // its grid
+  float m_keptCell = 0;                    // its cell edge (stage 3's test for moved proxies)
+  std::uint32_t m_keptHugeCount = 0;       // its huge proxies, in m_hugeBuf
+  std::uint32_t m_syncedCount = 0;         // slots whose boxes, filters and flags the device arrays hold
+  std::vector<std::uint8_t> m_resting;     // per slot: active in that search and unchanged since
+  std::vector<std::uint64_t> m_keptPairs;  // the pairs of the previous search
+  std::vector<std::uint32_t> m_moved;      // active slots changed since that search, ascending
+  std::vector<std::uint32_t> m_movedBinned;  // of those, the binned ones
+  std::vector<std::uint32_t> m_movedHuge;    // and the huge ones
+  std::vector<GpucolProxyUpdate> m_updates;  // slots to write into the device's arrays this search
+  std::vector<std::uint64_t> m_carried;      // pairs of two resting proxies, carried over
+  std::vector<std::uint64_t> m_found;        // pairs with a moved proxy, found on the device
+  DeviceArray m_restingBuf, m_updatesBuf, m_movedHugeBuf, m_isMovedHugeBuf;
+  Bins m_movedBins;  // the binned moved proxies' own entries on the kept grid
 };
 
 OpenClPairFinder::Kernels& OpenClPairFinder::kernels(bool newton) {
@@ -82,6 +144,8 @@ OpenClPairFinder::Kernels& OpenClPairFinder::kernels(bool newton) {
     k.testCandidates = cl::Kernel(program, "grid_test_candidates");
     k.testHuge = cl::Kernel(program, "grid_test_huge");
     k.bruteTest = cl::Kernel(program, "brute_test_pairs");
+    k.updateProxies = cl::Kernel(program, "grid_update_proxies");
+    k.testMoved = cl::Kernel(program, "grid_test_moved");
     m_kernelsBuilt[newton ? 1 : 0] = true;
   }
   return k;
@@ -104,6 +168,7 @@ void OpenClPairFinder::chooseGrid(const ProxyArrays& p, const PairFinderOptions&
   }
   g = GpucolGridParams{grid.origin[0], grid.origin[1], grid.origin[2], grid.invCell,
                        grid.dims[0],   grid.dims[1],   grid.dims[2],   0};
+  m_keptCell = grid.cell;
   if (m_binned.empty()) return;
   m_stats.cellSize = grid.cell;
   for (int a = 0; a < 3; ++a) m_stats.dims[a] = grid.dims[a];
@@ -122,6 +187,7 @@ void OpenClPairFinder::upload(const ProxyArrays& p) {
   q.enqueueWriteBuffer(m_group.ensure(c, n * 4), CL_FALSE, 0, n * 4, p.group);
   q.enqueueWriteBuffer(m_mask.ensure(c, n * 4), CL_FALSE, 0, n * 4, p.mask);
   q.enqueueWriteBuffer(m_flags.ensure(c, n), CL_FALSE, 0, n, p.flags);
+  m_syncedCount = p.count;
 }
 
 void OpenClPairFinder::setProxyArgs(cl::Kernel& kernel) {
@@ -155,6 +221,133 @@ void OpenClPairFinder::launchStrided(cl::Kernel& kernel, std::uint64_t items) {
   m_context.queue().enqueueNDRangeKernel(kernel, cl::NullRange, cl::NDRange(global), cl::NDRange(local));
 }
 
+void OpenClPairFinder::bin(Kernels& k, const std::vector<std::uint32_t>& slots, const GpucolGridParams& grid,
+                           Bins& b) {
+  const cl::Context& c = m_context.context();
+  cl::CommandQueue& q = m_context.queue();
+  b.count = std::uint32_t(slots.size());
+  b.keys = b.runs = b.candidates = 0;
+  if (b.count == 0) {
+    return;
+  }
+  const cl_uint zero = 0;
+  q.enqueueFillBuffer(m_overflow.ensure(c, 4), zero, 0, 4);
+  q.enqueueWriteBuffer(b.slots.ensure(c, b.count * 4), CL_FALSE, 0, b.count * 4, slots.data());
+  // Stage 4: count cells per box, scan, fill (cell, slot) entries.
+  setProxyArgs(k.countCells);
+  k.countCells.setArg(9, m_grid.buffer);
+  k.countCells.setArg(10, b.slots.buffer);
+  k.countCells.setArg(11, b.count);
+  k.countCells.setArg(12, b.counts.ensure(c, b.count * 4));
+  k.countCells.setArg(13, m_overflow.buffer);
+  launch(k.countCells, b.count);
+  b.keys = m_scan.exclusiveScan(b.counts.buffer, b.count);
+  setProxyArgs(k.writeKeys);
+  k.writeKeys.setArg(9, m_grid.buffer);
+  k.writeKeys.setArg(10, b.slots.buffer);
+  k.writeKeys.setArg(11, b.count);
+  k.writeKeys.setArg(12, b.counts.buffer);
+  k.writeKeys.setArg(13, b.cellKeys.ensure(c, std::size_t(b.keys) * 8));
+  k.writeKeys.setArg(14, b.keySlots.ensure(c, std::size_t(b.keys) * 4));
+  launch(k.writeKeys, b.keys == 0 ? 0 : b.count);
+  // Stage 5: stable sort by cell; slots stay ascending inside a cell.
+  const std::uint64_t cells = std::uint64_t(grid.dimX) * grid.dimY * grid.dimZ;
+  m_sort.sort(b.cellKeys.buffer, b.keySlots.buffer, b.keys, indexBits(cells));
+  // Stage 6: runs of equal cells, m(m-1)/2 candidates each, scanned.
+  k.markRuns.setArg(0, b.cellKeys.buffer);
+  k.markRuns.setArg(1, b.keys);
+  k.markRuns.setArg(2, b.runHeads.ensure(c, std::size_t(b.keys) * 4));
+  launch(k.markRuns, b.keys);
+  b.runs = m_scan.exclusiveScan(b.runHeads.buffer, b.keys);
+  k.writeRuns.setArg(0, b.cellKeys.buffer);
+  k.writeRuns.setArg(1, b.keys);
+  k.writeRuns.setArg(2, b.runHeads.buffer);
+  k.writeRuns.setArg(3, b.runs);
+  k.writeRuns.setArg(4, b.runStart.ensure(c, (std::size_t(b.runs) + 1) * 4));
+  k.writeRuns.setArg(5, b.runCell.ensure(c, std::size_t(b.runs) * 4));
+  launch(k.writeRuns, b.keys);
+  k.countRunPairs.setArg(0, b.runStart.buffer);
+  k.countRunPairs.setArg(1, b.runs);
+  k.countRunPairs.setArg(2, b.runPairs.ensure(c, std::size_t(b.runs) * 4));
+  k.countRunPairs.setArg(3, m_overflow.buffer);
+  launch(k.countRunPairs, b.runs);
+  b.candidates = m_scan.exclusiveScan(b.runPairs.buffer, b.runs);
+  cl_uint overflow = 0;
+  q.enqueueReadBuffer(m_overflow.buffer, CL_TRUE, 0, 4, &overflow);
+  if (overflow != 0) {
+    throw std::overflow_error(
+        "gpucol OpenCL pair finder: a box or a cell exceeds 2^32 - 1 entries or candidates");
+  }
+}
+
+void OpenClPairFinder::testBins(Kernels& k, Bins& b, const cl::Buffer& out, std::uint32_t capacity,
+                                cl_uint slotBits) {
+  if (b.candidates == 0) {
+    return;
+  }
+  // A CPU device steps through chunks of candidates (see grid_test_candidates); a GPU takes one each.
+  const std::size_t local = m_context.workGroupSize(k.testCandidates);
+  const std::uint64_t units = m_context.device().getInfo<CL_DEVICE_MAX_COMPUTE_UNITS>();
+  const std::uint64_t targetItems = units * local * (m_context.isGpu() ? 64 : 1);
+  const std::uint64_t minChunk = m_context.isGpu() ? 1 : 16;
+  const std::uint64_t chunkLength = m_tuning.candidatesPerItem != 0
+                                        ? m_tuning.candidatesPerItem
+                                        : std::max(minChunk, (b.candidates + targetItems - 1) / targetItems);
+  setProxyArgs(k.testCandidates);
+  k.testCandidates.setArg(9, m_grid.buffer);
+  k.testCandidates.setArg(10, b.runStart.buffer);
+  k.testCandidates.setArg(11, b.runCell.buffer);
+  k.testCandidates.setArg(12, b.runPairs.buffer);
+  k.testCandidates.setArg(13, b.runs);
+  k.testCandidates.setArg(14, b.candidates);
+  k.testCandidates.setArg(15, cl_uint(chunkLength));
+  k.testCandidates.setArg(16, b.keySlots.buffer);
+  k.testCandidates.setArg(17, slotBits);
+  k.testCandidates.setArg(18, out);
+  k.testCandidates.setArg(19, capacity);
+  k.testCandidates.setArg(20, m_counter.buffer);
+  launch(k.testCandidates, (b.candidates + chunkLength - 1) / chunkLength);
+}
+
+void OpenClPairFinder::testHuge(Kernels& k, const DeviceArray& huge, std::uint32_t hugeCount,
+                                const DeviceArray& isHuge, const cl::Buffer& out, std::uint32_t capacity,
+                                cl_uint slotBits) {
+  if (hugeCount == 0) {
+    return;
+  }
+  const std::uint32_t activeCount = std::uint32_t(m_active.size());
+  setProxyArgs(k.testHuge);
+  k.testHuge.setArg(9, huge.buffer);
+  k.testHuge.setArg(10, hugeCount);
+  k.testHuge.setArg(11, m_activeBuf.buffer);
+  k.testHuge.setArg(12, activeCount);
+  k.testHuge.setArg(13, isHuge.buffer);
+  k.testHuge.setArg(14, slotBits);
+  k.testHuge.setArg(15, out);
+  k.testHuge.setArg(16, capacity);
+  k.testHuge.setArg(17, m_counter.buffer);
+  launchStrided(k.testHuge, std::uint64_t(hugeCount) * activeCount);
+}
+
+void OpenClPairFinder::readPairs(cl_uint slotBits, std::vector<std::uint64_t>& pairs) {
+  // Stage 10: one order whatever the device: sort the compressed keys, then widen them.
+  cl::CommandQueue& q = m_context.queue();
+  const std::uint32_t found = m_lastPairs;
+  if (found > 1) {
+    m_sort.sort(m_pairs.buffer, m_pairValues.ensure(m_context.context(), std::size_t(found) * 4), found,
+                2 * slotBits);
+  }
+  m_packed.resize(found);
+  if (found > 0) {
+    q.enqueueReadBuffer(m_pairs.buffer, CL_TRUE, 0, std::size_t(found) * 8, m_packed.data());
+  }
+  const std::uint64_t lowMask = (std::uint64_t(1) << slotBits) - 1;
+  pairs.resize(found);
+  for (std::uint32_t i = 0; i < found; ++i) {
+    pairs[i] = ((m_packed[i] >> slotBits) << 32) | (m_packed[i] & lowMask);
+  }
+}
+
 void OpenClPairFinder::findPairs(const ProxyArrays& p, const PairFinderOptions& options,
                                  std::vector<std::uint64_t>& pairs) {
   m_stats = PairFinderStats{};
@@ -165,185 +358,272 @@ void OpenClPairFinder::findPairs(const ProxyArrays& p, const PairFinderOptions& 
       m_active.push_back(s);
     }
   }
+  // Whatever happens below, the device's arrays and kept grid are only trusted again once this search has
+  // finished (an OpenCL error or an early return leaves them out of step with `p`).
+  const bool canKeep = keepGrid(p, options);
+  m_kept = false;
   if (m_active.size() < 2) {
     return;
   }
   translateClErrors("OpenCL grid pair search", [&] {
-    const cl::Context& c = m_context.context();
-    cl::CommandQueue& q = m_context.queue();
     Kernels& k = kernels(options.mappingSqrt == MappingSqrt::Newton);
-    upload(p);
-    const std::uint32_t activeCount = std::uint32_t(m_active.size());
-    q.enqueueWriteBuffer(m_activeBuf.ensure(c, activeCount * 4), CL_FALSE, 0, activeCount * 4,
-                         m_active.data());
-    const cl_uint slotBits = indexBits(p.count);
-    const cl_uint zero = 0;
-    m_counter.ensure(c, 4);
-    m_overflow.ensure(c, 4);
-    q.enqueueFillBuffer(m_overflow.buffer, zero, 0, 4);
-
-    const bool useGrid = activeCount >= options.bruteForceBelow;
-    GpucolGridParams grid{};
-    std::uint32_t runCount = 0;
-    std::uint32_t candidates = 0;
-    if (useGrid) {
-      m_stats.usedGrid = true;
-      chooseGrid(p, options, grid);
-      const std::uint32_t binnedCount = std::uint32_t(m_binned.size());
-      if (binnedCount > 0) {
-        q.enqueueWriteBuffer(m_grid.ensure(c, sizeof grid), CL_FALSE, 0, sizeof grid, &grid);
-        q.enqueueWriteBuffer(m_binnedBuf.ensure(c, binnedCount * 4), CL_FALSE, 0, binnedCount * 4,
-                             m_binned.data());
-        // Stage 4: count cells per box, scan, fill (cell, slot) entries.
-        setProxyArgs(k.countCells);
-        k.countCells.setArg(9, m_grid.buffer);
-        k.countCells.setArg(10, m_binnedBuf.buffer);
-        k.countCells.setArg(11, binnedCount);
-        k.countCells.setArg(12, m_counts.ensure(c, binnedCount * 4));
-        k.countCells.setArg(13, m_overflow.buffer);
-        launch(k.countCells, binnedCount);
-        const std::uint32_t keyCount = m_scan.exclusiveScan(m_counts.buffer, binnedCount);
-        m_stats.keys = keyCount;
-        setProxyArgs(k.writeKeys);
-        k.writeKeys.setArg(9, m_grid.buffer);
-        k.writeKeys.setArg(10, m_binnedBuf.buffer);
-        k.writeKeys.setArg(11, binnedCount);
-        k.writeKeys.setArg(12, m_counts.buffer);
-        k.writeKeys.setArg(13, m_cellKeys.ensure(c, std::size_t(keyCount) * 8));
-        k.writeKeys.setArg(14, m_keySlots.ensure(c, std::size_t(keyCount) * 4));
-        launch(k.writeKeys, keyCount == 0 ? 0 : binnedCount);
-        // Stage 5: stable sort by cell; slots stay ascending inside a cell.
-        const std::uint64_t cells = std::uint64_t(grid.dimX) * grid.dimY * grid.dimZ;
-        m_sort.sort(m_cellKeys.buffer, m_keySlots.buffer, keyCount, indexBits(cells));
-        // Stage 6: runs of equal cells, m(m-1)/2 candidates each, scanned.
-        k.markRuns.setArg(0, m_cellKeys.buffer);
-        k.markRuns.setArg(1, keyCount);
-        k.markRuns.setArg(2, m_runHeads.ensure(c, std::size_t(keyCount) * 4));
-        launch(k.markRuns, keyCount);
-        runCount = m_scan.exclusiveScan(m_runHeads.buffer, keyCount);
-        k.writeRuns.setArg(0, m_cellKeys.buffer);
-        k.writeRuns.setArg(1, keyCount);
-        k.writeRuns.setArg(2, m_runHeads.buffer);
-        k.writeRuns.setArg(3, runCount);
-        k.writeRuns.setArg(4, m_runStart.ensure(c, (std::size_t(runCount) + 1) * 4));
-        k.writeRuns.setArg(5, m_runCell.ensure(c, std::size_t(runCount) * 4));
-        launch(k.writeRuns, keyCount);
-        k.countRunPairs.setArg(0, m_runStart.buffer);
-        k.countRunPairs.setArg(1, runCount);
-        k.countRunPairs.setArg(2, m_runPairs.ensure(c, std::size_t(runCount) * 4));
-        k.countRunPairs.setArg(3, m_overflow.buffer);
-        launch(k.countRunPairs, runCount);
-        candidates = m_scan.exclusiveScan(m_runPairs.buffer, runCount);
-        cl_uint overflow = 0;
-        q.enqueueReadBuffer(m_overflow.buffer, CL_TRUE, 0, 4, &overflow);
-        if (overflow != 0) {
-          throw std::overflow_error(
-              "gpucol OpenCL pair finder: a box or a cell exceeds 2^32 - 1 entries or candidates");
-        }
-        m_stats.candidates = candidates;
-      }
-      m_stats.candidates += std::uint64_t(m_huge.size()) * activeCount;
-      if (!m_huge.empty()) {
-        const std::uint32_t hugeCount = std::uint32_t(m_huge.size());
-        q.enqueueWriteBuffer(m_hugeBuf.ensure(c, hugeCount * 4), CL_FALSE, 0, hugeCount * 4, m_huge.data());
-        q.enqueueWriteBuffer(m_isHugeBuf.ensure(c, activeCount), CL_FALSE, 0, activeCount, m_isHuge.data());
-      }
+    m_counter.ensure(m_context.context(), 4);
+    m_overflow.ensure(m_context.context(), 4);
+    if (canKeep) {
+      incremental(p, options, k, pairs);
+      m_kept = true;
     } else {
-      m_stats.candidates = gpucol_pair_count(activeCount);
+      fullSearch(p, options, k, pairs);
     }
-
-    // Stages 7–10: test every candidate and append the survivors; grow and run again when they overflow
-    // the output (its size comes from the last search, so a steady scene runs once).
-    std::uint32_t capacity = std::max<std::uint32_t>(1024, m_lastPairs + m_lastPairs / 4);
-    for (;;) {
-      q.enqueueFillBuffer(m_counter.buffer, zero, 0, 4);
-      const cl::Buffer& out = m_pairs.ensure(c, std::size_t(capacity) * 8);
-      if (useGrid) {
-        if (candidates > 0) {
-          // A CPU device steps through chunks of candidates (see grid_test_candidates); a GPU takes one each.
-          const std::size_t local = m_context.workGroupSize(k.testCandidates);
-          const std::uint64_t units = m_context.device().getInfo<CL_DEVICE_MAX_COMPUTE_UNITS>();
-          const std::uint64_t targetItems = units * local * (m_context.isGpu() ? 64 : 1);
-          const std::uint64_t minChunk = m_context.isGpu() ? 1 : 16;
-          const std::uint64_t chunkLength =
-              m_tuning.candidatesPerItem != 0
-                  ? m_tuning.candidatesPerItem
-                  : std::max(minChunk, (candidates + targetItems - 1) / targetItems);
-          setProxyArgs(k.testCandidates);
-          k.testCandidates.setArg(9, m_grid.buffer);
-          k.testCandidates.setArg(10, m_runStart.buffer);
-          k.testCandidates.setArg(11, m_runCell.buffer);
-          k.testCandidates.setArg(12, m_runPairs.buffer);
-          k.testCandidates.setArg(13, runCount);
-          k.testCandidates.setArg(14, candidates);
-          k.testCandidates.setArg(15, cl_uint(chunkLength));
-          k.testCandidates.setArg(16, m_keySlots.buffer);
-          k.testCandidates.setArg(17, slotBits);
-          k.testCandidates.setArg(18, out);
-          k.testCandidates.setArg(19, capacity);
-          k.testCandidates.setArg(20, m_counter.buffer);
-          launch(k.testCandidates, (candidates + chunkLength - 1) / chunkLength);
-        }
-        if (!m_huge.empty()) {
-          setProxyArgs(k.testHuge);
-          k.testHuge.setArg(9, m_hugeBuf.buffer);
-          k.testHuge.setArg(10, std::uint32_t(m_huge.size()));
-          k.testHuge.setArg(11, m_activeBuf.buffer);
-          k.testHuge.setArg(12, activeCount);
-          k.testHuge.setArg(13, m_isHugeBuf.buffer);
-          k.testHuge.setArg(14, slotBits);
-          k.testHuge.setArg(15, out);
-          k.testHuge.setArg(16, capacity);
-          k.testHuge.setArg(17, m_counter.buffer);
-          launchStrided(k.testHuge, std::uint64_t(m_huge.size()) * activeCount);
-        }
-      } else {
-        setProxyArgs(k.bruteTest);
-        k.bruteTest.setArg(9, m_activeBuf.buffer);
-        k.bruteTest.setArg(10, activeCount);
-        k.bruteTest.setArg(11, cl_ulong(gpucol_pair_count(activeCount)));
-        k.bruteTest.setArg(12, slotBits);
-        k.bruteTest.setArg(13, out);
-        k.bruteTest.setArg(14, capacity);
-        k.bruteTest.setArg(15, m_counter.buffer);
-        launchStrided(k.bruteTest, gpucol_pair_count(activeCount));
-      }
-      cl_uint found = 0;
-      q.enqueueReadBuffer(m_counter.buffer, CL_TRUE, 0, 4, &found);
-      if (found == 0xffffffffu) {
-        throw std::overflow_error(
-            "gpucol OpenCL pair finder: 2^32 - 1 or more overlapping pairs in one step");
-      }
-      if (found <= capacity) {
-        m_lastPairs = found;
-        break;
-      }
-      capacity = found;
-    }
-    // Stage 10: one order whatever the device: sort the compressed keys, then widen them.
-    const std::uint32_t found = m_lastPairs;
-    if (found > 1) {
-      m_sort.sort(m_pairs.buffer, m_pairValues.ensure(c, std::size_t(found) * 4), found, 2 * slotBits);
-    }
-    m_packed.resize(found);
-    if (found > 0) {
-      q.enqueueReadBuffer(m_pairs.buffer, CL_TRUE, 0, std::size_t(found) * 8, m_packed.data());
-    }
-    const std::uint64_t lowMask = (std::uint64_t(1) << slotBits) - 1;
-    pairs.resize(found);
-    for (std::uint32_t i = 0; i < found; ++i) {
-      pairs[i] = ((m_packed[i] >> slotBits) << 32) | (m_packed[i] & lowMask);
+    if (m_kept) {
+      m_keptPairs.assign(pairs.begin(), pairs.end());
+    } else {
+      std::vector<std::uint64_t>().swap(m_keptPairs);
     }
   });
-  std::size_t bytes = 0;
+  m_stats.rebinnedProxies = std::uint32_t(m_active.size()) - m_stats.restingProxies;
+  std::size_t bytes = m_bins.bytes() + m_movedBins.bytes();
   for (const DeviceArray* a :
-       {&m_minX,   &m_minY,       &m_minZ,     &m_maxX,      &m_maxY,      &m_maxZ,    &m_group,
-        &m_mask,   &m_flags,      &m_grid,     &m_activeBuf, &m_binnedBuf, &m_hugeBuf, &m_isHugeBuf,
-        &m_counts, &m_cellKeys,   &m_keySlots, &m_runHeads,  &m_runStart,  &m_runCell, &m_runPairs,
-        &m_pairs,  &m_pairValues, &m_counter,  &m_overflow}) {
+       {&m_minX,       &m_minY,         &m_minZ,          &m_maxX,    &m_maxY,      &m_maxZ,
+        &m_group,      &m_mask,         &m_flags,         &m_grid,    &m_activeBuf, &m_hugeBuf,
+        &m_isHugeBuf,  &m_pairs,        &m_pairValues,    &m_counter, &m_overflow,  &m_restingBuf,
+        &m_updatesBuf, &m_movedHugeBuf, &m_isMovedHugeBuf}) {
     bytes += a->bytes;
   }
-  m_stats.scratchBytes = bytes;
+  m_stats.scratchBytes =
+      bytes + m_resting.capacity() + (m_keptPairs.capacity() + m_carried.capacity() + m_found.capacity()) * 8;
+}
+
+bool OpenClPairFinder::keepGrid(const ProxyArrays& p, const PairFinderOptions& options) {
+  // Stage 11, as the CPU finder decides it: the kept grid serves while the options that shape it are the
+  // same, `moved` is known, and few active proxies changed since it was built. The device's arrays must
+  // also still hold every slot (a grown slot count past their size takes a full upload).
+  if (!m_kept || p.moved == nullptr || m_active.size() < options.bruteForceBelow || m_active.size() < 2 ||
+      options.cellSizeRule != m_keptOptions.cellSizeRule ||
+      options.hugeCellLimit != m_keptOptions.hugeCellLimit || p.count < m_syncedCount ||
+      std::size_t(p.count) * 4 > m_minX.bytes || p.count > m_flags.bytes || p.count > m_restingBuf.bytes) {
+    return false;
+  }
+  // A slot stays resting while it stays active and does not change; new slots start changed. A slot that
+  // changes, or becomes inactive, is written to the device (a destroyed one with its flags only).
+  m_resting.resize(p.count, 0);
+  m_moved.clear();
+  m_updates.clear();
+  const std::size_t limit = std::size_t(kIncrementalFraction * double(m_active.size()));
+  for (std::uint32_t s = 0; s < p.count; ++s) {
+    const bool active = (p.flags[s] & kProxyActive) != 0;
+    if (p.moved[s] || s >= m_syncedCount || (m_resting[s] && !active)) {
+      m_resting[s] = 0;
+      m_updates.push_back(GpucolProxyUpdate{p.minX[s], p.minY[s], p.minZ[s], p.maxX[s], p.maxY[s], p.maxZ[s],
+                                            p.group[s], p.mask[s], s, p.flags[s]});
+    }
+    if (active && !m_resting[s]) {
+      m_moved.push_back(s);
+      if (m_moved.size() > limit) {  // too many: a full search, which rebuilds m_resting anyway
+        return false;
+      }
+    }
+  }
+  return true;
+}
+
+void OpenClPairFinder::sendChanges(const ProxyArrays& p, Kernels& k) {
+  const cl::Context& c = m_context.context();
+  const std::uint32_t count = std::uint32_t(m_updates.size());
+  if (count > 0) {
+    const std::size_t bytes = std::size_t(count) * sizeof(GpucolProxyUpdate);
+    m_context.queue().enqueueWriteBuffer(m_updatesBuf.ensure(c, bytes), CL_FALSE, 0, bytes, m_updates.data());
+    const DeviceArray* arrays[] = {&m_minX, &m_minY,  &m_minZ, &m_maxX,  &m_maxY,
+                                   &m_maxZ, &m_group, &m_mask, &m_flags, &m_restingBuf};
+    for (cl_uint i = 0; i < 10; ++i) {
+      k.updateProxies.setArg(i, arrays[i]->buffer);
+    }
+    k.updateProxies.setArg(10, m_updatesBuf.buffer);
+    k.updateProxies.setArg(11, count);
+    launch(k.updateProxies, count);
+  }
+  m_syncedCount = p.count;
+}
+
+void OpenClPairFinder::fullSearch(const ProxyArrays& p, const PairFinderOptions& options, Kernels& k,
+                                  std::vector<std::uint64_t>& pairs) {
+  const cl::Context& c = m_context.context();
+  cl::CommandQueue& q = m_context.queue();
+  upload(p);
+  const std::uint32_t activeCount = std::uint32_t(m_active.size());
+  q.enqueueWriteBuffer(m_activeBuf.ensure(c, activeCount * 4), CL_FALSE, 0, activeCount * 4, m_active.data());
+  const cl_uint slotBits = indexBits(p.count);
+  const cl_uint zero = 0;
+
+  const bool useGrid = activeCount >= options.bruteForceBelow;
+  GpucolGridParams grid{};
+  m_bins.count = m_bins.candidates = 0;
+  m_huge.clear();
+  if (useGrid) {
+    m_stats.usedGrid = true;
+    chooseGrid(p, options, grid);
+    q.enqueueWriteBuffer(m_grid.ensure(c, sizeof grid), CL_FALSE, 0, sizeof grid, &grid);
+    bin(k, m_binned, grid, m_bins);
+    m_stats.keys = m_bins.keys;
+    m_stats.candidates = m_bins.candidates + std::uint64_t(m_huge.size()) * activeCount;
+    if (!m_huge.empty()) {
+      const std::uint32_t hugeCount = std::uint32_t(m_huge.size());
+      q.enqueueWriteBuffer(m_hugeBuf.ensure(c, hugeCount * 4), CL_FALSE, 0, hugeCount * 4, m_huge.data());
+      q.enqueueWriteBuffer(m_isHugeBuf.ensure(c, activeCount), CL_FALSE, 0, activeCount, m_isHuge.data());
+    }
+  } else {
+    m_stats.candidates = gpucol_pair_count(activeCount);
+  }
+
+  // Stages 7–10: test every candidate and append the survivors; grow and run again when they overflow
+  // the output (its size comes from the last search, so a steady scene runs once).
+  std::uint32_t capacity = std::max<std::uint32_t>(1024, m_lastPairs + m_lastPairs / 4);
+  for (;;) {
+    q.enqueueFillBuffer(m_counter.buffer, zero, 0, 4);
+    const cl::Buffer& out = m_pairs.ensure(c, std::size_t(capacity) * 8);
+    if (useGrid) {
+      testBins(k, m_bins, out, capacity, slotBits);
+      testHuge(k, m_hugeBuf, std::uint32_t(m_huge.size()), m_isHugeBuf, out, capacity, slotBits);
+    } else {
+      setProxyArgs(k.bruteTest);
+      k.bruteTest.setArg(9, m_activeBuf.buffer);
+      k.bruteTest.setArg(10, activeCount);
+      k.bruteTest.setArg(11, cl_ulong(gpucol_pair_count(activeCount)));
+      k.bruteTest.setArg(12, slotBits);
+      k.bruteTest.setArg(13, out);
+      k.bruteTest.setArg(14, capacity);
+      k.bruteTest.setArg(15, m_counter.buffer);
+      launchStrided(k.bruteTest, gpucol_pair_count(activeCount));
+    }
+    cl_uint found = 0;
+    q.enqueueReadBuffer(m_counter.buffer, CL_TRUE, 0, 4, &found);
+    if (found == 0xffffffffu) {
+      throw std::overflow_error("gpucol OpenCL pair finder: 2^32 - 1 or more overlapping pairs in one step");
+    }
+    if (found <= capacity) {
+      m_lastPairs = found;
+      break;
+    }
+    capacity = found;
+  }
+  readPairs(slotBits, pairs);
+
+  // Stage 11: keep this grid after a first search (nothing is known about motion yet) or when few proxies
+  // changed since the last one, as the CPU finder does; where most move, the next search is a full one.
+  bool few = p.moved == nullptr;
+  if (!few) {
+    const std::size_t limit = std::size_t(kIncrementalFraction * double(m_active.size()));
+    std::size_t moved = 0;
+    few = true;
+    for (std::uint32_t s : m_active) {
+      if (p.moved[s] && ++moved > limit) {
+        few = false;
+        break;
+      }
+    }
+  }
+  if (useGrid && few) {
+    m_keptOptions = options;
+    m_keptGrid = grid;
+    m_keptHugeCount = std::uint32_t(m_huge.size());
+    m_resting.assign(p.count, 0);
+    for (std::uint32_t s : m_active) m_resting[s] = 1;
+    q.enqueueWriteBuffer(m_restingBuf.ensure(c, p.count), CL_FALSE, 0, p.count, m_resting.data());
+    m_kept = true;
+  }
+}
+
+void OpenClPairFinder::incremental(const ProxyArrays& p, const PairFinderOptions& options, Kernels& k,
+                                   std::vector<std::uint64_t>& pairs) {
+  const cl::Context& c = m_context.context();
+  cl::CommandQueue& q = m_context.queue();
+  const GpucolGridParams& grid = m_keptGrid;
+  m_stats.usedGrid = true;
+  m_stats.incremental = true;
+  m_stats.cellSize = m_keptCell;
+  m_stats.dims[0] = grid.dimX, m_stats.dims[1] = grid.dimY, m_stats.dims[2] = grid.dimZ;
+  m_stats.restingProxies = std::uint32_t(m_active.size() - m_moved.size());
+  sendChanges(p, k);
+  const cl_uint slotBits = indexBits(p.count);
+  const cl_uint zero = 0;
+
+  // Moved proxies: huge ones (on the kept cell size) test against every active proxy; the others against
+  // the kept cells and huge boxes (grid_test_moved) and each other (stages 4-9 on their own entries).
+  m_movedBinned.clear();
+  m_movedHuge.clear();
+  for (std::uint32_t s : m_moved) {
+    (isHuge(p, s, m_keptCell, options.hugeCellLimit) ? m_movedHuge : m_movedBinned).push_back(s);
+  }
+  const std::uint32_t binnedCount = std::uint32_t(m_movedBinned.size());
+  const std::uint32_t hugeCount = std::uint32_t(m_movedHuge.size());
+  m_hugeBuf.ensure(c, 4);  // a valid argument even when the kept search had no huge box
+  bin(k, m_movedBinned, grid, m_movedBins);
+  m_stats.keys = m_movedBins.keys;
+  m_stats.candidates = m_movedBins.candidates;
+  if (hugeCount > 0) {
+    // grid_test_huge over the active list, with the moved huge boxes marked per active index.
+    const std::uint32_t activeCount = std::uint32_t(m_active.size());
+    m_isHuge.assign(activeCount, 0);
+    for (std::size_t i = 0, h = 0; i < activeCount && h < hugeCount; ++i) {
+      if (m_active[i] == m_movedHuge[h]) {
+        m_isHuge[i] = 1;
+        ++h;
+      }
+    }
+    q.enqueueWriteBuffer(m_activeBuf.ensure(c, activeCount * 4), CL_FALSE, 0, activeCount * 4,
+                         m_active.data());
+    q.enqueueWriteBuffer(m_isMovedHugeBuf.ensure(c, activeCount), CL_FALSE, 0, activeCount, m_isHuge.data());
+    q.enqueueWriteBuffer(m_movedHugeBuf.ensure(c, hugeCount * 4), CL_FALSE, 0, hugeCount * 4,
+                         m_movedHuge.data());
+  }
+
+  std::uint32_t capacity = std::max<std::uint32_t>(1024, m_lastPairs + m_lastPairs / 4);
+  for (;;) {
+    q.enqueueFillBuffer(m_counter.buffer, zero, 0, 4);
+    const cl::Buffer& out = m_pairs.ensure(c, std::size_t(capacity) * 8);
+    if (binnedCount > 0) {
+      setProxyArgs(k.testMoved);
+      k.testMoved.setArg(9, m_grid.buffer);
+      k.testMoved.setArg(10, m_restingBuf.buffer);
+      k.testMoved.setArg(11, m_bins.runStart.buffer);
+      k.testMoved.setArg(12, m_bins.runCell.buffer);
+      k.testMoved.setArg(13, m_bins.runs);
+      k.testMoved.setArg(14, m_bins.keySlots.buffer);
+      k.testMoved.setArg(15, m_hugeBuf.buffer);
+      k.testMoved.setArg(16, m_keptHugeCount);
+      k.testMoved.setArg(17, m_movedBins.slots.buffer);
+      k.testMoved.setArg(18, binnedCount);
+      k.testMoved.setArg(19, slotBits);
+      k.testMoved.setArg(20, out);
+      k.testMoved.setArg(21, capacity);
+      k.testMoved.setArg(22, m_counter.buffer);
+      launch(k.testMoved, binnedCount);
+    }
+    testBins(k, m_movedBins, out, capacity, slotBits);
+    testHuge(k, m_movedHugeBuf, hugeCount, m_isMovedHugeBuf, out, capacity, slotBits);
+    cl_uint found = 0;
+    q.enqueueReadBuffer(m_counter.buffer, CL_TRUE, 0, 4, &found);
+    if (found == 0xffffffffu) {
+      throw std::overflow_error("gpucol OpenCL pair finder: 2^32 - 1 or more overlapping pairs in one step");
+    }
+    if (found <= capacity) {
+      m_lastPairs = found;
+      break;
+    }
+    capacity = found;
+  }
+  // The new pairs, sorted on the device, merged with the carried ones: pairs of two resting proxies are
+  // those of the last search (neither box nor filter changed). Every new pair has a moved proxy, so the two
+  // lists never share a pair.
+  m_carried.clear();
+  for (std::uint64_t key : m_keptPairs) {
+    if (m_resting[std::uint32_t(key >> 32)] && m_resting[std::uint32_t(key)]) {
+      m_carried.push_back(key);
+    }
+  }
+  readPairs(slotBits, m_found);
+  pairs.resize(m_carried.size() + m_found.size());
+  std::merge(m_carried.begin(), m_carried.end(), m_found.begin(), m_found.end(), pairs.begin());
 }
 
 }  // namespace

@@ -235,3 +235,86 @@ __kernel void brute_test_pairs(PROXY_PARAMS, __global const uint* active, const 
     }
   }
 }
+
+// Stage 11: writes the slots that changed since the last search into the kept arrays and marks them as no
+// longer resting (their entries in the kept cells, and their pairs of the last search, are stale).
+__kernel void grid_update_proxies(__global float* minX, __global float* minY, __global float* minZ,
+                                  __global float* maxX, __global float* maxY, __global float* maxZ,
+                                  __global int* group, __global int* mask, __global uchar* flags,
+                                  __global uchar* resting, __global const GpucolProxyUpdate* updates,
+                                  const uint updateCount) {
+  const uint i = get_global_id(0);
+  if (i >= updateCount) {
+    return;
+  }
+  const GpucolProxyUpdate u = updates[i];
+  minX[u.slot] = u.minX;
+  minY[u.slot] = u.minY;
+  minZ[u.slot] = u.minZ;
+  maxX[u.slot] = u.maxX;
+  maxY[u.slot] = u.maxY;
+  maxZ[u.slot] = u.maxZ;
+  group[u.slot] = u.group;
+  mask[u.slot] = u.mask;
+  flags[u.slot] = (uchar)u.flags;
+  resting[u.slot] = 0u;
+}
+
+// Stage 11: each moved (binned) proxy against the kept grid. For every cell of its range on the kept grid,
+// the kept run of that cell (runs are in ascending cell order: one binary search per row of cells, then a
+// walk along the row) gives the resting proxies binned there; entries of proxies that changed since the
+// grid was built are stale and skipped. A pair is kept only in the cell holding the min corner of the
+// overlap, as in stage 9, so it is reported once. Then the kept huge boxes that still rest. Moved proxies
+// among themselves go through stages 4-9 on their own entries; moved huge boxes through grid_test_huge.
+__kernel void grid_test_moved(PROXY_PARAMS, __global const GpucolGridParams* grid, __global const uchar* resting,
+                              __global const uint* runStart, __global const uint* runCell, const uint runCount,
+                              __global const uint* keySlots, __global const uint* keptHuge,
+                              const uint keptHugeCount, __global const uint* moved, const uint movedCount,
+                              const uint slotBits, __global ulong* pairs, const uint capacity,
+                              volatile __global uint* pairCount) {
+  const uint i = get_global_id(0);
+  if (i >= movedCount) {
+    return;
+  }
+  const uint sm = moved[i];
+  const GpucolGridParams g = *grid;
+  const uint x0 = cell_of(minX[sm], g.originX, g.invCell, g.dimX), x1 = cell_of(maxX[sm], g.originX, g.invCell, g.dimX);
+  const uint y0 = cell_of(minY[sm], g.originY, g.invCell, g.dimY), y1 = cell_of(maxY[sm], g.originY, g.invCell, g.dimY);
+  const uint z0 = cell_of(minZ[sm], g.originZ, g.invCell, g.dimZ), z1 = cell_of(maxZ[sm], g.originZ, g.invCell, g.dimZ);
+  for (uint z = z0; z <= z1; ++z) {
+    for (uint y = y0; y <= y1; ++y) {
+      const uint row = (uint)(((ulong)z * g.dimY + y) * g.dimX);
+      // First run whose cell is at least the row's first cell of the range.
+      uint r = 0u, hi = runCount;
+      while (r < hi) {
+        const uint mid = r + (hi - r) / 2u;
+        if (runCell[mid] < row + x0) {
+          r = mid + 1u;
+        } else {
+          hi = mid;
+        }
+      }
+      for (; r < runCount && runCell[r] <= row + x1; ++r) {
+        const uint c = runCell[r];
+        for (uint e = runStart[r]; e < runStart[r + 1u]; ++e) {
+          const uint s = keySlots[e];
+          if (!resting[s] || !accept_pair(PROXY_ARGS, sm, s)) {
+            continue;
+          }
+          const uint cx = cell_of(max(minX[sm], minX[s]), g.originX, g.invCell, g.dimX);
+          const uint cy = cell_of(max(minY[sm], minY[s]), g.originY, g.invCell, g.dimY);
+          const uint cz = cell_of(max(minZ[sm], minZ[s]), g.originZ, g.invCell, g.dimZ);
+          if (((ulong)cz * g.dimY + cy) * g.dimX + cx == (ulong)c) {
+            append_pair(min(sm, s), max(sm, s), slotBits, pairs, capacity, pairCount);
+          }
+        }
+      }
+    }
+  }
+  for (uint h = 0u; h < keptHugeCount; ++h) {
+    const uint s = keptHuge[h];
+    if (resting[s] && accept_pair(PROXY_ARGS, sm, s)) {
+      append_pair(min(sm, s), max(sm, s), slotBits, pairs, capacity, pairCount);
+    }
+  }
+}

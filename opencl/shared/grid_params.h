@@ -6,9 +6,11 @@
 
 #ifdef __OPENCL_VERSION__
 typedef uint gpucol_grid_uint;
+typedef int gpucol_grid_int;
 #else
 #include <stdint.h>
 typedef uint32_t gpucol_grid_uint;
+typedef int32_t gpucol_grid_int;
 #endif
 
 /* Flag bits of a proxy slot; the host checks them against gpucol::kProxyActive / kProxyStatic. */
@@ -27,5 +29,21 @@ typedef struct GpucolGridParams {
   gpucol_grid_uint dimZ;
   gpucol_grid_uint unused;
 } GpucolGridParams;
+
+/* One proxy slot that changed since the last search (stage 11, resting proxies): while the device keeps the
+   last grid, the host sends only these and grid_update_proxies writes them into the device's arrays and
+   marks the slot as no longer resting. A destroyed proxy comes with flags 0. */
+typedef struct GpucolProxyUpdate {
+  float minX;
+  float minY;
+  float minZ;
+  float maxX;
+  float maxY;
+  float maxZ;
+  gpucol_grid_int group;
+  gpucol_grid_int mask;
+  gpucol_grid_uint slot;
+  gpucol_grid_uint flags;
+} GpucolProxyUpdate;
 
 #endif /* GPUCOL_OPENCL_SHARED_GRID_PARAMS_H */

@@ -1,12 +1,13 @@
 #include "opencl/host/opencl_pair_finder.h"
 
-#include "broadphase/grid_pair_finder.h"
-#include "opencl_test_device.h"
-
+#include <algorithm>
 #include <cstdint>
 #include <random>
 #include <string>
 #include <vector>
+
+#include "broadphase/grid_pair_finder.h"
+#include "opencl_test_device.h"
 
 namespace gpucol::opencl {
 namespace {
@@ -44,9 +45,10 @@ Scene uniformScene(std::size_t n, float world, float half, std::uint32_t seed, f
   return s;
 }
 
-/// Runs the OpenCL finder (grid and brute-force paths, both square roots, three launch shapes) and checks it against the CPU
-/// finder (bit for bit, same order) and the double-precision brute force (same set).
-void expectMatchesReferences(const Scene& scene, const std::string& what, std::uint32_t bruteForceBelow = 1000) {
+/// Runs the OpenCL finder (grid and brute-force paths, both square roots, three launch shapes) and checks it
+/// against the CPU finder (bit for bit, same order) and the double-precision brute force (same set).
+void expectMatchesReferences(const Scene& scene, const std::string& what,
+                             std::uint32_t bruteForceBelow = 1000) {
   OpenClContext* context = OpenClContext::tryGet();
   ASSERT_NE(context, nullptr);
   // The device's own launch shape, one candidate per item (a GPU's), and an odd chunk length.
@@ -69,8 +71,8 @@ void expectMatchesReferences(const Scene& scene, const std::string& what, std::u
           EXPECT_TRUE(gpu->stats().usedGrid) << what << ": the grid path was not taken";
         }
         EXPECT_EQ(fromGpu.size(), expected.size()) << what << ", bruteForceBelow " << below;
-        EXPECT_TRUE(fromGpu == expected) << what << ": OpenCL pairs differ from brute force, bruteForceBelow "
-                                         << below;
+        EXPECT_TRUE(fromGpu == expected)
+            << what << ": OpenCL pairs differ from brute force, bruteForceBelow " << below;
         EXPECT_TRUE(fromGpu == fromCpu) << what << ": OpenCL pairs differ from the CPU finder";
       }
     }
@@ -81,7 +83,8 @@ TEST(OpenClPairFinder, UniformCloud) {
   GPUCOL_REQUIRE_OPENCL(context);
   expectMatchesReferences(uniformScene(3000, 100.0f, 1.5f, 1), "uniform");
   expectMatchesReferences(uniformScene(500, 30.0f, 1.5f, 2), "small uniform");
-  EXPECT_GT(findPairsBruteForce(uniformScene(3000, 100.0f, 1.5f, 1).view()).size(), 100u) << "scene too sparse";
+  EXPECT_GT(findPairsBruteForce(uniformScene(3000, 100.0f, 1.5f, 1).view()).size(), 100u)
+      << "scene too sparse";
 }
 
 TEST(OpenClPairFinder, ClusteredScene) {
@@ -102,7 +105,7 @@ TEST(OpenClPairFinder, MixedSizesWithHugeBoxes) {
   GPUCOL_REQUIRE_OPENCL(context);
   Scene s = uniformScene(2500, 80.0f, 1.0f, 4);
   s.add(40.0f, -1.0f, 40.0f, 100.0f, 1.0f, 100.0f, kProxyStatic);  // ground
-  s.add(10.0f, 10.0f, 10.0f, 30.0f, 30.0f, 30.0f);                  // huge dynamic box
+  s.add(10.0f, 10.0f, 10.0f, 30.0f, 30.0f, 30.0f);                 // huge dynamic box
   s.add(70.0f, 70.0f, 70.0f, 20.0f, 5.0f, 20.0f);
   Scene more = uniformScene(300, 80.0f, 6.0f, 5);
   for (std::size_t i = 0; i < more.flags.size(); ++i) {
@@ -153,10 +156,10 @@ TEST(OpenClPairFinder, HolesStaticsAndFilters) {
   std::mt19937 random(11);
   for (std::size_t i = 0; i < s.flags.size(); ++i) {
     const std::uint32_t r = random() % 10;
-    if (r == 0) s.flags[i] = 0;                                      // destroyed proxy: a hole
+    if (r == 0) s.flags[i] = 0;  // destroyed proxy: a hole
     if (r == 1) s.flags[i] = kProxyActive | kProxyStatic;
-    if (r == 2) s.group[i] = 2, s.mask[i] = ~2;                      // group 2 ignores its own group
-    if (r == 3) s.mask[i] = 0;                                       // collides with nothing
+    if (r == 2) s.group[i] = 2, s.mask[i] = ~2;  // group 2 ignores its own group
+    if (r == 3) s.mask[i] = 0;                   // collides with nothing
   }
   expectMatchesReferences(s, "holes, statics and filters");
 }
@@ -178,6 +181,220 @@ TEST(OpenClPairFinder, GrowsItsOutputAcrossSteps) {
   // A sparse scene, then a dense one: the second overflows the output sized from the first and must rerun.
   expectMatchesReferences(uniformScene(2000, 400.0f, 1.0f, 12), "sparse");
   expectMatchesReferences(uniformScene(2000, 20.0f, 1.5f, 13), "dense");
+}
+
+/// Stage 11 over steps: OpenCL finders (three launch shapes) and a CPU finder see the same scene and the
+/// same `moved` flags each step. Each OpenCL finder's pairs must equal the CPU finder's (bit for bit, same
+/// order) and brute force, and its resting/re-binned counts and path (grid, incremental) the CPU finder's.
+class SteppedFinders {
+ public:
+  explicit SteppedFinders(const PairFinderOptions& options)
+      : m_options(options),
+        m_gpu{makePairFinder(Config{}), makePairFinder(Config{}, {1}), makePairFinder(Config{}, {7})},
+        m_cpu(makeCpuPairFinder()) {}
+
+  /// One search of every finder; `moved` may be nullptr (anything may have changed). Returns the OpenCL
+  /// finders' common stats (the first finder's).
+  PairFinderStats step(const Scene& scene, const std::uint8_t* moved, const std::string& what) {
+    ProxyArrays view = scene.view();
+    view.moved = moved;
+    std::vector<std::uint64_t> fromCpu;
+    m_cpu->findPairs(view, m_options, fromCpu);
+    const std::vector<std::uint64_t> expected = findPairsBruteForce(view);
+    EXPECT_TRUE(fromCpu == expected) << what << ": the CPU finder differs from brute force";
+    const PairFinderStats& cpu = m_cpu->stats();
+    for (std::unique_ptr<PairFinder>& gpu : m_gpu) {
+      std::vector<std::uint64_t> fromGpu;
+      gpu->findPairs(view, m_options, fromGpu);
+      EXPECT_EQ(fromGpu.size(), expected.size()) << what;
+      EXPECT_TRUE(fromGpu == fromCpu) << what << ": OpenCL pairs differ from the CPU finder";
+      EXPECT_TRUE(fromGpu == expected) << what << ": OpenCL pairs differ from brute force";
+      const PairFinderStats& st = gpu->stats();
+      EXPECT_EQ(st.usedGrid, cpu.usedGrid) << what;
+      EXPECT_EQ(st.incremental, cpu.incremental) << what;
+      EXPECT_EQ(st.restingProxies, cpu.restingProxies) << what;
+      EXPECT_EQ(st.rebinnedProxies, cpu.rebinnedProxies) << what;
+    }
+    return m_gpu[0]->stats();
+  }
+
+ private:
+  PairFinderOptions m_options;
+  std::unique_ptr<PairFinder> m_gpu[3];
+  std::unique_ptr<PairFinder> m_cpu;
+};
+
+std::uint32_t activeCount(const Scene& s) {
+  std::uint32_t n = 0;
+  for (std::uint8_t f : s.flags) n += (f & kProxyActive) != 0;
+  return n;
+}
+
+void shift(Scene& s, std::size_t i, float dx, float dy, float dz) {
+  s.minX[i] += dx, s.maxX[i] += dx, s.minY[i] += dy, s.maxY[i] += dy, s.minZ[i] += dz, s.maxZ[i] += dz;
+}
+
+TEST(OpenClPairFinder, RestingProxiesAtEachFractionMoving) {
+  GPUCOL_REQUIRE_OPENCL(context);
+  // 0%, 1%, 50% and 100% of the dynamic boxes move every step; a fifth of the boxes are static and never
+  // move. While few have changed since the kept grid was built, exactly the others rest.
+  for (const double fraction : {0.0, 0.01, 0.5, 1.0}) {
+    const std::string what = "fraction " + std::to_string(fraction);
+    Scene s = uniformScene(5000, 40.0f, 1.0f, 20);
+    std::vector<std::uint32_t> dynamic;
+    for (std::size_t i = 0; i < s.flags.size(); ++i) {
+      if (i % 5 == 0) {
+        s.flags[i] |= kProxyStatic;
+      } else {
+        dynamic.push_back(std::uint32_t(i));
+      }
+    }
+    PairFinderOptions options;
+    options.bruteForceBelow = 0;
+    SteppedFinders finders(options);
+    std::mt19937 random(21);
+    std::uniform_real_distribution<float> step(-0.4f, 0.4f);
+    std::vector<std::uint8_t> moved(s.flags.size(), 0), changedSinceKept(s.flags.size(), 0);
+    PairFinderStats st = finders.step(s, nullptr, what + ", step 0");
+    EXPECT_TRUE(st.usedGrid && !st.incremental) << what << ": the first search is a full one";
+    int incrementalSteps = 0;
+    for (int t = 1; t <= 8; ++t) {
+      std::fill(moved.begin(), moved.end(), std::uint8_t(0));
+      std::shuffle(dynamic.begin(), dynamic.end(), random);
+      const std::size_t count = std::size_t(fraction * double(dynamic.size()) + 0.5);
+      for (std::size_t k = 0; k < count; ++k) {
+        shift(s, dynamic[k], step(random), step(random), step(random));
+        moved[dynamic[k]] = 1;
+      }
+      st = finders.step(s, moved.data(), what + ", step " + std::to_string(t));
+      const std::uint32_t active = activeCount(s);
+      EXPECT_EQ(st.restingProxies + st.rebinnedProxies, active) << what << ", step " << t;
+      if (st.incremental) {
+        ++incrementalSteps;
+        std::uint32_t changed = 0;
+        for (std::size_t i = 0; i < moved.size(); ++i) {
+          changedSinceKept[i] |= moved[i];
+          changed += changedSinceKept[i];
+        }
+        EXPECT_EQ(st.restingProxies, active - changed) << what << ", step " << t;
+        EXPECT_EQ(st.keys == 0, changed == 0) << what << ": only the moved proxies are binned";
+      } else {
+        EXPECT_EQ(st.restingProxies, 0u) << what << ", step " << t;
+        std::fill(changedSinceKept.begin(), changedSinceKept.end(), std::uint8_t(0));
+      }
+    }
+    if (fraction <= 0.01) {
+      EXPECT_EQ(incrementalSteps, 8) << what << ": the kept grid was not used";
+    } else {
+      EXPECT_EQ(incrementalSteps, 0) << what << ": too many moved for the kept grid";
+    }
+  }
+}
+
+TEST(OpenClPairFinder, RestingProxiesWithLifeAndFilterChanges) {
+  GPUCOL_REQUIRE_OPENCL(context);
+  // A few boxes each step vanish or come back, change filters while resting, jump far (out of the kept
+  // grid), shift a little; a huge pillar moves now and then beside a huge static ground (kept huge boxes and
+  // moved huge boxes); new proxies arrive. Pairs must stay exact and the skip must keep happening.
+  Scene s = uniformScene(6000, 20.0f, 0.7f, 22);
+  for (std::size_t i = 0; i < s.flags.size(); i += 5) s.flags[i] |= kProxyStatic;
+  s.add(10.0f, -0.5f, 10.0f, 25.0f, 0.5f, 25.0f, kProxyStatic);  // huge static ground
+  s.add(10.0f, 10.0f, 10.0f, 3.0f, 20.0f, 3.0f);                 // huge moving pillar
+  const std::size_t pillar = s.flags.size() - 1;
+  PairFinderOptions options;
+  options.bruteForceBelow = 0;
+  SteppedFinders finders(options);
+  std::mt19937 random(23);
+  std::uniform_real_distribution<float> step(-0.3f, 0.3f), far(-30.0f, 50.0f);
+  std::vector<std::uint8_t> moved(s.flags.size(), 1);
+  int incrementalSteps = 0;
+  for (int t = 0; t < 14; ++t) {
+    const PairFinderStats st = finders.step(s, moved.data(), "life and filters, step " + std::to_string(t));
+    EXPECT_EQ(st.restingProxies + st.rebinnedProxies, activeCount(s)) << "step " << t;
+    if (st.incremental) {
+      ++incrementalSteps;
+      EXPECT_GE(st.restingProxies, activeCount(s) * 3 / 4) << "step " << t;
+    }
+    std::fill(moved.begin(), moved.end(), std::uint8_t(0));
+    if (t == 9) {
+      // Half of the boxes at once: a full search and a new grid, then the skip resumes.
+      for (std::size_t i = 0; i < s.flags.size(); i += 2) {
+        shift(s, i, step(random), 0.0f, 0.0f);
+        moved[i] = 1;
+      }
+      continue;
+    }
+    for (int k = 0; k < 60; ++k) {
+      const std::size_t i = random() % s.flags.size();
+      moved[i] = 1;
+      switch (k % 6) {
+        case 0:
+          s.flags[i] ^= kProxyActive;  // vanish or come back
+          break;
+        case 1:
+          s.group[i] = (s.group[i] == 1 ? 2 : 1), s.mask[i] = 1;  // filter change, box at rest
+          break;
+        case 2: {
+          const float h = 0.5f * (s.maxX[i] - s.minX[i]);
+          shift(s, i, far(random) - (s.minX[i] + h), far(random) - (s.minY[i] + h),
+                far(random) - (s.minZ[i] + h));
+          break;
+        }
+        case 3:
+          s.flags[i] ^= kProxyStatic;  // becomes static or dynamic while resting
+          break;
+        default:
+          shift(s, i, step(random), step(random), step(random));
+      }
+    }
+    if (t % 3 == 1) {
+      shift(s, pillar, 1.5f, 0.0f, 0.0f);
+      moved[pillar] = 1;
+    }
+    for (int k = 0; k < 10; ++k) {  // new proxies
+      s.add(far(random) * 0.5f, far(random) * 0.5f, far(random) * 0.5f, 0.5f, 0.5f, 0.5f);
+      moved.push_back(1);
+    }
+  }
+  EXPECT_GE(incrementalSteps, 9) << "the kept grid was not used";
+}
+
+TEST(OpenClPairFinder, FullSearchWhenTheGridOptionsOrMotionAreUnknown) {
+  GPUCOL_REQUIRE_OPENCL(context);
+  Scene s = uniformScene(4000, 30.0f, 1.0f, 24);
+  PairFinderOptions options;
+  options.bruteForceBelow = 0;
+  std::unique_ptr<PairFinder> gpu = makePairFinder(Config{});
+  std::unique_ptr<PairFinder> cpu = makeCpuPairFinder();
+  std::vector<std::uint8_t> moved(s.flags.size(), 0);
+  auto search = [&](const PairFinderOptions& o, const std::uint8_t* m, const std::string& what) {
+    ProxyArrays view = s.view();
+    view.moved = m;
+    std::vector<std::uint64_t> fromGpu, fromCpu;
+    gpu->findPairs(view, o, fromGpu);
+    cpu->findPairs(view, o, fromCpu);
+    EXPECT_TRUE(fromGpu == fromCpu) << what;
+    EXPECT_TRUE(fromGpu == findPairsBruteForce(view)) << what;
+    return gpu->stats();
+  };
+  search(options, nullptr, "first");
+  shift(s, 3, 0.5f, 0.5f, 0.5f);
+  moved[3] = 1;
+  EXPECT_TRUE(search(options, moved.data(), "one moved").incremental);
+  // Another cell size rule: the kept grid no longer fits the options.
+  PairFinderOptions density = options;
+  density.cellSizeRule = CellSizeRule::Density;
+  moved[3] = 0;
+  EXPECT_FALSE(search(density, moved.data(), "other cell size rule").incremental);
+  EXPECT_TRUE(search(density, moved.data(), "same rule again").incremental);
+  // Motion unknown: a full search.
+  shift(s, 7, -0.5f, 0.0f, 0.0f);
+  EXPECT_FALSE(search(density, nullptr, "moved unknown").incremental);
+  // Below the brute-force threshold: no grid, nothing kept.
+  PairFinderOptions brute = density;
+  brute.bruteForceBelow = 100000;
+  EXPECT_FALSE(search(brute, moved.data(), "brute force").usedGrid);
+  EXPECT_FALSE(search(density, moved.data(), "grid again").incremental);
 }
 
 TEST(OpenClPairFinder, IsInstalledBehindTheBroadphaseSeam) {
