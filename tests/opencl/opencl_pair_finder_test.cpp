@@ -329,7 +329,9 @@ TEST(OpenClPairFinder, RestingProxiesWithLifeAndFilterChanges) {
       moved[i] = 1;
       switch (k % 6) {
         case 0:
-          s.flags[i] ^= kProxyActive;  // vanish or come back
+          // Vanish or come back. A proxy that vanishes needs no moved flag (its flags say it is gone).
+          s.flags[i] ^= kProxyActive;
+          moved[i] = (s.flags[i] & kProxyActive) != 0;
           break;
         case 1:
           s.group[i] = (s.group[i] == 1 ? 2 : 1), s.mask[i] = 1;  // filter change, box at rest
