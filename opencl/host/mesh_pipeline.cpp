@@ -54,8 +54,21 @@ constexpr std::size_t kGroupSizeCap = 64;
 /// register; measured on PoCL (thesis scene): see the README.
 constexpr std::uint64_t kPrefilterLanes = 8;
 
-/// Work-items the depth-first traversal's automatic start depth aims for (MeshBatchDeviceOptions).
+/// Work-items the depth-first traversal's automatic start depth aims for (MeshBatchDeviceOptions): the
+/// batch's triangles (the smaller mesh of each pair, summed) / kTrianglesPerItem, within kDepthFirstMinItems
+/// .. kDepthFirstItems. Every work-item walks again from the roots to the start front, which on a small pair
+/// costs more than the balance it buys. Measured on PoCL (thesis scene, 2 cores at load 8-9, 4 interleaved
+/// rounds, README "Mesh pairs on OpenCL"): armadillo-2766 alone was fastest at 256 (0.57-0.60 ms end to end
+/// against 0.65-0.90 at 4096), a batch of 100 of its pairs at 4096 (1.3-1.5x over single calls, 1.0-1.2x at
+/// 256); 16 triangles per item puts one 2766 pair at 256 and one 27674 pair or more at 4096, as before.
 constexpr std::uint64_t kDepthFirstItems = 4096;
+constexpr std::uint64_t kDepthFirstMinItems = 256;
+constexpr std::uint64_t kTrianglesPerItem = 16;
+
+/// Words of the counter buffer the traversal and the near kernel share: [0] candidates appended, [1] the
+/// candidate counter wrapped, [2] / [3] low / high word of the box tests (mesh_middle_phase.cl), [4] hits
+/// appended by mesh_near_filter_test; the rest is padding.
+constexpr std::size_t kCounterWords = 8;
 
 class OpenClMeshPipeline final : public MeshBatchDevice {
  public:
@@ -69,7 +82,7 @@ class OpenClMeshPipeline final : public MeshBatchDevice {
                                                   "-DGPUCOL_LANES=" + std::to_string(kPrefilterLanes));
       m_nearFilterTest = cl::Kernel(nearProgram, "mesh_near_filter_test");
       m_nearTest = cl::Kernel(nearProgram, "mesh_near_test");
-      m_counters = cl::Buffer(m_context.context(), CL_MEM_READ_WRITE, 4 * sizeof(cl_uint));
+      m_counters = cl::Buffer(m_context.context(), CL_MEM_READ_WRITE, kCounterWords * sizeof(cl_uint));
       // Kernels read the leaf entry arena even when no tree has entries: give it one element.
       m_emptyEntries = cl::Buffer(m_context.context(), CL_MEM_READ_ONLY, sizeof(GpucolLeafEntry));
     });
@@ -129,9 +142,11 @@ class OpenClMeshPipeline final : public MeshBatchDevice {
   std::uint64_t traverseBreadthFirst(std::size_t pairCount, const MeshBatchDeviceOptions& options,
                                      const cl::Buffer& entries, unsigned bitsA, unsigned bitsB,
                                      MeshBatchDeviceStats& s);
-  std::uint64_t traverseDepthFirst(std::size_t pairCount, int treeDepths,
+  std::uint64_t traverseDepthFirst(std::size_t pairCount, int treeDepths, std::uint64_t smallerTriangles,
                                    const MeshBatchDeviceOptions& options, const cl::Buffer& entries,
-                                   unsigned bitsA, unsigned bitsB, MeshBatchDeviceStats& s);
+                                   unsigned bitsA, unsigned bitsB, bool chainNear, std::uint64_t& records,
+                                   MeshBatchDeviceStats& s);
+  void setNearFilterArgs(std::uint64_t capacity, unsigned bitsA, unsigned bitsB);
   cl::Kernel& depthFirstKernel(int treeDepths);
 
   OpenClContext& m_context;
@@ -142,6 +157,7 @@ class OpenClMeshPipeline final : public MeshBatchDevice {
   cl::Kernel m_frontStart, m_frontExpand, m_nearFilterTest, m_nearTest;
   std::map<std::size_t, cl::Kernel> m_depthFirst;  // by stack length
   cl::Buffer m_emptyEntries, m_counters;
+  const cl_uint m_zeroCounters[kCounterWords] = {};
   DeviceArray m_pairs, m_counts, m_front, m_next, m_keys, m_values, m_hits;
   std::vector<GpucolMeshPair> m_hostPairs;
   std::vector<std::uint64_t> m_hostKeys, m_sortedKeys;
@@ -161,6 +177,7 @@ void OpenClMeshPipeline::runBatch(const std::vector<DeviceMeshPair>& pairs,
   if (!options.resident) m_cache.clear();
   std::uint64_t maxTrianglesA = 1, maxTrianglesB = 1;
   int treeDepths = 0;
+  std::uint64_t smallerTriangles = 0;
   m_hostPairs.resize(pairs.size());
   for (std::size_t i = 0; i < pairs.size(); ++i) {
     const DeviceMeshPair& in = pairs[i];
@@ -173,6 +190,7 @@ void OpenClMeshPipeline::runBatch(const std::vector<DeviceMeshPair>& pairs,
     maxTrianglesA = std::max<std::uint64_t>(maxTrianglesA, in.meshA->triangleCount());
     maxTrianglesB = std::max<std::uint64_t>(maxTrianglesB, in.meshB->triangleCount());
     treeDepths = std::max(treeDepths, in.treeA->depth() + in.treeB->depth());
+    smallerTriangles += std::min(in.meshA->triangleCount(), in.meshB->triangleCount());
     GpucolMeshPair& p = m_hostPairs[i];
     const Eigen::Vector3f inflation = carriedBoxInflation(*in.treeB, in.treeMap);
     for (int r = 0; r < 3; ++r) {
@@ -212,11 +230,18 @@ void OpenClMeshPipeline::runBatch(const std::vector<DeviceMeshPair>& pairs,
   const cl::Buffer& entries = m_cache.entries()() ? m_cache.entries() : m_emptyEntries;
   s.uploadMs = millisecondsSince(start);
 
+  // The depth-first traversal with the early-out and the host sort (the defaults) has the near kernel
+  // enqueued right behind it, reading the candidate count on the device: one wait for both instead of a wait,
+  // a second launch and a second wait (PoCL's threads went idle and woke again in between).
+  const bool chainNear =
+      options.traversal == MeshTraversal::DepthFirst && options.nearPrefilter && !options.deviceSort;
   std::uint64_t candidateCount = 0;
+  std::uint64_t records = 0;
   if (options.traversal == MeshTraversal::BreadthFirst) {
     candidateCount = traverseBreadthFirst(pairs.size(), options, entries, bitsA, bitsB, s);
   } else {
-    candidateCount = traverseDepthFirst(pairs.size(), treeDepths, options, entries, bitsA, bitsB, s);
+    candidateCount = traverseDepthFirst(pairs.size(), treeDepths, smallerTriangles, options, entries, bitsA,
+                                        bitsB, chainNear, records, s);
   }
   s.candidates = candidateCount;
   if (candidateCount == 0) return;
@@ -240,23 +265,19 @@ void OpenClMeshPipeline::runBatch(const std::vector<DeviceMeshPair>& pairs,
   // order. Without it: every candidate's record, intersecting or not, in candidate order. The host keeps the
   // intersecting records and puts them in candidate order below.
   start = Clock::now();
-  std::uint64_t records = candidateCount;
-  if (options.nearPrefilter) {
-    queue.enqueueFillBuffer(m_counters, cl_uint(0), 0, sizeof(cl_uint));
-    m_nearFilterTest.setArg(0, m_pairs.buffer);
-    m_nearFilterTest.setArg(1, m_cache.vertices());
-    m_nearFilterTest.setArg(2, m_cache.indices());
-    m_nearFilterTest.setArg(3, m_keys.buffer);
-    m_nearFilterTest.setArg(4, cl_uint(candidateCount));
-    m_nearFilterTest.setArg(5, cl_uint(bitsA));
-    m_nearFilterTest.setArg(6, cl_uint(bitsB));
-    m_nearFilterTest.setArg(7, m_hits.ensure(ctx, candidateCount * sizeof(GpucolNearHit)));
-    m_nearFilterTest.setArg(8, m_counters);
+  if (chainNear) {
+    // Done with the traversal (traverseDepthFirst timed it as nearMs).
+  } else if (options.nearPrefilter) {
+    // The kernel reads the candidate count from counters[0] and appends at counters[4].
+    const cl_uint counters[kCounterWords] = {cl_uint(candidateCount)};
+    queue.enqueueWriteBuffer(m_counters, CL_FALSE, 0, sizeof counters, counters);
+    setNearFilterArgs(candidateCount, bitsA, bitsB);
     launch(m_nearFilterTest, (candidateCount + kPrefilterLanes - 1) / kPrefilterLanes);
-    cl_uint hitCount = 0;
-    queue.enqueueReadBuffer(m_counters, CL_TRUE, 0, sizeof hitCount, &hitCount);
-    records = hitCount;
+    cl_uint read[kCounterWords];
+    queue.enqueueReadBuffer(m_counters, CL_TRUE, 0, sizeof read, read);
+    records = read[4];
   } else {
+    records = candidateCount;
     m_nearTest.setArg(0, m_pairs.buffer);
     m_nearTest.setArg(1, m_cache.vertices());
     m_nearTest.setArg(2, m_cache.indices());
@@ -268,7 +289,7 @@ void OpenClMeshPipeline::runBatch(const std::vector<DeviceMeshPair>& pairs,
     launch(m_nearTest, candidateCount);
     queue.finish();
   }
-  s.nearMs += millisecondsSince(start);
+  if (!chainNear) s.nearMs += millisecondsSince(start);
 
   start = Clock::now();
   queue.enqueueReadBuffer(m_keys.buffer, CL_FALSE, 0, candidateCount * 8, m_hostKeys.data());
@@ -453,19 +474,37 @@ cl::Kernel& OpenClMeshPipeline::depthFirstKernel(int treeDepths) {
   return m_depthFirst.emplace(length, cl::Kernel(program, "mesh_traverse_depth_first")).first->second;
 }
 
+void OpenClMeshPipeline::setNearFilterArgs(std::uint64_t capacity, unsigned bitsA, unsigned bitsB) {
+  const cl::Context& ctx = m_context.context();
+  m_nearFilterTest.setArg(0, m_pairs.buffer);
+  m_nearFilterTest.setArg(1, m_cache.vertices());
+  m_nearFilterTest.setArg(2, m_cache.indices());
+  m_nearFilterTest.setArg(3, m_keys.buffer);
+  m_nearFilterTest.setArg(4, cl_uint(capacity));
+  m_nearFilterTest.setArg(5, cl_uint(bitsA));
+  m_nearFilterTest.setArg(6, cl_uint(bitsB));
+  m_nearFilterTest.setArg(7, m_hits.ensure(ctx, capacity * sizeof(GpucolNearHit)));
+  m_nearFilterTest.setArg(8, m_counters);
+}
+
 std::uint64_t OpenClMeshPipeline::traverseDepthFirst(std::size_t pairCount, int treeDepths,
+                                                     std::uint64_t smallerTriangles,
                                                      const MeshBatchDeviceOptions& options,
                                                      const cl::Buffer& entries, unsigned bitsA,
-                                                     unsigned bitsB, MeshBatchDeviceStats& s) {
+                                                     unsigned bitsB, bool chainNear, std::uint64_t& records,
+                                                     MeshBatchDeviceStats& s) {
   const cl::Context& ctx = m_context.context();
   cl::CommandQueue& queue = m_context.queue();
-  const auto start = Clock::now();
-  // The start front: deep enough for a few thousand work-items (a CPU device balances its threads over them),
-  // as shallow as that allows (the paths below the front's dead ends are idle work-items).
+  auto start = Clock::now();
+  // The start front: deep enough for the work-items kDepthFirstItems' rule asks for (a CPU device balances
+  // its threads over them), as shallow as that allows (the paths below the front's dead ends are idle
+  // work-items).
   int depth = options.depthFirstStartDepth;
   if (depth < 0) {
     depth = 0;
-    while (depth < kMaxStartDepth && (std::uint64_t(pairCount) << (2 * depth)) < kDepthFirstItems) ++depth;
+    const std::uint64_t wanted = std::clamp<std::uint64_t>(smallerTriangles / kTrianglesPerItem,
+                                                           kDepthFirstMinItems, kDepthFirstItems);
+    while (depth < kMaxStartDepth && (std::uint64_t(pairCount) << (2 * depth)) < wanted) ++depth;
   }
   const std::uint64_t items = std::uint64_t(pairCount) << (2 * depth);
   if (items > 0xffffffffu) {
@@ -475,10 +514,12 @@ std::uint64_t OpenClMeshPipeline::traverseDepthFirst(std::size_t pairCount, int 
   cl::Kernel& kernel = depthFirstKernel(treeDepths);
   // The key buffer keeps its size between batches; it starts at one candidate per 4 work-items.
   std::size_t capacity = std::max<std::size_t>(m_keys.bytes, items * 2) / sizeof(cl_ulong);
-  cl_uint counters[4] = {0, 0, 0, 0};
+  cl_uint counters[kCounterWords] = {};
+  double nearMs = 0;
   for (;;) {
     capacity = std::min<std::size_t>(capacity, 0xffffffffu);
-    queue.enqueueFillBuffer(m_counters, cl_uint(0), 0, sizeof counters);
+    // From a host array, not waited for: the in-order queue runs it before the kernel.
+    queue.enqueueWriteBuffer(m_counters, CL_FALSE, 0, sizeof m_zeroCounters, m_zeroCounters);
     kernel.setArg(0, m_pairs.buffer);
     kernel.setArg(1, m_cache.nodes());
     kernel.setArg(2, entries);
@@ -490,7 +531,24 @@ std::uint64_t OpenClMeshPipeline::traverseDepthFirst(std::size_t pairCount, int 
     kernel.setArg(8, cl_uint(bitsA));
     kernel.setArg(9, cl_uint(bitsB));
     launch(kernel, items);
-    queue.enqueueReadBuffer(m_counters, CL_TRUE, 0, sizeof counters, counters);
+    if (chainNear) {
+      // Launched over the whole capacity; the work-items past the count the kernel reads return at once. When
+      // the traversal overflowed, its hits are discarded with it below.
+      setNearFilterArgs(capacity, bitsA, bitsB);
+      cl::Event traversed;
+      queue.enqueueMarkerWithWaitList(nullptr, &traversed);
+      launch(m_nearFilterTest, (capacity + kPrefilterLanes - 1) / kPrefilterLanes);
+      queue.flush();
+      // The host waits for the traversal only to time it: the near kernel is queued behind it already.
+      traversed.wait();
+      s.traversalMs += millisecondsSince(start);
+      start = Clock::now();
+      queue.enqueueReadBuffer(m_counters, CL_TRUE, 0, sizeof counters, counters);
+      nearMs += millisecondsSince(start);
+      start = Clock::now();
+    } else {
+      queue.enqueueReadBuffer(m_counters, CL_TRUE, 0, sizeof counters, counters);
+    }
     if (counters[1] != 0) {
       throw std::length_error("OpenCL mesh pipeline: more than 2^32 - 1 candidate pairs in one batch");
     }
@@ -503,6 +561,8 @@ std::uint64_t OpenClMeshPipeline::traverseDepthFirst(std::size_t pairCount, int 
   }
   s.nodeTests += pairCount + ((std::uint64_t(counters[3]) << 32) | counters[2]);
   s.traversalMs += millisecondsSince(start);
+  s.nearMs += nearMs;
+  records = counters[4];
   return counters[0];
 }
 

@@ -552,15 +552,18 @@ __kernel void mesh_near_test(__global const GpucolMeshPair* pairs, __global cons
 // The early-out and the double test in one pass: work-item w tests candidates GPUCOL_LANES w .. in lanes
 // (mesh_prefilter_lanes), then runs the double test on the lanes that survive, one after the other, and
 // appends the records of the intersecting ones at hits[atomic counter] (at most one per candidate: `hits`
-// holds n, so nothing is dropped). Their order varies between runs; the host puts them in candidate order.
-// One launch and one wait: a separate early-out kernel, a scan and gather of its survivors and a test kernel
-// on them took longer on PoCL.
+// holds every candidate, so nothing is dropped). Their order varies between runs; the host puts them in
+// candidate order. One launch and one wait: a separate early-out kernel, a scan and gather of its survivors
+// and a test kernel on them took longer on PoCL.
 __kernel void mesh_near_filter_test(__global const GpucolMeshPair* restrict pairs,
                                     __global const float* restrict vertices,
                                     __global const uint* restrict indices,
-                                    __global const ulong* restrict keys, const uint n, const uint bitsA,
-                                    const uint bitsB, __global GpucolNearHit* restrict hits,
-                                    __global uint* restrict hitCount) {
+                                    __global const ulong* restrict keys, const uint capacity,
+                                    const uint bitsA, const uint bitsB, __global GpucolNearHit* restrict hits,
+                                    __global uint* restrict counters) {
+  // counters[0] holds the candidate count (written by the traversal just before, or by the host), of which
+  // `keys` holds at most `capacity`; hits are appended at counters[4] (mesh_pipeline.cpp's kCounterWords).
+  const uint n = min(counters[0], capacity);
   const uint first = (uint)get_global_id(0) * GPUCOL_LANES;
   if (first >= n) return;
   float corners[18][GPUCOL_LANES];
@@ -579,6 +582,6 @@ __kernel void mesh_near_filter_test(__global const GpucolMeshPair* restrict pair
       }
     }
     const GpucolNearHit hit = mesh_near_hit(af, bf, first + lane);
-    if (hit.flags & GPUCOL_HIT_INTERSECTS) hits[atomic_inc(hitCount)] = hit;
+    if (hit.flags & GPUCOL_HIT_INTERSECTS) hits[atomic_inc(&counters[4])] = hit;
   }
 }
