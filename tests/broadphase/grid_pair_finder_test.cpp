@@ -202,10 +202,12 @@ TEST(GridPairFinder, AddAndRemoveBetweenSearches) {
   }
 }
 
-TEST(GridPairFinder, RestingProxiesAreNotRebinnedAndPairsStayExact) {
-  // Stage 11: with ProxyArrays::moved, a finder keeps its grid while few proxies change. Each step a few
-  // boxes move (some far, some out of the grid's bounds), vanish, reappear, change filters, and a huge
-  // box moves; the pairs must equal brute force and the unchanged proxies must be counted as resting.
+/// Stage 11: with ProxyArrays::moved, a finder keeps its grid while few proxies change. Each step a few
+/// boxes move (some far, some out of the grid's bounds), vanish, reappear, change filters, and a huge
+/// box moves; the pairs must equal brute force and the unchanged proxies must be counted as resting.
+/// With `callerKeepsPairs`, the caller hands the finder its previous result (ProxyArrays::lastPairs), as
+/// GridBroadphase does, except at one step, which must then be a full search.
+void restingScenario(bool callerKeepsPairs) {
   Scene s = uniformCloud(6000, 20.0f, 0.7f, 12);
   for (std::size_t i = 0; i < s.flags.size(); i += 5) s.flags[i] |= gpucol::kProxyStatic;
   s.add(0, -20.5f, 0, 25.0f, 0.5f, 25.0f, gpucol::kProxyActive | gpucol::kProxyStatic);  // huge static ground
@@ -218,12 +220,19 @@ TEST(GridPairFinder, RestingProxiesAreNotRebinnedAndPairsStayExact) {
   gpucol::PairFinderOptions o;
   o.bruteForceBelow = 0;
   int incrementalSteps = 0;
+  constexpr int kWithoutLastPairs = 9;  // with callerKeepsPairs: the step that does not hand them over
+  std::vector<std::uint64_t> last;
   for (int t = 0; t < 12; ++t) {
     gpucol::ProxyArrays view = s.view();
     view.moved = moved.data();
+    if (callerKeepsPairs && t != kWithoutLastPairs) view.lastPairs = &last;
     std::vector<std::uint64_t> pairs;
     finder->findPairs(view, o, pairs);
     ASSERT_EQ(pairs, gpucol::findPairsBruteForce(s.view())) << "step " << t;
+    if (callerKeepsPairs && t == kWithoutLastPairs) {
+      EXPECT_FALSE(finder->stats().incremental) << "the finder kept no pairs of its own to carry over";
+    }
+    last = pairs;
     std::uint32_t active = 0, changedActive = 0;
     for (std::size_t i = 0; i < s.flags.size(); ++i) {
       active += (s.flags[i] & gpucol::kProxyActive) != 0;
@@ -285,7 +294,15 @@ TEST(GridPairFinder, RestingProxiesAreNotRebinnedAndPairsStayExact) {
       moved.push_back(1);
     }
   }
-  EXPECT_GE(incrementalSteps, 8) << "the kept grid was not used";
+  EXPECT_GE(incrementalSteps, callerKeepsPairs ? 7 : 8) << "the kept grid was not used";
+}
+
+TEST(GridPairFinder, RestingProxiesAreNotRebinnedAndPairsStayExact) {
+  restingScenario(false);
+}
+
+TEST(GridPairFinder, RestingPairsCarriedOverFromTheCallersCopy) {
+  restingScenario(true);
 }
 
 TEST(GridPairFinder, SparseGridPath) {

@@ -354,7 +354,8 @@ class CpuPairFinder final : public PairFinder {
   PairFinderOptions m_keptOptions;
   std::vector<std::uint8_t> m_unchanged;     // per slot: active in the kept search and unchanged since
   std::vector<std::uint32_t> m_keptHuge;     // huge proxies of the kept search
-  std::vector<std::uint64_t> m_lastPairs;    // this finder's previous result
+  std::vector<std::uint64_t> m_lastPairs;    // this finder's previous result (unless the caller keeps it)
+  bool m_callerKeepsPairs = false;           // the kept grid's pairs are the caller's ProxyArrays::lastPairs
   std::vector<std::uint32_t> m_moved;        // active slots changed since the kept search
   std::vector<std::uint64_t> m_movedKeys;    // (cell << 32) | index into m_moved, binned moved proxies
   std::vector<std::uint64_t> m_sortScratch;  // second buffer of the pair radix sort
@@ -382,6 +383,13 @@ void CpuPairFinder::findPairs(const ProxyArrays& proxies, const PairFinderOption
                               std::vector<std::uint64_t>& pairs) {
   m_stats = PairFinderStats{};
   m_chunksUsed = 0;
+  if (proxies.lastPairs == &pairs) {
+    // The caller's copy would be overwritten below: search as if it had given none.
+    ProxyArrays own = proxies;
+    own.lastPairs = nullptr;
+    findPairs(own, options, pairs);
+    return;
+  }
   pairs.clear();
   // Stage 0: the active list, ascending, so brute force emits keys already in order.
   m_active.clear();
@@ -412,7 +420,10 @@ void CpuPairFinder::findPairs(const ProxyArrays& proxies, const PairFinderOption
       m_keptHuge = m_huge;
     }
   }
-  if (m_kept)
+  // The pairs carried over by the next incremental search: the caller's copy when it says it keeps one
+  // (8 bytes per pair not held twice), else our own.
+  m_callerKeepsPairs = m_kept && proxies.lastPairs != nullptr;
+  if (m_kept && !m_callerKeepsPairs)
     m_lastPairs.assign(pairs.begin(), pairs.end());
   else
     std::vector<std::uint64_t>().swap(m_lastPairs);
@@ -445,7 +456,8 @@ void CpuPairFinder::releaseScratch() {
 }
 
 bool CpuPairFinder::keepGrid(const ProxyArrays& p, const PairFinderOptions& options) {
-  if (!m_kept || p.moved == nullptr || options.cellSizeRule != m_keptOptions.cellSizeRule ||
+  if (!m_kept || p.moved == nullptr || (m_callerKeepsPairs && p.lastPairs == nullptr) ||
+      options.cellSizeRule != m_keptOptions.cellSizeRule ||
       options.hugeCellLimit != m_keptOptions.hugeCellLimit || options.output != m_keptOptions.output ||
       options.mappingSqrt != m_keptOptions.mappingSqrt) {
     m_kept = false;
@@ -479,7 +491,7 @@ void CpuPairFinder::incremental(const ProxyArrays& p, const PairFinderOptions& o
   // Pairs of two unchanged proxies are carried over: neither box nor filter changed.
   std::vector<std::uint64_t>& carried = m_keys;  // scratch of the sparse path, free here
   carried.clear();
-  for (std::uint64_t key : m_lastPairs)
+  for (std::uint64_t key : m_callerKeepsPairs ? *p.lastPairs : m_lastPairs)
     if (m_unchanged[std::uint32_t(key >> 32)] && m_unchanged[std::uint32_t(key)]) carried.push_back(key);
 
   // Moved proxies: huge ones (on the kept cell size) test against every active proxy; the others are

@@ -35,8 +35,9 @@
 // 11. Resting proxies (CPU finder, "skip what a scene does not need"): when ProxyArrays::moved says which
 //     slots changed since this finder's previous search and few did, the grid of that search is kept:
 //     proxies unchanged since it was built (static or sleeping) are not re-binned and not tested among
-//     themselves (their pairs are carried over); only moved proxies are binned (on the kept grid) and
-//     tested against the kept cells, the kept huge boxes and each other. Same pairs, same order.
+//     themselves (their pairs are carried over from the previous result, the caller's copy when
+//     ProxyArrays::lastPairs gives it); only moved proxies are binned (on the kept grid) and tested against
+//     the kept cells, the kept huge boxes and each other. Same pairs, same order.
 //
 // Pair key: (std::uint64_t(lower slot) << 32) | higher slot. Slots are the indices into ProxyArrays.
 #include <cstdint>
@@ -79,6 +80,12 @@ struct ProxyArrays {
   /// Optional: nonzero for a slot whose box, filter or flags changed (or that is new) since the previous
   /// findPairs call on the same finder. nullptr: anything may have changed (a full search).
   const std::uint8_t* moved = nullptr;
+  /// Optional: the sorted pair keys that the same finder returned from its previous findPairs call, kept
+  /// unchanged by the caller (GridBroadphase keeps them for its diff with the pair cache). Given, a finder
+  /// that carries pairs over (stage 11) reads them here and keeps no copy of its own until the next call;
+  /// a later call without them is then a full search. nullptr: the finder keeps what it needs itself. Never
+  /// the `pairs` argument of the same call (that one is overwritten; it is then treated as not given).
+  const std::vector<std::uint64_t>* lastPairs = nullptr;
 };
 
 /// How the grid's cell size is chosen (paper §4.1 and the alternative it is measured against).
