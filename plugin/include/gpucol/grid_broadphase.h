@@ -53,8 +53,9 @@ struct GridBroadphaseStats {
   /// the filter and state per slot (9 bytes), free-slot lists, the last step's sorted pair keys (8 bytes
   /// per pair, plus the few the cache's filter refused; the CPU finder carries resting pairs over from
   /// them), and what the pair finder keeps between searches (the CPU finder: the home-cell order of the
-  /// binned boxes, 8 bytes per proxy; while few proxies move, also the kept grid of stage 11). Allocated capacities are counted, not sizes. Bullet's pair cache
-  /// (btHashedOverlappingPairCache or the user's) is not counted: it belongs to Bullet.
+  /// binned boxes, 8 bytes per proxy; while few proxies move, also the kept grid of stage 11). Allocated
+  /// capacities are counted, not sizes. Bullet's pair cache (btHashedOverlappingPairCache or the user's) is
+  /// not counted: it belongs to Bullet.
   std::size_t memoryBytes = 0;
   /// Bytes at the peak of the last step: memoryBytes plus the scratch of the step that is released at its
   /// end (the boxes' structure-of-arrays view, the finder's working arrays as they stand at the end of its
