@@ -17,7 +17,8 @@ struct OpenClPairFinderTuning {
 
 /// The grid pair finder of plugin/src/broadphase/grid_pair_finder.h on an OpenCL device: the host
 /// chooses the grid (stages 0–3), kernels do the rest (grid_find_pairs.cl, scan.cl, radix_sort.cl).
-/// Same pairs as the CPU finder, in the same (sorted) order. Returns nullptr when OpenCL is not usable
+/// Same pairs as the CPU finder, in the same (sorted) order; keeps its grid on the device while few proxies
+/// move (stage 11). Returns nullptr when OpenCL is not usable
 /// (said once on stderr by OpenClContext::tryGet); throws OpenClError when setup fails on a usable device.
 std::unique_ptr<PairFinder> makePairFinder(const Config& config, const OpenClPairFinderTuning& tuning = {});
 

@@ -32,8 +32,9 @@
 // 10. Output: set bits in a bit mask over the candidates (§3.4) or append to per-chunk lists (compacted);
 //     either way the pair keys are gathered and sorted, so the order never depends on threads or device.
 //
-// 11. Resting proxies (CPU finder, "skip what a scene does not need"): when ProxyArrays::moved says which
-//     slots changed since this finder's previous search and few did, the grid of that search is kept:
+// 11. Resting proxies (both finders, "skip what a scene does not need"; the OpenCL one keeps its grid on the
+//     device): when ProxyArrays::moved says which slots changed since this finder's previous search and few
+//     did, the grid of that search is kept:
 //     proxies unchanged since it was built (static or sleeping) are not re-binned and not tested among
 //     themselves (their pairs are carried over from the previous result, the caller's copy when
 //     ProxyArrays::lastPairs gives it); only moved proxies are binned (on the kept grid) and tested against
