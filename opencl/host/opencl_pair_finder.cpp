@@ -90,6 +90,7 @@ class OpenClPairFinder final : public PairFinder {
                   std::vector<std::uint64_t>& pairs);
   void incremental(const ProxyArrays& p, const PairFinderOptions& options, Kernels& k,
                    std::vector<std::uint64_t>& pairs);
+  bool pairsFit(std::uint32_t& capacity);
   void readPairs(cl_uint slotBits, std::vector<std::uint64_t>& pairs);
   void setProxyArgs(cl::Kernel& kernel);
   void launch(cl::Kernel& kernel, std::uint64_t items);
@@ -329,6 +330,22 @@ void OpenClPairFinder::testHuge(Kernels& k, const DeviceArray& huge, std::uint32
   launchStrided(k.testHuge, std::uint64_t(hugeCount) * activeCount);
 }
 
+/// Reads the pair counter after a pass: true when the pairs found fit `capacity` (m_lastPairs set), else
+/// `capacity` becomes the count and the caller runs the pass again (nothing is truncated).
+bool OpenClPairFinder::pairsFit(std::uint32_t& capacity) {
+  cl_uint found = 0;
+  m_context.queue().enqueueReadBuffer(m_counter.buffer, CL_TRUE, 0, 4, &found);
+  if (found == 0xffffffffu) {
+    throw std::overflow_error("gpucol OpenCL pair finder: 2^32 - 1 or more overlapping pairs in one step");
+  }
+  if (found <= capacity) {
+    m_lastPairs = found;
+    return true;
+  }
+  capacity = found;
+  return false;
+}
+
 void OpenClPairFinder::readPairs(cl_uint slotBits, std::vector<std::uint64_t>& pairs) {
   // Stage 10: one order whatever the device: sort the compressed keys, then widen them.
   cl::CommandQueue& q = m_context.queue();
@@ -495,16 +512,7 @@ void OpenClPairFinder::fullSearch(const ProxyArrays& p, const PairFinderOptions&
       k.bruteTest.setArg(15, m_counter.buffer);
       launchStrided(k.bruteTest, gpucol_pair_count(activeCount));
     }
-    cl_uint found = 0;
-    q.enqueueReadBuffer(m_counter.buffer, CL_TRUE, 0, 4, &found);
-    if (found == 0xffffffffu) {
-      throw std::overflow_error("gpucol OpenCL pair finder: 2^32 - 1 or more overlapping pairs in one step");
-    }
-    if (found <= capacity) {
-      m_lastPairs = found;
-      break;
-    }
-    capacity = found;
+    if (pairsFit(capacity)) break;
   }
   readPairs(slotBits, pairs);
 
@@ -601,16 +609,7 @@ void OpenClPairFinder::incremental(const ProxyArrays& p, const PairFinderOptions
     }
     testBins(k, m_movedBins, out, capacity, slotBits);
     testHuge(k, m_movedHugeBuf, hugeCount, m_isMovedHugeBuf, out, capacity, slotBits);
-    cl_uint found = 0;
-    q.enqueueReadBuffer(m_counter.buffer, CL_TRUE, 0, 4, &found);
-    if (found == 0xffffffffu) {
-      throw std::overflow_error("gpucol OpenCL pair finder: 2^32 - 1 or more overlapping pairs in one step");
-    }
-    if (found <= capacity) {
-      m_lastPairs = found;
-      break;
-    }
-    capacity = found;
+    if (pairsFit(capacity)) break;
   }
   // The new pairs, sorted on the device, merged with the carried ones: pairs of two resting proxies are
   // those of the last search (neither box nor filter changed). Every new pair has a moved proxy, so the two
