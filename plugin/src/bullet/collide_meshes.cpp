@@ -116,10 +116,8 @@ struct NearHit {
 // cores.
 constexpr std::size_t kNearChunk = 512;
 
-// How far ahead the near phase prefetches B's indices and vertices, in candidates.
-constexpr std::size_t kIndexAhead = 16;
-constexpr std::size_t kVertexAhead = 8;
-
+// How far ahead the near phase prefetches B's triangles, in candidates.
+constexpr std::size_t kSoupAhead = 8;
 
 // Distance in floats between two coordinates' rows of ChunkTriangles: not a power of two, so that the 18 rows
 // written together do not all fall into the same few sets of the L1 cache (a 2 KiB stride put 9 rows per
@@ -196,8 +194,8 @@ void transformRows(float* rows, std::size_t count, const PairFrame& frame) {
 // double test and the contact generation on the pairs it could not reject. The pre-test only rejects what the
 // double test rejects, so the result is the double test's; it removes about two thirds of the candidates of
 // the thesis scene, and without a branch per pair (its outcome is close to a coin toss).
-std::vector<NearHit> runNearPhase(const TriangleMesh& meshA, const TriangleMesh& meshB,
-                                  const PairFrame& frame, const std::vector<TrianglePair>& candidates) {
+std::vector<NearHit> runNearPhase(const MeshShape& shapeA, const MeshShape& shapeB, const PairFrame& frame,
+                                  const std::vector<TrianglePair>& candidates) {
   const std::size_t chunks = (candidates.size() + kNearChunk - 1) / kNearChunk;
   std::vector<std::vector<NearHit>> chunkHits(chunks);
   tbb::enumerable_thread_specific<ChunkBuffers> threadBuffers;
@@ -217,36 +215,31 @@ std::vector<NearHit> runNearPhase(const TriangleMesh& meshA, const TriangleMesh&
     constexpr std::size_t n = kNearRow;
     const std::size_t rowA[3] = {0, frame.flipA ? 2u : 1u, frame.flipA ? 1u : 2u};
     const std::size_t rowB[3] = {3, frame.flipB ? 5u : 4u, frame.flipB ? 4u : 5u};
-    // B's triangles are read in no useful order, so each costs a cache miss for its indices and then one per
-    // vertex; prefetching the indices kIndexAhead candidates ahead and the vertices kVertexAhead ahead
-    // overlaps those misses instead of paying them one after the other.
-    const std::uint32_t* const indicesA = meshA.indices().data();
-    const float* const positionsA = meshA.positions().data();
-    const std::uint32_t* const indicesB = meshB.indices().data();
-    const float* const positionsB = meshB.positions().data();
+    // B's triangles are read in no useful order. They come from the shapes' triangle soups (MeshShape::
+    // triangleSoup): one contiguous 36-byte read per triangle, prefetched kSoupAhead candidates ahead, where
+    // the mesh's index and vertex arrays cost a load of the indices and then, depending on it, three vertex
+    // loads.
+    const float* const soupA = shapeA.triangleSoup().data();
+    const float* const soupB = shapeB.triangleSoup().data();
     float a[9] = {};
     for (std::size_t j = 0; j < count; ++j) {
       const std::size_t i = begin + j;
-      if (i + kIndexAhead < candidates.size()) {
-        prefetch(indicesB + 3 * std::size_t(candidates[i + kIndexAhead].triangleB));
-      }
-      if (i + kVertexAhead < candidates.size()) {
-        const std::uint32_t* corner = indicesB + 3 * std::size_t(candidates[i + kVertexAhead].triangleB);
-        for (int k = 0; k < 3; ++k) prefetch(positionsB + 3 * std::size_t(corner[k]));
+      if (i + kSoupAhead < candidates.size()) {
+        const float* ahead = soupB + 9 * std::size_t(candidates[i + kSoupAhead].triangleB);
+        prefetch(ahead);
+        prefetch(ahead + 8);  // the last coordinate, on the next cache line when the triangle straddles two
       }
       const TrianglePair& pair = candidates[i];
       if (j == 0 || pair.triangleA != candidates[i - 1].triangleA) {
-        const std::uint32_t* corner = indicesA + 3 * std::size_t(pair.triangleA);
+        const float* p = soupA + 9 * std::size_t(pair.triangleA);
         for (int v = 0; v < 3; ++v) {
-          const float* p = positionsA + 3 * std::size_t(corner[v]);
-          for (int c = 0; c < 3; ++c) a[3 * rowA[v] + c] = p[c];
+          for (int c = 0; c < 3; ++c) a[3 * rowA[v] + c] = p[3 * v + c];
         }
       }
       for (std::size_t k = 0; k < 9; ++k) rows[k * n + j] = a[k];
-      const std::uint32_t* corner = indicesB + 3 * std::size_t(pair.triangleB);
+      const float* p = soupB + 9 * std::size_t(pair.triangleB);
       for (int v = 0; v < 3; ++v) {
-        const float* p = positionsB + 3 * std::size_t(corner[v]);
-        for (int c = 0; c < 3; ++c) rows[(3 * rowB[v] + c) * n + j] = p[c];
+        for (int c = 0; c < 3; ++c) rows[(3 * rowB[v] + c) * n + j] = p[3 * v + c];
       }
     }
     transformRows(rows, count, frame);
@@ -377,7 +370,7 @@ MeshPairResult collidePair(const MeshShape& shapeA, const btTransform& transform
   result.stats.middlePhaseMs = millisecondsSince(start);
 
   start = Clock::now();
-  const std::vector<NearHit> hits = runNearPhase(shapeA.mesh(), shapeB.mesh(), frame, result.candidatePairs);
+  const std::vector<NearHit> hits = runNearPhase(shapeA, shapeB, frame, result.candidatePairs);
   const double nearMs = millisecondsSince(start);
   collectHits(hits, frame, config, result);
   result.stats.nearPhaseMs = nearMs;

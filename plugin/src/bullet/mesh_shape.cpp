@@ -14,6 +14,12 @@ namespace gpucol {
 MeshShape::MeshShape(std::shared_ptr<const TriangleMesh> mesh, const Config& config) : m_mesh(std::move(mesh)) {
   if (!m_mesh) throw MeshError("MeshShape: the mesh pointer is null");
   m_tree = std::make_shared<const AabbTree>(AabbTree::build(*m_mesh, config.trianglesPerLeaf));
+  const std::vector<float>& positions = m_mesh->positions();
+  const std::vector<std::uint32_t>& indices = m_mesh->indices();
+  m_soup.resize(3 * indices.size());
+  for (std::size_t k = 0; k < indices.size(); ++k) {
+    for (std::size_t c = 0; c < 3; ++c) m_soup[3 * k + c] = positions[3 * std::size_t(indices[k]) + c];
+  }
   // Not CUSTOM_CONCAVE_SHAPE_TYPE: Bullet 3 gives that value to SDF_SHAPE_PROXYTYPE too, and its convex-concave
   // algorithm treats every shape of that type as a btSdfCollisionShape (boxes would fall through a mesh).
   // FAST_CONCAVE_MESH_PROXYTYPE is a concave type that nothing in Bullet special-cases, so Bullet's generic
