@@ -67,7 +67,7 @@ struct MeshBatchDeviceOptions {
   /// pair that many expansions below the roots whose boxes (and ancestors' boxes) overlap.
   int startDepth = 0;
   /// Depth of the depth-first traversal's start front (0..12); -1 picks the smallest depth that gives the
-  /// launch as many work-items (pairs x 4^depth) as the batch's size asks for: one per 16 triangles of each
+  /// launch as many work-items (pairs x 4^depth) as the batch's size asks for: one per 128 triangles of each
   /// pair's smaller mesh, from 256 to 4096 (measured in opencl/host/mesh_pipeline.cpp).
   int depthFirstStartDepth = -1;
   /// Run the float plane and interval tests of triangle_plane.h as a stage of their own, then the double
