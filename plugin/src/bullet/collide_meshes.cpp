@@ -225,9 +225,15 @@ std::vector<NearHit> runNearPhase(const MeshShape& shapeA, const MeshShape& shap
     for (std::size_t j = 0; j < count; ++j) {
       const std::size_t i = begin + j;
       if (i + kSoupAhead < candidates.size()) {
-        const float* ahead = soupB + 9 * std::size_t(candidates[i + kSoupAhead].triangleB);
-        prefetch(ahead);
-        prefetch(ahead + 8);  // the last coordinate, on the next cache line when the triangle straddles two
+        // B's triangle, and A's too: A's come in ascending order but far apart, and perf showed the first
+        // load of each new A triangle as the near phase's largest stall once B's were prefetched.
+        const TrianglePair& ahead = candidates[i + kSoupAhead];
+        const float* aheadB = soupB + 9 * std::size_t(ahead.triangleB);
+        const float* aheadA = soupA + 9 * std::size_t(ahead.triangleA);
+        prefetch(aheadB);
+        prefetch(aheadB + 8);  // the last coordinate, on the next cache line when the triangle straddles two
+        prefetch(aheadA);
+        prefetch(aheadA + 8);
       }
       const TrianglePair& pair = candidates[i];
       if (j == 0 || pair.triangleA != candidates[i - 1].triangleA) {
