@@ -63,11 +63,11 @@ constexpr std::uint64_t kPrefilterLanes = 8;
 /// 256). One item per 128 triangles instead of 16: the walk to a start front d levels down costs
 /// sum over levels l of (overlapping node pairs at l) x 4^(d - l) box tests, about 14,700 at d = 6 on
 /// armadillo-27674 (87,657 tests in all) and 3,600 at d = 5, while only 145 (d = 5) or 279 (d = 6) of the
-/// work-items reach a live node pair anyway. 4 interleaved rounds at load 3.7-3.9, end to end: armadillo-27674
-/// 2.04-2.15 ms at d = 6 (the 16-triangle rule), 1.80-2.02 at d = 4, 1.80-1.91 at d = 5; armadillo-99976
-/// 3.49-8.39 at d = 6, 3.23-4.05 at d = 5 (lower in each round); armadillo-2766 (256 items) and -399904 and a
-/// batch of 100 armadillo-2766 pairs (4096 items) keep their depth. 128 gives d = 4, 5, 6 for 27674, 99976,
-/// 399904.
+/// work-items reach a live node pair anyway. 4 interleaved rounds at load 3.7-3.9, end to end:
+/// armadillo-27674 2.04-2.15 ms at d = 6 (the 16-triangle rule), 1.80-2.02 at d = 4, 1.80-1.91 at d = 5;
+/// armadillo-99976 3.49-8.39 at d = 6, 3.23-4.05 at d = 5 (lower in each round); armadillo-2766 (256 items)
+/// and -399904 and a batch of 100 armadillo-2766 pairs (depth 3, 6,400 items) keep their depth. 128 gives d =
+/// 4, 5, 6 for 27674, 99976, 399904.
 constexpr std::uint64_t kDepthFirstItems = 4096;
 constexpr std::uint64_t kDepthFirstMinItems = 256;
 constexpr std::uint64_t kTrianglesPerItem = 128;
