@@ -116,7 +116,7 @@ struct NearHit {
 // cores.
 constexpr std::size_t kNearChunk = 512;
 
-// How far ahead the near phase prefetches B's triangles, in candidates.
+// How far ahead the near phase prefetches the triangles of both meshes, in candidates.
 constexpr std::size_t kSoupAhead = 8;
 
 // Distance in floats between two coordinates' rows of ChunkTriangles: not a power of two, so that the 18 rows
