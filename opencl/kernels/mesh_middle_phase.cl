@@ -318,6 +318,22 @@ uint mesh_overlaps4(float4 lo, float4 hi, const Box4* b) {
 #define GPUCOL_PREFETCH_NODE(node) ((void)(node))
 #endif
 
+// Expansions between popping a pair and expanding it: 4 on a CPU device (tree_traversal.cpp's kLookahead,
+// whose cache misses it hides), 1 (a plain descent) elsewhere.
+//
+// The stack's length, GPUCOL_DFS_ROOM: a plain descent needs GPUCOL_DFS_STACK. With the ring, while the stack
+// holds at most GPUCOL_DFS_STACK entries the ring is refilled; each of its at most GPUCOL_DFS_LOOKAHEAD
+// expansions then pushes at most four, so the stack reaches at most GPUCOL_DFS_STACK + 4 GPUCOL_DFS_LOOKAHEAD
+// before the descent turns plain, and a plain descent adds at most 3 per level below the pair it pops, at
+// most GPUCOL_DFS_STACK in all.
+#ifdef GPUCOL_CPU_PREFETCH
+#define GPUCOL_DFS_LOOKAHEAD 4u
+#define GPUCOL_DFS_ROOM (2u * GPUCOL_DFS_STACK + 4u * GPUCOL_DFS_LOOKAHEAD)
+#else
+#define GPUCOL_DFS_LOOKAHEAD 1u
+#define GPUCOL_DFS_ROOM GPUCOL_DFS_STACK
+#endif
+
 void mesh_count_tests(__global uint* counters, uint tests) {
   if (tests == 0u) return;
   const uint old = atomic_add(&counters[2], tests);
@@ -399,14 +415,29 @@ __kernel void mesh_traverse_depth_first(__global const GpucolMeshPair* restrict 
   ulong batch[GPUCOL_DFS_BATCH];
   uint batched = 0u;
   // Children are written at the top in any case and the top moves up by the box test's outcome (no branch:
-  // the tests come out about half and half), so the stack has one entry of room past the bound.
-  uint2 stack[GPUCOL_DFS_STACK + 1];
+  // the tests come out about half and half), so the stack has one entry of room past its bound
+  // (GPUCOL_DFS_ROOM).
+  uint2 stack[GPUCOL_DFS_ROOM + 1];
   uint top = 0u;
   stack[top++] = (uint2)(a, b);
-  while (top > 0u) {
-    const uint2 top2 = stack[--top];
-    a = top2.x;
-    b = top2.y;
+  // A popped pair waits in the ring for GPUCOL_DFS_LOOKAHEAD - 1 expansions, its nodes asked for when it
+  // enters, as in tree_traversal.cpp's Traverser::run. The ring is refilled only while the stack is within
+  // GPUCOL_DFS_STACK, else only when empty (a plain descent): see GPUCOL_DFS_ROOM for the bound.
+  uint2 ring[GPUCOL_DFS_LOOKAHEAD];
+  uint head = 0u, waiting = 0u;
+  for (;;) {
+    while (waiting < GPUCOL_DFS_LOOKAHEAD && top > 0u && (waiting == 0u || top <= GPUCOL_DFS_STACK)) {
+      const uint2 entering = stack[--top];
+      GPUCOL_PREFETCH_NODE(treeA + entering.x);
+      GPUCOL_PREFETCH_NODE(treeB + entering.y);
+      ring[(head + waiting) % GPUCOL_DFS_LOOKAHEAD] = entering;
+      ++waiting;
+    }
+    if (waiting == 0u) break;
+    a = ring[head].x;
+    b = ring[head].y;
+    head = (head + 1u) % GPUCOL_DFS_LOOKAHEAD;
+    --waiting;
     na = mesh_node4(treeA + a);
     nb = mesh_node4(treeB + b);
     const bool leafA = na.count != 0u;
