@@ -198,17 +198,12 @@ GPUCOL_INLINE void mesh_vertex(__global const float* vertices, uint firstVertex,
   out[2] = p[2];
 }
 
-// The triangles of candidate `key` in A's scaled frame, in float, as collide_meshes.cpp builds them. Its
-// loops are unrolled: left as loops, PoCL vectorised them (two floats wide) inside each work-item, and the
-// loop over the work-items, no longer innermost, stayed scalar.
-GPUCOL_INLINE void mesh_candidate_triangles(__global const GpucolMeshPair* pairs,
-                                            __global const float* vertices, __global const uint* indices,
-                                            const ulong key, const uint bitsA, const uint bitsB,
-                                            float af[3][3], float bf[3][3]) {
-  const uint pair = (uint)(key >> (bitsA + bitsB));
-  const uint triangleA = (uint)((key >> bitsB) & ((1ul << bitsA) - 1ul));
-  const uint triangleB = (uint)(key & ((1ul << bitsB) - 1ul));
-  __global const GpucolMeshPair* p = pairs + pair;
+// Triangles triangleA of A and triangleB of B of pair `p` (a private copy) in A's scaled frame, in float, as
+// collide_meshes.cpp builds them. Its loops are unrolled: left as loops, PoCL vectorised them (two floats
+// wide) inside each work-item, and the loop over the work-items, no longer innermost, stayed scalar.
+GPUCOL_INLINE void mesh_pair_triangles(const GpucolMeshPair* p, __global const float* vertices,
+                                       __global const uint* indices, const uint triangleA, const uint triangleB,
+                                       float af[3][3], float bf[3][3]) {
   __global const uint* cornerA = indices + 3u * (p->trianglesA + triangleA);
   __global const uint* cornerB = indices + 3u * (p->trianglesB + triangleB);
 #pragma unroll
@@ -236,6 +231,16 @@ GPUCOL_INLINE void mesh_candidate_triangles(__global const GpucolMeshPair* pairs
     bf[1][k] = flipB ? b2 : b1;
     bf[2][k] = flipB ? b1 : b2;
   }
+}
+
+// The triangles of candidate `key` (mesh_pair_triangles).
+GPUCOL_INLINE void mesh_candidate_triangles(__global const GpucolMeshPair* pairs,
+                                            __global const float* vertices, __global const uint* indices,
+                                            const ulong key, const uint bitsA, const uint bitsB,
+                                            float af[3][3], float bf[3][3]) {
+  const GpucolMeshPair p = pairs[(uint)(key >> (bitsA + bitsB))];
+  mesh_pair_triangles(&p, vertices, indices, (uint)((key >> bitsB) & ((1ul << bitsA) - 1ul)),
+                      (uint)(key & ((1ul << bitsB) - 1ul)), af, bf);
 }
 
 // The early-out tests GPUCOL_LANES candidates per work-item, one in each lane of float vectors. PoCL does
@@ -385,6 +390,19 @@ GPUCOL_INLINE BoolLanes l3_intervals_apart(L3 a0, L3 a1, L3 a2, L3 b0, L3 b1, L3
   return valid & ((iA.x > iB.y + tolerance) | (iB.x > iA.y + tolerance));
 }
 
+// Lane `lane` of the corners (mesh_prefilter_lanes).
+GPUCOL_INLINE void mesh_store_corners(const float af[3][3], const float bf[3][3], int lane,
+                                      float corners[18][GPUCOL_LANES]) {
+#pragma unroll
+  for (int c = 0; c < 3; ++c) {
+#pragma unroll
+    for (int k = 0; k < 3; ++k) {
+      corners[3 * c + k][lane] = af[c][k];
+      corners[9 + 3 * c + k][lane] = bf[c][k];
+    }
+  }
+}
+
 // The early-out of GPUCOL_LANES candidates from `first` (lanes past n repeat the last candidate): -1 in the
 // lanes whose triangles float arithmetic proves apart as the double test would find them
 // (floatCertainlyApartBranchFree, then floatIntervalsApartBranchFree), else 0. The triangles stay in
@@ -394,17 +412,29 @@ GPUCOL_INLINE BoolLanes mesh_prefilter_lanes(__global const GpucolMeshPair* rest
                                              __global const uint* restrict indices,
                                              __global const ulong* restrict keys, uint first, uint n,
                                              uint bitsA, uint bitsB, float corners[18][GPUCOL_LANES]) {
-  for (int lane = 0; lane < GPUCOL_LANES; ++lane) {
-    float af[3][3], bf[3][3];
-    mesh_candidate_triangles(pairs, vertices, indices, keys[min(first + (uint)lane, n - 1u)], bitsA, bitsB,
-                             af, bf);
-#pragma unroll
-    for (int c = 0; c < 3; ++c) {
-#pragma unroll
-      for (int k = 0; k < 3; ++k) {
-        corners[3 * c + k][lane] = af[c][k];
-        corners[9 + 3 * c + k][lane] = bf[c][k];
-      }
+  // The lanes' candidates usually belong to one pair (the traversal appends each work-item's candidates 16 at
+  // a time): then the pair's map is read once, not gathered lane by lane (PoCL vectorises the lane loop, and
+  // gathering the pair's fields took most of its time). Both loops compute the same values.
+  const uint pairShift = bitsA + bitsB;
+  const ulong maskA = (1ul << bitsA) - 1ul, maskB = (1ul << bitsB) - 1ul;
+  const uint firstPair = (uint)(keys[first] >> pairShift);
+  bool onePair = true;
+  for (int lane = 1; lane < GPUCOL_LANES; ++lane)
+    onePair = onePair && (uint)(keys[min(first + (uint)lane, n - 1u)] >> pairShift) == firstPair;
+  if (onePair) {
+    const GpucolMeshPair p = pairs[firstPair];
+    for (int lane = 0; lane < GPUCOL_LANES; ++lane) {
+      const ulong key = keys[min(first + (uint)lane, n - 1u)];
+      float af[3][3], bf[3][3];
+      mesh_pair_triangles(&p, vertices, indices, (uint)((key >> bitsB) & maskA), (uint)(key & maskB), af, bf);
+      mesh_store_corners(af, bf, lane, corners);
+    }
+  } else {
+    for (int lane = 0; lane < GPUCOL_LANES; ++lane) {
+      float af[3][3], bf[3][3];
+      mesh_candidate_triangles(pairs, vertices, indices, keys[min(first + (uint)lane, n - 1u)], bitsA, bitsB,
+                               af, bf);
+      mesh_store_corners(af, bf, lane, corners);
     }
   }
   L3 t[6];
