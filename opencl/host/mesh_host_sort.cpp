@@ -1,7 +1,6 @@
 #include "opencl/host/mesh_host_sort.h"
 
 #include <algorithm>
-#include <array>
 #include <stdexcept>
 #include <utility>
 
@@ -11,10 +10,9 @@ namespace gpucol::opencl {
 
 namespace {
 
-/// Digit width: 2048 counters (16 KiB) stay in L1, and one armadillo-399904 pair's 38-bit keys with a 16-bit
-/// index take five passes.
-constexpr unsigned kDigitBits = 11;
-constexpr std::size_t kBuckets = std::size_t(1) << kDigitBits;
+/// Widest digit: 2048 counters (8 KiB) per pass. The key's bits are split into the fewest passes of at most
+/// this width, all counted in one sweep (one armadillo-399904 pair's 38-bit keys: four passes of 10 bits).
+constexpr unsigned kMaxDigitBits = 11;
 
 }  // namespace
 
@@ -38,25 +36,33 @@ void MeshHostSort::sortAndRank(const std::vector<std::uint64_t>& keys, unsigned 
     }
     return;
   }
-  // The index in the low bits makes every word unique and the order stable, and carries the rank out.
+  // The index rides in the low bits to carry the rank out. Only the key's digits are sorted: the words start
+  // in index order and every pass is stable, so equal keys keep it without passes over the index.
   m_packed.resize(n);
   m_scratch.resize(n);
   for (std::size_t i = 0; i < n; ++i) m_packed[i] = (keys[i] << indexBits) | i;
-  const unsigned totalBits = keyBits + indexBits;
-  std::array<std::uint32_t, kBuckets> count;
-  for (unsigned shift = 0; shift < totalBits; shift += kDigitBits) {
-    count.fill(0);
-    for (std::uint64_t w : m_packed) ++count[(w >> shift) & (kBuckets - 1)];
+  const unsigned passes = (keyBits + kMaxDigitBits - 1) / kMaxDigitBits;
+  const unsigned digitBits = passes == 0 ? 0 : (keyBits + passes - 1) / passes;
+  const std::size_t buckets = std::size_t(1) << digitBits;
+  const std::uint64_t digitMask = buckets - 1;
+  m_counts.assign(passes * buckets, 0);
+  for (std::uint64_t w : m_packed) {
+    const std::uint64_t key = w >> indexBits;
+    for (unsigned p = 0; p < passes; ++p) ++m_counts[p * buckets + ((key >> (p * digitBits)) & digitMask)];
+  }
+  for (unsigned p = 0; p < passes; ++p) {
+    std::uint32_t* count = m_counts.data() + p * buckets;
+    const unsigned shift = indexBits + p * digitBits;
     // A digit shared by every word (the pair bits of a one-pair batch, the high bits of small meshes) leaves
     // the order as it is: the pass is skipped.
-    if (count[(m_packed[0] >> shift) & (kBuckets - 1)] == n) continue;
+    if (count[(m_packed[0] >> shift) & digitMask] == n) continue;
     std::uint32_t offset = 0;
-    for (std::uint32_t& c : count) {
-      const std::uint32_t here = c;
-      c = offset;
+    for (std::size_t d = 0; d < buckets; ++d) {
+      const std::uint32_t here = count[d];
+      count[d] = offset;
       offset += here;
     }
-    for (std::uint64_t w : m_packed) m_scratch[count[(w >> shift) & (kBuckets - 1)]++] = w;
+    for (std::uint64_t w : m_packed) m_scratch[count[(w >> shift) & digitMask]++] = w;
     std::swap(m_packed, m_scratch);
   }
   const std::uint64_t indexMask = (std::uint64_t(1) << indexBits) - 1;
