@@ -23,8 +23,7 @@ static_assert(sizeof(GpucolLeafEntry) == sizeof(AabbLeafEntry) &&
 namespace {
 // Arenas index their elements with 32-bit offsets in the kernels.
 constexpr std::size_t kMaxElements = std::numeric_limits<std::uint32_t>::max();
-constexpr std::size_t kElementBytes[4] = {3 * sizeof(float), 3 * sizeof(std::uint32_t), sizeof(AabbNode),
-                                          sizeof(AabbLeafEntry)};
+constexpr std::size_t kElementBytes[3] = {9 * sizeof(float), sizeof(AabbNode), sizeof(AabbLeafEntry)};
 }  // namespace
 
 std::size_t MeshDeviceCache::append(Arena& arena, const void* data, std::size_t bytes) {
@@ -57,14 +56,19 @@ MeshSlot MeshDeviceCache::acquire(const std::shared_ptr<const TriangleMesh>& mes
   const Key key{mesh, tree.trianglesPerLeaf()};
   auto found = m_meshes.find(key);
   if (found == m_meshes.end()) {
-    const void* data[4] = {mesh->positions().data(), mesh->indices().data(), tree.nodes().data(),
-                           tree.leafEntries().data()};
-    const std::size_t bytes[4] = {
-        mesh->positions().size() * sizeof(float), mesh->indices().size() * sizeof(std::uint32_t),
-        tree.nodes().size() * sizeof(AabbNode), tree.leafEntries().size() * sizeof(AabbLeafEntry)};
-    Arena* arenas[4] = {&m_vertexArena, &m_indexArena, &m_nodeArena, &m_entryArena};
+    // Blocking writes (append): the soup buffer is reused for the next mesh.
+    const std::vector<float>& positions = mesh->positions();
+    const std::vector<std::uint32_t>& indices = mesh->indices();
+    m_soup.resize(3 * indices.size());
+    for (std::size_t i = 0; i < indices.size(); ++i) {
+      for (int k = 0; k < 3; ++k) m_soup[3 * i + k] = positions[3 * std::size_t(indices[i]) + k];
+    }
+    const void* data[3] = {m_soup.data(), tree.nodes().data(), tree.leafEntries().data()};
+    const std::size_t bytes[3] = {m_soup.size() * sizeof(float), tree.nodes().size() * sizeof(AabbNode),
+                                  tree.leafEntries().size() * sizeof(AabbLeafEntry)};
+    Arena* arenas[3] = {&m_triangleArena, &m_nodeArena, &m_entryArena};
     Ranges ranges;
-    for (int k = 0; k < 4; ++k) {
+    for (int k = 0; k < 3; ++k) {
       if ((arenas[k]->used + bytes[k]) / kElementBytes[k] > kMaxElements) {
         throw std::length_error("MeshDeviceCache: the resident meshes exceed 2^32 elements of one kind");
       }
@@ -76,10 +80,9 @@ MeshSlot MeshDeviceCache::acquire(const std::shared_ptr<const TriangleMesh>& mes
   }
   const Ranges& r = found->second;
   MeshSlot slot;
-  slot.vertices = std::uint32_t(r.offset[0] / kElementBytes[0]);
-  slot.triangles = std::uint32_t(r.offset[1] / kElementBytes[1]);
-  slot.nodes = std::uint32_t(r.offset[2] / kElementBytes[2]);
-  slot.entries = std::uint32_t(r.offset[3] / kElementBytes[3]);
+  slot.triangles = std::uint32_t(r.offset[0] / kElementBytes[0]);
+  slot.nodes = std::uint32_t(r.offset[1] / kElementBytes[1]);
+  slot.entries = std::uint32_t(r.offset[2] / kElementBytes[2]);
   return slot;
 }
 
@@ -99,15 +102,15 @@ std::size_t MeshDeviceCache::dropExpired() {
 
 void MeshDeviceCache::clear() {
   m_meshes.clear();
-  for (Arena* arena : {&m_vertexArena, &m_indexArena, &m_nodeArena, &m_entryArena}) arena->used = 0;
+  for (Arena* arena : {&m_triangleArena, &m_nodeArena, &m_entryArena}) arena->used = 0;
 }
 
 void MeshDeviceCache::compact() {
   // The live ranges, in arena order, copied into fresh arenas of exactly their size; the old buffers go when
   // the queue is done with them (OpenCL keeps a buffer alive while commands use it).
-  Arena* arenas[4] = {&m_vertexArena, &m_indexArena, &m_nodeArena, &m_entryArena};
+  Arena* arenas[3] = {&m_triangleArena, &m_nodeArena, &m_entryArena};
   cl::CommandQueue& queue = m_context.queue();
-  for (int k = 0; k < 4; ++k) {
+  for (int k = 0; k < 3; ++k) {
     std::size_t live = 0;
     for (const auto& entry : m_meshes) live += entry.second.bytes[k];
     Arena fresh;

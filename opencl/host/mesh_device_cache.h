@@ -11,19 +11,22 @@
 
 namespace gpucol::opencl {
 
-/// Where one mesh lies in the resident arenas: first node, leaf entry, vertex and triangle.
+/// Where one mesh lies in the resident arenas: first node, leaf entry and triangle.
 struct MeshSlot {
   std::uint32_t nodes = 0;      ///< First node of its tree in the node arena.
   std::uint32_t entries = 0;    ///< First leaf entry in the entry arena.
-  std::uint32_t vertices = 0;   ///< First vertex in the vertex arena (3 floats each).
-  std::uint32_t triangles = 0;  ///< First triangle in the index arena (3 uints each).
+  std::uint32_t triangles = 0;  ///< First triangle in the triangle soup arena (9 floats each).
 };
 
-/// The meshes of the mesh pipeline kept on the device (vertices, triangles, tree nodes, leaf entries),
+/// The meshes of the mesh pipeline kept on the device (triangle soup, tree nodes, leaf entries),
 /// uploaded once per mesh and tree shape (thesis §5.4.1 re-sent triangles every step; this keeps them
 /// resident).
 ///
-/// All meshes share four arenas, so that one kernel launch can reach every mesh of a batch; a mesh is found
+/// The triangles go as a soup, each its three corners' coordinates in a row (9 floats, 36 bytes), as
+/// MeshShape keeps them for the CPU path: the near phase reads a triangle in one place instead of three
+/// indices and then three vertices elsewhere (two dependent cache misses per triangle on large meshes).
+///
+/// All meshes share three arenas, so that one kernel launch can reach every mesh of a batch; a mesh is found
 /// by its slot's offsets. Entries are keyed by the mesh's shared pointer through a std::weak_ptr (owner
 /// order), so a dead mesh can never be mistaken for a new one at the same address, and by the tree's leaf
 /// size. A mesh whose last owner is gone is dropped at the next acquire(): its arena ranges are given back by
@@ -48,10 +51,8 @@ class MeshDeviceCache {
   /// Number of meshes resident.
   std::size_t size() const { return m_meshes.size(); }
 
-  /// Vertex arena (3 floats per vertex).
-  const cl::Buffer& vertices() const { return m_vertexArena.buffer; }
-  /// Index arena (3 uints per triangle, relative to the mesh's first vertex).
-  const cl::Buffer& indices() const { return m_indexArena.buffer; }
+  /// Triangle soup arena (9 floats per triangle: corners 0, 1, 2, each x, y, z).
+  const cl::Buffer& triangles() const { return m_triangleArena.buffer; }
   /// Node arena (GpucolTreeNode, children relative to the tree's first node).
   const cl::Buffer& nodes() const { return m_nodeArena.buffer; }
   /// Leaf entry arena (GpucolLeafEntry, relative to the tree's first entry).
@@ -76,10 +77,10 @@ class MeshDeviceCache {
       return l.trianglesPerLeaf < r.trianglesPerLeaf;
     }
   };
-  /// Byte ranges of one mesh in the four arenas.
+  /// Byte ranges of one mesh in the three arenas.
   struct Ranges {
-    std::size_t offset[4];
-    std::size_t bytes[4];
+    std::size_t offset[3];
+    std::size_t bytes[3];
   };
 
   /// Appends `bytes` of `data` to `arena`, growing it (device-side copy of the old contents); returns the
@@ -88,7 +89,8 @@ class MeshDeviceCache {
   void compact();
 
   OpenClContext& m_context;
-  Arena m_vertexArena, m_indexArena, m_nodeArena, m_entryArena;
+  Arena m_triangleArena, m_nodeArena, m_entryArena;
+  std::vector<float> m_soup;  // the soup of the mesh being uploaded
   std::map<Key, Ranges, KeyLess> m_meshes;
 };
 

@@ -24,9 +24,9 @@
 
 namespace gpucol::opencl {
 
-static_assert(sizeof(GpucolMeshPair) == 49 * 4 && offsetof(GpucolMeshPair, absLinear) == 48 &&
+static_assert(sizeof(GpucolMeshPair) == 47 * 4 && offsetof(GpucolMeshPair, absLinear) == 48 &&
                   offsetof(GpucolMeshPair, bLinear) == 96 && offsetof(GpucolMeshPair, scaleA) == 144 &&
-                  offsetof(GpucolMeshPair, nodesA) == 156 && offsetof(GpucolMeshPair, flipB) == 192,
+                  offsetof(GpucolMeshPair, nodesA) == 156 && offsetof(GpucolMeshPair, flipB) == 184,
               "GpucolMeshPair layout differs from the kernels'");
 static_assert(sizeof(GpucolFrontEntry) == 12, "GpucolFrontEntry layout differs from the kernels'");
 static_assert(sizeof(GpucolNearHit) == 48 && offsetof(GpucolNearHit, point) == 8 &&
@@ -215,8 +215,6 @@ void OpenClMeshPipeline::runBatch(const std::vector<DeviceMeshPair>& pairs,
     p.nodesB = slotB.nodes;
     p.entriesA = slotA.entries;
     p.entriesB = slotB.entries;
-    p.verticesA = slotA.vertices;
-    p.verticesB = slotB.vertices;
     p.trianglesA = slotA.triangles;
     p.trianglesB = slotB.triangles;
     p.flipA = in.flipA ? 1u : 0u;
@@ -286,13 +284,12 @@ void OpenClMeshPipeline::runBatch(const std::vector<DeviceMeshPair>& pairs,
   } else {
     records = candidateCount;
     m_nearTest.setArg(0, m_pairs.buffer);
-    m_nearTest.setArg(1, m_cache.vertices());
-    m_nearTest.setArg(2, m_cache.indices());
-    m_nearTest.setArg(3, m_keys.buffer);
-    m_nearTest.setArg(4, cl_uint(candidateCount));
-    m_nearTest.setArg(5, cl_uint(bitsA));
-    m_nearTest.setArg(6, cl_uint(bitsB));
-    m_nearTest.setArg(7, m_hits.ensure(ctx, candidateCount * sizeof(GpucolNearHit)));
+    m_nearTest.setArg(1, m_cache.triangles());
+    m_nearTest.setArg(2, m_keys.buffer);
+    m_nearTest.setArg(3, cl_uint(candidateCount));
+    m_nearTest.setArg(4, cl_uint(bitsA));
+    m_nearTest.setArg(5, cl_uint(bitsB));
+    m_nearTest.setArg(6, m_hits.ensure(ctx, candidateCount * sizeof(GpucolNearHit)));
     launch(m_nearTest, candidateCount);
     queue.finish();
   }
@@ -484,14 +481,13 @@ cl::Kernel& OpenClMeshPipeline::depthFirstKernel(int treeDepths) {
 void OpenClMeshPipeline::setNearFilterArgs(std::uint64_t capacity, unsigned bitsA, unsigned bitsB) {
   const cl::Context& ctx = m_context.context();
   m_nearFilterTest.setArg(0, m_pairs.buffer);
-  m_nearFilterTest.setArg(1, m_cache.vertices());
-  m_nearFilterTest.setArg(2, m_cache.indices());
-  m_nearFilterTest.setArg(3, m_keys.buffer);
-  m_nearFilterTest.setArg(4, cl_uint(capacity));
-  m_nearFilterTest.setArg(5, cl_uint(bitsA));
-  m_nearFilterTest.setArg(6, cl_uint(bitsB));
-  m_nearFilterTest.setArg(7, m_hits.ensure(ctx, capacity * sizeof(GpucolNearHit)));
-  m_nearFilterTest.setArg(8, m_counters);
+  m_nearFilterTest.setArg(1, m_cache.triangles());
+  m_nearFilterTest.setArg(2, m_keys.buffer);
+  m_nearFilterTest.setArg(3, cl_uint(capacity));
+  m_nearFilterTest.setArg(4, cl_uint(bitsA));
+  m_nearFilterTest.setArg(5, cl_uint(bitsB));
+  m_nearFilterTest.setArg(6, m_hits.ensure(ctx, capacity * sizeof(GpucolNearHit)));
+  m_nearFilterTest.setArg(7, m_counters);
 }
 
 std::uint64_t OpenClMeshPipeline::traverseDepthFirst(std::size_t pairCount, int treeDepths,

@@ -190,9 +190,9 @@ bool coplanar_overlap(const V3* a, const V3* b, int dropAxis, V3* point) {
   return true;
 }
 
-// Vertex of a mesh from the arena.
-GPUCOL_INLINE void mesh_vertex(__global const float* vertices, uint firstVertex, uint vertex, float* out) {
-  __global const float* p = vertices + 3u * (firstVertex + vertex);
+// Corner c of triangle `triangle` in the triangle soup arena (mesh_device_cache.h: 9 floats per triangle).
+GPUCOL_INLINE void mesh_corner(__global const float* soup, uint triangle, int c, float* out) {
+  __global const float* p = soup + 9u * triangle + 3 * c;
   out[0] = p[0];
   out[1] = p[1];
   out[2] = p[2];
@@ -201,18 +201,16 @@ GPUCOL_INLINE void mesh_vertex(__global const float* vertices, uint firstVertex,
 // Triangles triangleA of A and triangleB of B of pair `p` (a private copy) in A's scaled frame, in float, as
 // collide_meshes.cpp builds them. Its loops are unrolled: left as loops, PoCL vectorised them (two floats
 // wide) inside each work-item, and the loop over the work-items, no longer innermost, stayed scalar.
-GPUCOL_INLINE void mesh_pair_triangles(const GpucolMeshPair* p, __global const float* vertices,
-                                       __global const uint* indices, const uint triangleA, const uint triangleB,
-                                       float af[3][3], float bf[3][3]) {
-  __global const uint* cornerA = indices + 3u * (p->trianglesA + triangleA);
-  __global const uint* cornerB = indices + 3u * (p->trianglesB + triangleB);
+GPUCOL_INLINE void mesh_pair_triangles(const GpucolMeshPair* p, __global const float* soup,
+                                       const uint triangleA, const uint triangleB, float af[3][3],
+                                       float bf[3][3]) {
 #pragma unroll
   for (int c = 0; c < 3; ++c) {
     float v[3];
-    mesh_vertex(vertices, p->verticesA, cornerA[c], v);
+    mesh_corner(soup, p->trianglesA + triangleA, c, v);
 #pragma unroll
     for (int k = 0; k < 3; ++k) af[c][k] = p->scaleA[k] * v[k];
-    mesh_vertex(vertices, p->verticesB, cornerB[c], v);
+    mesh_corner(soup, p->trianglesB + triangleB, c, v);
 #pragma unroll
     for (int k = 0; k < 3; ++k) {
       // Eigen's order for a 3x3 float matrix times a vector (its unrolled sum pairs the last two terms
@@ -235,11 +233,10 @@ GPUCOL_INLINE void mesh_pair_triangles(const GpucolMeshPair* p, __global const f
 
 // The triangles of candidate `key` (mesh_pair_triangles).
 GPUCOL_INLINE void mesh_candidate_triangles(__global const GpucolMeshPair* pairs,
-                                            __global const float* vertices, __global const uint* indices,
-                                            const ulong key, const uint bitsA, const uint bitsB,
+                                            __global const float* soup, const ulong key, const uint bitsA, const uint bitsB,
                                             float af[3][3], float bf[3][3]) {
   const GpucolMeshPair p = pairs[(uint)(key >> (bitsA + bitsB))];
-  mesh_pair_triangles(&p, vertices, indices, (uint)((key >> bitsB) & ((1ul << bitsA) - 1ul)),
+  mesh_pair_triangles(&p, soup, (uint)((key >> bitsB) & ((1ul << bitsA) - 1ul)),
                       (uint)(key & ((1ul << bitsB) - 1ul)), af, bf);
 }
 
@@ -408,8 +405,7 @@ GPUCOL_INLINE void mesh_store_corners(const float af[3][3], const float bf[3][3]
 // (floatCertainlyApartBranchFree, then floatIntervalsApartBranchFree), else 0. The triangles stay in
 // `corners`: corner c of A is rows 3c .. 3c + 2, of B rows 9 + 3c .., one lane per candidate.
 GPUCOL_INLINE BoolLanes mesh_prefilter_lanes(__global const GpucolMeshPair* restrict pairs,
-                                             __global const float* restrict vertices,
-                                             __global const uint* restrict indices,
+                                             __global const float* restrict soup,
                                              __global const ulong* restrict keys, uint first, uint n,
                                              uint bitsA, uint bitsB, float corners[18][GPUCOL_LANES]) {
   // The lanes' candidates usually belong to one pair (the traversal appends each work-item's candidates 16 at
@@ -426,14 +422,13 @@ GPUCOL_INLINE BoolLanes mesh_prefilter_lanes(__global const GpucolMeshPair* rest
     for (int lane = 0; lane < GPUCOL_LANES; ++lane) {
       const ulong key = keys[min(first + (uint)lane, n - 1u)];
       float af[3][3], bf[3][3];
-      mesh_pair_triangles(&p, vertices, indices, (uint)((key >> bitsB) & maskA), (uint)(key & maskB), af, bf);
+      mesh_pair_triangles(&p, soup, (uint)((key >> bitsB) & maskA), (uint)(key & maskB), af, bf);
       mesh_store_corners(af, bf, lane, corners);
     }
   } else {
     for (int lane = 0; lane < GPUCOL_LANES; ++lane) {
       float af[3][3], bf[3][3];
-      mesh_candidate_triangles(pairs, vertices, indices, keys[min(first + (uint)lane, n - 1u)], bitsA, bitsB,
-                               af, bf);
+      mesh_candidate_triangles(pairs, soup, keys[min(first + (uint)lane, n - 1u)], bitsA, bitsB, af, bf);
       mesh_store_corners(af, bf, lane, corners);
     }
   }
@@ -569,13 +564,13 @@ GpucolNearHit mesh_near_hit(const float af[3][3], const float bf[3][3], uint can
 }
 
 // Candidate j's hit record, intersecting or not (the near phase without the early-out).
-__kernel void mesh_near_test(__global const GpucolMeshPair* pairs, __global const float* vertices,
-                             __global const uint* indices, __global const ulong* keys, const uint n,
+__kernel void mesh_near_test(__global const GpucolMeshPair* pairs, __global const float* soup,
+                             __global const ulong* keys, const uint n,
                              const uint bitsA, const uint bitsB, __global GpucolNearHit* hits) {
   const uint j = get_global_id(0);
   if (j >= n) return;
   float af[3][3], bf[3][3];
-  mesh_candidate_triangles(pairs, vertices, indices, keys[j], bitsA, bitsB, af, bf);
+  mesh_candidate_triangles(pairs, soup, keys[j], bitsA, bitsB, af, bf);
   hits[j] = mesh_near_hit(af, bf, j);
 }
 
@@ -586,8 +581,7 @@ __kernel void mesh_near_test(__global const GpucolMeshPair* pairs, __global cons
 // candidate order. One launch and one wait: a separate early-out kernel, a scan and gather of its survivors
 // and a test kernel on them took longer on PoCL.
 __kernel void mesh_near_filter_test(__global const GpucolMeshPair* restrict pairs,
-                                    __global const float* restrict vertices,
-                                    __global const uint* restrict indices,
+                                    __global const float* restrict soup,
                                     __global const ulong* restrict keys, const uint capacity,
                                     const uint bitsA, const uint bitsB, __global GpucolNearHit* restrict hits,
                                     __global uint* restrict counters) {
@@ -598,7 +592,7 @@ __kernel void mesh_near_filter_test(__global const GpucolMeshPair* restrict pair
   if (first >= n) return;
   float corners[18][GPUCOL_LANES];
   const BoolLanes apart =
-      mesh_prefilter_lanes(pairs, vertices, indices, keys, first, n, bitsA, bitsB, corners);
+      mesh_prefilter_lanes(pairs, soup, keys, first, n, bitsA, bitsB, corners);
   uint survives[GPUCOL_LANES];
   GPUCOL_STORE_LANES(GPUCOL_UINT_LANES(apart + 1), 0, survives);
   const uint lanes = min((uint)GPUCOL_LANES, n - first);

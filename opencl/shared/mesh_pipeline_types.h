@@ -28,9 +28,7 @@ typedef struct GpucolMeshPair {
   gpucol_mesh_uint nodesB;
   gpucol_mesh_uint entriesA; /* first leaf entry of A's tree in the entry arena */
   gpucol_mesh_uint entriesB;
-  gpucol_mesh_uint verticesA; /* first vertex of A's mesh in the vertex arena (3 floats each) */
-  gpucol_mesh_uint verticesB;
-  gpucol_mesh_uint trianglesA; /* first triangle of A's mesh in the index arena (3 uints each) */
+  gpucol_mesh_uint trianglesA; /* first triangle of A's mesh in the triangle soup arena (9 floats each) */
   gpucol_mesh_uint trianglesB;
   gpucol_mesh_uint flipA; /* 1: A's scaling mirrors the mesh, swap vertices 1 and 2 */
   gpucol_mesh_uint flipB;
