@@ -170,6 +170,9 @@ class OpenClMeshPipeline final : public MeshBatchDevice {
   std::vector<std::uint64_t> m_hostKeys, m_sortedKeys;
   std::vector<std::uint32_t> m_rank, m_hitAt;
   std::vector<GpucolNearHit> m_hostHits, m_rankedHits;
+  // Keys and hits already read into m_hostKeys / m_hostHits behind the kernels (the one-wait path), and the
+  // last batch's counts that size those reads.
+  std::uint64_t m_keysRead = 0, m_hitsRead = 0, m_lastCandidates = 0, m_lastHits = 0;
   MeshHostSort m_hostSort;
 };
 
@@ -242,6 +245,7 @@ void OpenClMeshPipeline::runBatch(const std::vector<DeviceMeshPair>& pairs,
       options.traversal == MeshTraversal::DepthFirst && options.nearPrefilter && !options.deviceSort;
   std::uint64_t candidateCount = 0;
   std::uint64_t records = 0;
+  m_keysRead = m_hitsRead = 0;
   if (options.traversal == MeshTraversal::BreadthFirst) {
     candidateCount = traverseBreadthFirst(pairs.size(), options, entries, bitsA, bitsB, s);
   } else {
@@ -249,13 +253,14 @@ void OpenClMeshPipeline::runBatch(const std::vector<DeviceMeshPair>& pairs,
                                         bitsB, chainNear, records, s);
   }
   s.candidates = candidateCount;
+  m_lastCandidates = candidateCount;
+  m_lastHits = records;
   if (candidateCount == 0) return;
 
   // Deterministic order: by pair, then (triangleA, triangleB), which is the CPU's order within each pair. On
   // the device before the near phase, or (deviceSort false) on the host after it: the near phase does not
   // care about the order, and the host sorts the keys it reads back anyway without the device sort's launches
   // and waits (ten radix passes of 4 bits for 40-bit keys, a scan with a wait in each).
-  m_hostKeys.resize(candidateCount);
   const bool deviceSort = options.deviceSort;
   if (deviceSort) {
     start = Clock::now();
@@ -295,14 +300,25 @@ void OpenClMeshPipeline::runBatch(const std::vector<DeviceMeshPair>& pairs,
   }
   if (!chainNear) s.nearMs += millisecondsSince(start);
 
+  // What the traversal did not read with its wait (all of it but with the one-wait path).
   start = Clock::now();
-  queue.enqueueReadBuffer(m_keys.buffer, CL_FALSE, 0, candidateCount * 8, m_hostKeys.data());
+  const std::uint64_t keysRead = std::min(m_keysRead, candidateCount);
+  const std::uint64_t hitsRead = std::min(m_hitsRead, records);
+  m_keysRead = m_hitsRead = 0;
+  m_hostKeys.resize(candidateCount);
   m_hostHits.resize(records);
-  if (records > 0) {
-    queue.enqueueReadBuffer(m_hits.buffer, CL_FALSE, 0, std::size_t(records) * sizeof(GpucolNearHit),
-                            m_hostHits.data());
+  bool reading = false;
+  if (candidateCount > keysRead) {
+    queue.enqueueReadBuffer(m_keys.buffer, CL_FALSE, keysRead * sizeof(cl_ulong),
+                            (candidateCount - keysRead) * sizeof(cl_ulong), m_hostKeys.data() + keysRead);
+    reading = true;
   }
-  queue.finish();
+  if (records > hitsRead) {
+    queue.enqueueReadBuffer(m_hits.buffer, CL_FALSE, hitsRead * sizeof(GpucolNearHit),
+                            (records - hitsRead) * sizeof(GpucolNearHit), m_hostHits.data() + hitsRead);
+    reading = true;
+  }
+  if (reading) queue.finish();
   s.readbackMs = millisecondsSince(start);
 
   // The keys in order (deviceSort false: sorted here, and each hit's candidate index moved to its key's place
@@ -539,16 +555,31 @@ std::uint64_t OpenClMeshPipeline::traverseDepthFirst(std::size_t pairCount, int 
       // the traversal overflowed, its hits are discarded with it below.
       setNearFilterArgs(capacity, bitsA, bitsB);
       cl::Event traversed;
-      queue.enqueueMarkerWithWaitList(nullptr, &traversed);
+      if (options.splitTimes) queue.enqueueMarkerWithWaitList(nullptr, &traversed);
       launch(m_nearFilterTest, (capacity + kPrefilterLanes - 1) / kPrefilterLanes);
-      queue.flush();
-      // The host waits for the traversal only to time it: the near kernel is queued behind it already.
-      traversed.wait();
-      s.traversalMs += millisecondsSince(start);
-      start = Clock::now();
-      queue.enqueueReadBuffer(m_counters, CL_TRUE, 0, sizeof counters, counters);
-      nearMs += millisecondsSince(start);
-      start = Clock::now();
+      if (options.splitTimes) {
+        // The host waits for the traversal only to time it: the near kernel is queued behind it already.
+        queue.flush();
+        traversed.wait();
+        s.traversalMs += millisecondsSince(start);
+        start = Clock::now();
+        queue.enqueueReadBuffer(m_counters, CL_TRUE, 0, sizeof counters, counters);
+        nearMs += millisecondsSince(start);
+        start = Clock::now();
+      } else {
+        // One wait for everything: the counters, and as many keys and hits as the last batch had plus an
+        // eighth, are read behind the kernels; runBatch reads whatever lies past them. (Each wait on PoCL
+        // costs about as much as a kernel launch.)
+        queue.enqueueReadBuffer(m_counters, CL_FALSE, 0, sizeof counters, counters);
+        m_keysRead = std::min<std::uint64_t>(capacity, m_lastCandidates + m_lastCandidates / 8 + 64);
+        m_hitsRead = std::min<std::uint64_t>(capacity, m_lastHits + m_lastHits / 8 + 16);
+        if (m_hostKeys.size() < m_keysRead) m_hostKeys.resize(m_keysRead);
+        if (m_hostHits.size() < m_hitsRead) m_hostHits.resize(m_hitsRead);
+        queue.enqueueReadBuffer(m_keys.buffer, CL_FALSE, 0, m_keysRead * sizeof(cl_ulong), m_hostKeys.data());
+        queue.enqueueReadBuffer(m_hits.buffer, CL_FALSE, 0, m_hitsRead * sizeof(GpucolNearHit),
+                                m_hostHits.data());
+        queue.finish();
+      }
     } else {
       queue.enqueueReadBuffer(m_counters, CL_TRUE, 0, sizeof counters, counters);
     }

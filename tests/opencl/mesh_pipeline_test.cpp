@@ -165,6 +165,33 @@ TEST(MeshPipeline, ThesisSceneBothWalksAtEveryStartDepthWithAndWithoutEarlyOut) 
   }
 }
 
+// The default path reads counters, keys and hits behind the kernels in one wait, as many as the last batch
+// had plus an eighth, and the rest after: a large batch after a small one reads most of its lists late, a
+// small one after a large one reads more than it needs. Both, and the timed path with a wait after the
+// traversal, must give the CPU's lists.
+TEST(MeshPipeline, OneWaitReadsWhatItsGuessMissed) {
+  GPUCOL_REQUIRE_OPENCL(context);
+  GPUCOL_REQUIRE_MESH(path, "armadillo-2766.ply");
+  const auto mesh = sharedMesh(scenes::centredOnVertexCentroid(loadMesh(path)));
+  MeshShape armadillo(mesh);
+  const scenes::PairPose pose = scenes::thesisPose(*mesh);
+  MeshShape sphere(sharedMesh(scenes::makeIcosphere(1.0f, 2)));
+  const btTransform ta(btQuaternion(btVector3(0, 1, 1), 0.3f), btVector3(0, 0, 0));
+  const btTransform tb(btQuaternion(btVector3(1, 0, 1), 1.1f), btVector3(1.9f, 0, 0));
+  DeviceOptionsGuard guard;
+  for (bool splitTimes : {false, true}) {
+    MeshBatchDeviceOptions options;
+    options.splitTimes = splitTimes;
+    detail::setMeshDeviceOptions(options);
+    SCOPED_TRACE(splitTimes ? "wait after the traversal" : "one wait");
+    for (bool large : {true, false, true, true, false}) {
+      const Compared seen = large ? expectSameAsCpu({query(armadillo, pose.a, armadillo, pose.b)}, 100.0f)
+                                  : expectSameAsCpu({query(sphere, ta, sphere, tb)}, 3.0f);
+      EXPECT_GT(seen.intersecting, large ? 100u : 0u);
+    }
+  }
+}
+
 TEST(MeshPipeline, FarFromTheOrigin) {
   GPUCOL_REQUIRE_OPENCL(context);
   MeshShape a(sharedMesh(scenes::makeTorus(1.0f, 0.3f, 48, 16))),

@@ -80,6 +80,11 @@ struct MeshBatchDeviceOptions {
   /// it, as they come back, with a radix sort of its own (faster on PoCL at every size measured, up to a
   /// batch of 431,257 candidates; README, "Mesh pairs on OpenCL").
   bool deviceSort = false;
+  /// Wait after the traversal too, so that the stats split its time from the near kernel's and the
+  /// readback's (the time-split table of `gpucol-bench meshpair --backend opencl`). Off (the default), the
+  /// depth-first traversal, the near kernel and the reads of the counters, keys and hits are one wait, and
+  /// MeshBatchDeviceStats::traversalMs holds all three.
+  bool splitTimes = false;
 };
 
 /// Timings and counters of the last batch (host clock around each stage; each stage ends with a wait).
@@ -91,7 +96,7 @@ struct MeshBatchDeviceStats {
   double prefilterMs = 0;           ///< Near phase: the float early-out kernel (nearPrefilter).
   double nearMs = 0;                ///< Near phase: the double test and contact kernel.
   double compactionMs = 0;          ///< Near phase: scan and gather of the early-out's survivors.
-  double readbackMs = 0;            ///< Candidates and hits back to the host.
+  double readbackMs = 0;            ///< Candidates and hits back, past those read with the traversal.
   std::uint64_t uploadedBytes = 0;  ///< Bytes written to the device in this batch.
   std::uint64_t nodeTests = 0;      ///< Box tests of the middle phase, start front included.
   std::vector<std::uint64_t> frontSizes;  ///< Overlapping node pairs per level (thesis Table 6.3).
