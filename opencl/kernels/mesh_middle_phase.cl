@@ -330,7 +330,7 @@ uint mesh_overlaps4(float4 lo, float4 hi, const Box4* b) {
 #define GPUCOL_DFS_LOOKAHEAD 4u
 #define GPUCOL_DFS_ROOM (2u * GPUCOL_DFS_STACK + 4u * GPUCOL_DFS_LOOKAHEAD)
 #else
-#define GPUCOL_DFS_LOOKAHEAD 4u
+#define GPUCOL_DFS_LOOKAHEAD 1u
 #define GPUCOL_DFS_ROOM GPUCOL_DFS_STACK
 #endif
 
