@@ -328,11 +328,11 @@ uint mesh_overlaps4(float4 lo, float4 hi, const Box4* b) {
 // most GPUCOL_DFS_STACK in all.
 #ifdef GPUCOL_CPU_PREFETCH
 #define GPUCOL_DFS_LOOKAHEAD 4u
-#define GPUCOL_DFS_ROOM (2u * GPUCOL_DFS_STACK + 4u * GPUCOL_DFS_LOOKAHEAD)
 #else
 #define GPUCOL_DFS_LOOKAHEAD 1u
-#define GPUCOL_DFS_ROOM GPUCOL_DFS_STACK
 #endif
+#define GPUCOL_DFS_ROOM \
+  (GPUCOL_DFS_LOOKAHEAD > 1u ? 2u * GPUCOL_DFS_STACK + 4u * GPUCOL_DFS_LOOKAHEAD : GPUCOL_DFS_STACK)
 
 void mesh_count_tests(__global uint* counters, uint tests) {
   if (tests == 0u) return;
