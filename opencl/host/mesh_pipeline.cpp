@@ -45,10 +45,16 @@ double millisecondsSince(Clock::time_point start) {
 /// Largest start depth: 4^d paths per pair must stay far below the 2^32 work-items of one launch.
 constexpr int kMaxStartDepth = 12;
 
-/// Largest work-group the pipeline launches (OpenClMeshPipeline::groupSize): 64 work-items are several vector
-/// widths on a CPU device and whole wavefronts on GPUs, and leave the 4096 work-items of a one-pair
-/// depth-first launch 64 groups to spread over the compute units.
+/// Largest work-group the pipeline launches on a GPU (OpenClMeshPipeline::groupSize): whole wavefronts, and
+/// the 4096 work-items of a one-pair depth-first launch make 64 groups to spread over the compute units.
 constexpr std::size_t kGroupSizeCap = 64;
+
+/// The same on a CPU device, which runs one group at a time per thread: the smaller the group, the more
+/// evenly the two threads share a small launch (armadillo-2766's traversal is 256 work-items whose work
+/// differs widely). PoCL, thesis scene, 4 alternating rounds at load about 1.4, end to end: armadillo-99976
+/// 1.91-1.96 ms with 16 (one round 2.79, its CPU path slow too) against 2.05-2.32 with 64, armadillo-2766
+/// 0.40-0.43 (one round 0.58) against 0.42-0.44.
+constexpr std::size_t kCpuGroupSizeCap = 16;
 
 /// Candidates per work-item of mesh_near_filter_test (its GPUCOL_LANES: 4, 8 or 16). 8 floats are one AVX
 /// register; measured on PoCL (thesis scene): see the README.
@@ -123,12 +129,14 @@ class OpenClMeshPipeline final : public MeshBatchDevice {
   }
 
  private:
-  /// The work-group size of `kernel`: the device's largest for it, capped at kGroupSizeCap. One size per
-  /// kernel whatever the batch: PoCL compiles a kernel again for every new local size (a few hundred ms), and
-  /// a CPU device runs one work-group per thread, so its largest group (4096) would put a whole small batch
-  /// on one core; the depth-first kernel's work-items also differ widely in work.
+  /// The work-group size of `kernel`: the device's largest for it, capped at kGroupSizeCap (kCpuGroupSizeCap
+  /// on a CPU device). One size per kernel whatever the batch: PoCL compiles a kernel again for every new
+  /// local size (a few hundred ms), and a CPU device runs one work-group per thread, so its largest group
+  /// (4096) would put a whole small batch on one core; the depth-first kernel's work-items also differ widely
+  /// in work.
   std::size_t groupSize(const cl::Kernel& kernel, std::uint64_t) const {
-    return std::min<std::size_t>(m_context.workGroupSize(kernel), kGroupSizeCap);
+    return std::min<std::size_t>(m_context.workGroupSize(kernel),
+                                 m_context.isGpu() ? kGroupSizeCap : kCpuGroupSizeCap);
   }
 
   /// The global size launch() uses for `items` work-items of `kernel`.
