@@ -231,13 +231,19 @@ GPUCOL_INLINE void mesh_pair_triangles(const GpucolMeshPair* p, __global const f
   }
 }
 
-// The triangles of candidate `key` (mesh_pair_triangles).
-GPUCOL_INLINE void mesh_candidate_triangles(__global const GpucolMeshPair* pairs,
-                                            __global const float* soup, const ulong key, const uint bitsA, const uint bitsB,
+// The triangles of candidate `key` of pair `p` (mesh_pair_triangles).
+GPUCOL_INLINE void mesh_key_triangles(const GpucolMeshPair* p, __global const float* soup, const ulong key,
+                                      const uint bitsA, const uint bitsB, float af[3][3], float bf[3][3]) {
+  mesh_pair_triangles(p, soup, (uint)((key >> bitsB) & ((1ul << bitsA) - 1ul)),
+                      (uint)(key & ((1ul << bitsB) - 1ul)), af, bf);
+}
+
+// The triangles of candidate `key`, its pair read from `pairs`.
+GPUCOL_INLINE void mesh_candidate_triangles(__global const GpucolMeshPair* pairs, __global const float* soup,
+                                            const ulong key, const uint bitsA, const uint bitsB,
                                             float af[3][3], float bf[3][3]) {
   const GpucolMeshPair p = pairs[(uint)(key >> (bitsA + bitsB))];
-  mesh_pair_triangles(&p, soup, (uint)((key >> bitsB) & ((1ul << bitsA) - 1ul)),
-                      (uint)(key & ((1ul << bitsB) - 1ul)), af, bf);
+  mesh_key_triangles(&p, soup, key, bitsA, bitsB, af, bf);
 }
 
 // The early-out tests GPUCOL_LANES candidates per work-item, one in each lane of float vectors. PoCL does
@@ -412,7 +418,6 @@ GPUCOL_INLINE BoolLanes mesh_prefilter_lanes(__global const GpucolMeshPair* rest
   // a time): then the pair's map is read once, not gathered lane by lane (PoCL vectorises the lane loop, and
   // gathering the pair's fields took most of its time). Both loops compute the same values.
   const uint pairShift = bitsA + bitsB;
-  const ulong maskA = (1ul << bitsA) - 1ul, maskB = (1ul << bitsB) - 1ul;
   const uint firstPair = (uint)(keys[first] >> pairShift);
   bool onePair = true;
   for (int lane = 1; lane < GPUCOL_LANES; ++lane)
@@ -420,9 +425,8 @@ GPUCOL_INLINE BoolLanes mesh_prefilter_lanes(__global const GpucolMeshPair* rest
   if (onePair) {
     const GpucolMeshPair p = pairs[firstPair];
     for (int lane = 0; lane < GPUCOL_LANES; ++lane) {
-      const ulong key = keys[min(first + (uint)lane, n - 1u)];
       float af[3][3], bf[3][3];
-      mesh_pair_triangles(&p, soup, (uint)((key >> bitsB) & maskA), (uint)(key & maskB), af, bf);
+      mesh_key_triangles(&p, soup, keys[min(first + (uint)lane, n - 1u)], bitsA, bitsB, af, bf);
       mesh_store_corners(af, bf, lane, corners);
     }
   } else {
