@@ -29,6 +29,7 @@ struct MeshPairOptions {
   int runs = 5;
   std::string csvPath;
   std::string backend = "cpu";
+  bool variants = true;  // --backend opencl: also the variants' table
 };
 
 struct Row {
@@ -171,6 +172,8 @@ struct OpenClRow {
   double depthFirstMs[3] = {0, 0, 0};  // depth-first, start depth 3, 6, 8
   double noEarlyOutMs = 0, resendMs = 0, deviceSortMs = 0;
   double resendUploadMs = 0;
+  double ratio = 0, ratioLow = 0, ratioHigh = 0;  // OpenCL / CPU over the blocks of calls: median, range
+  bool variants = false;                          // the variants' columns were measured
   std::size_t candidates = 0, intersecting = 0;
   bool sameAsCpu = false;
 };
@@ -214,7 +217,7 @@ double timeOpenCl(const MeshShape& shape, const scenes::PairPose& pose, const Me
   return median(total);
 }
 
-OpenClRow measureOpenCl(const std::string& name, const TriangleMesh& loaded, int runs) {
+OpenClRow measureOpenCl(const std::string& name, const TriangleMesh& loaded, int runs, bool variants) {
   const auto mesh = std::make_shared<const TriangleMesh>(scenes::centredOnVertexCentroid(loaded));
   const scenes::PairPose pose = scenes::thesisPose(*mesh);
   const MeshShape shape(mesh);
@@ -224,21 +227,44 @@ OpenClRow measureOpenCl(const std::string& name, const TriangleMesh& loaded, int
   Config cpu;
   cpu.meshBackend = Backend::Cpu;
   MeshPairResult cpuResult = collideMeshes(shape, pose.a, shape, pose.b, cpu);
-  std::vector<double> total, middle, nearPhase;
+  Config cl;
+  cl.meshBackend = Backend::OpenCL;
+  detail::setMeshDeviceOptions(MeshBatchDeviceOptions());
+  row.firstCallMs = millisecondsOf([&] { collideMeshes(shape, pose.a, shape, pose.b, cl); });
+  MeshPairResult clResult = collideMeshes(shape, pose.a, shape, pose.b, cl);  // warm-up
+  // The CPU path and the default OpenCL path take turns in blocks of kTurnCalls calls, so that both meet the
+  // same load on a shared machine. The first kWarmCalls calls of a block are not counted: after a switch
+  // each path ran slow for several calls (armadillo-27674 on PoCL: 1.9-2.7 ms on the first OpenCL call after
+  // CPU calls, falling to 1.0-1.4 by the sixth; the CPU path 1.0 ms on its first call against 0.6-0.7), and
+  // calls alternating one by one measured only that. Each total is the median of the blocks' medians, the
+  // ratio the median of the blocks' ratios.
+  constexpr int kTurnCalls = 14;
+  constexpr int kWarmCalls = 6;
+  std::vector<double> total, middle, nearPhase, clTotal, ratio;
   for (int i = 0; i < runs; ++i) {
-    total.push_back(millisecondsOf([&] { cpuResult = collideMeshes(shape, pose.a, shape, pose.b, cpu); }));
-    middle.push_back(cpuResult.stats.middlePhaseMs);
-    nearPhase.push_back(cpuResult.stats.nearPhaseMs + cpuResult.stats.reductionMs);
+    std::vector<double> cpuBlock, clBlock;
+    for (int k = 0; k < kTurnCalls; ++k) {
+      const double ms = millisecondsOf([&] { cpuResult = collideMeshes(shape, pose.a, shape, pose.b, cpu); });
+      if (k < kWarmCalls) continue;
+      cpuBlock.push_back(ms);
+      middle.push_back(cpuResult.stats.middlePhaseMs);
+      nearPhase.push_back(cpuResult.stats.nearPhaseMs + cpuResult.stats.reductionMs);
+    }
+    for (int k = 0; k < kTurnCalls; ++k) {
+      const double ms = millisecondsOf([&] { clResult = collideMeshes(shape, pose.a, shape, pose.b, cl); });
+      if (k >= kWarmCalls) clBlock.push_back(ms);
+    }
+    total.push_back(median(cpuBlock));
+    clTotal.push_back(median(clBlock));
+    ratio.push_back(clTotal.back() / total.back());
   }
   row.cpuTotalMs = median(total);
   row.cpuMiddleMs = median(middle);
   row.cpuNearMs = median(nearPhase);
-
-  Config cl;
-  cl.meshBackend = Backend::OpenCL;
-  row.firstCallMs = millisecondsOf([&] { collideMeshes(shape, pose.a, shape, pose.b, cl); });
-  MeshPairResult clResult;
-  row.clTotalMs = timeOpenCl(shape, pose, MeshBatchDeviceOptions(), runs, nullptr, &clResult);
+  row.clTotalMs = median(clTotal);
+  row.ratio = median(ratio);
+  row.ratioLow = *std::min_element(ratio.begin(), ratio.end());
+  row.ratioHigh = *std::max_element(ratio.begin(), ratio.end());
   MeshBatchDeviceOptions split;
   split.splitTimes = true;
   row.clSplitTotalMs = timeOpenCl(shape, pose, split, runs, &row.stages, nullptr);
@@ -248,12 +274,20 @@ OpenClRow measureOpenCl(const std::string& name, const TriangleMesh& loaded, int
                   clResult.contacts.size() == cpuResult.contacts.size();
   row.candidates = cpuResult.candidatePairs.size();
   row.intersecting = cpuResult.intersectingPairs.size();
-  for (int k = 0; k < 3; ++k) {
-    MeshBatchDeviceOptions o;
-    o.traversal = MeshTraversal::BreadthFirst;
-    o.startDepth = kStartDepths[k];
+  MeshBatchDeviceStats breadthFirst;
+  MeshBatchDeviceOptions fromRoots;
+  fromRoots.traversal = MeshTraversal::BreadthFirst;
+  fromRoots.startDepth = 0;
+  if (!variants) {
     // The per-level front sizes (Table 6.3) come from the breadth-first walk from the roots.
-    MeshBatchDeviceStats breadthFirst;
+    timeOpenCl(shape, pose, fromRoots, 1, &breadthFirst, nullptr);
+    row.stages.frontSizes = breadthFirst.frontSizes;
+    return row;
+  }
+  row.variants = true;
+  for (int k = 0; k < 3; ++k) {
+    MeshBatchDeviceOptions o = fromRoots;
+    o.startDepth = kStartDepths[k];
     row.startDepthMs[k] = timeOpenCl(shape, pose, o, runs, &breadthFirst, nullptr);
     if (k == 0) row.stages.frontSizes = breadthFirst.frontSizes;
   }
@@ -280,21 +314,22 @@ void printOpenClTables(const std::vector<OpenClRow>& rows, const std::string& de
                        std::ostream& out) {
   out << std::fixed << std::setprecision(2);
   out << "\nOpenCL device: " << device << "; thesis scene, median of " << runs << " runs\n";
-  out << "\nCPU vs OpenCL, end to end (thesis Tables 6.2, 6.5). OpenCL total: the default path (one wait for "
-         "traversal, near kernel and readback). OpenCL middle = upload + traversal + scan + sort and near = "
+  out << "\nCPU vs OpenCL, end to end (thesis Tables 6.2, 6.5). CPU total and OpenCL total: the CPU path and "
+         "the default OpenCL path (one wait for traversal, near kernel and readback) taking turns in blocks of "
+         "calls, medians of the blocks' medians; OpenCL / CPU: the median of the blocks' ratios, and their range. OpenCL middle = upload + traversal + scan + sort and near = "
          "near kernel + compaction + readback come from runs that also wait after the traversal "
          "(splitTimes), whose total is given too\n";
   out << "| mesh | triangles | CPU middle ms | CPU near+reduction ms | CPU total ms | OpenCL middle ms | "
-         "OpenCL near ms | OpenCL total, split ms | OpenCL total ms | OpenCL / CPU | first OpenCL call ms | "
-         "same results |\n";
-  out << "|---|---:|---:|---:|---:|---:|---:|---:|---:|---:|---:|---|\n";
+         "OpenCL near ms | OpenCL total, split ms | OpenCL total ms | OpenCL / CPU | blocks' OpenCL / CPU | "
+         "first OpenCL call ms | same results |\n";
+  out << "|---|---:|---:|---:|---:|---:|---:|---:|---:|---:|---:|---:|---|\n";
   for (const OpenClRow& r : rows) {
     const MeshBatchDeviceStats& s = r.stages;
     out << "| " << r.name << " | " << r.triangles << " | " << r.cpuMiddleMs << " | " << r.cpuNearMs << " | "
         << r.cpuTotalMs << " | " << s.uploadMs + s.traversalMs + s.scanMs + s.sortMs << " | "
         << s.prefilterMs + s.nearMs + s.compactionMs + s.readbackMs << " | " << r.clSplitTotalMs << " | "
-        << r.clTotalMs << " | " << std::setprecision(1) << r.clTotalMs / r.cpuTotalMs << "x"
-        << std::setprecision(2) << " | " << r.firstCallMs << " | " << (r.sameAsCpu ? "yes" : "NO") << " |\n";
+        << r.clTotalMs << " | " << std::setprecision(1) << r.ratio << "x | " << r.ratioLow << "-" << r.ratioHigh
+        << "x" << std::setprecision(2) << " | " << r.firstCallMs << " | " << (r.sameAsCpu ? "yes" : "NO") << " |\n";
   }
   out << "\nOpenCL time split (thesis Figs. 6.2-6.3), ms, with a wait after the traversal (splitTimes)\n";
   out << "| mesh | upload (transforms) | traversal | prefix sum | sort | early-out | near kernel | "
@@ -314,6 +349,7 @@ void printOpenClTables(const std::vector<OpenClRow>& rows, const std::string& de
     for (std::uint64_t f : r.stages.frontSizes) out << " " << f;
     out << "\n";
   }
+  if (rows.empty() || !rows.front().variants) return;
   out << "\nOpenCL variants, end-to-end ms: the breadth-first traversal (thesis §5.4.2) from start depth d0 "
          "(thesis "
          "used 6), the depth-first one from a fixed start depth, without the early-out test, the device "
@@ -340,13 +376,15 @@ void runOpenCl(const MeshPairOptions& options) {
   if (device == nullptr) throw std::runtime_error("--backend opencl: no usable OpenCL device");
   std::vector<OpenClRow> rows;
   if (options.builtin) {
-    rows.push_back(measureOpenCl("icosphere (5 levels)", scenes::makeIcosphere(1.0f, 5), options.runs));
-    rows.push_back(measureOpenCl("torus 256x64", scenes::makeTorus(1.0f, 0.3f, 256, 64), options.runs));
+    rows.push_back(
+        measureOpenCl("icosphere (5 levels)", scenes::makeIcosphere(1.0f, 5), options.runs, options.variants));
+    rows.push_back(measureOpenCl("torus 256x64", scenes::makeTorus(1.0f, 0.3f, 256, 64), options.runs,
+                                   options.variants));
   } else {
     for (const std::string& file : options.meshes) {
       const std::string path = options.meshDirectory + "/" + file;
       std::cout << "measuring " << path << " ..." << std::endl;
-      rows.push_back(measureOpenCl(file, loadMesh(path), options.runs));
+      rows.push_back(measureOpenCl(file, loadMesh(path), options.runs, options.variants));
     }
   }
   printOpenClTables(rows, device->deviceName(), options.runs, std::cout);
@@ -389,6 +427,9 @@ const CommandRegistration kRegistration([](CLI::App& app) {
           "--backend", options->backend,
           "cpu: gpucol beside GImpact; opencl: the OpenCL pipeline beside the CPU path, stage by stage")
       ->check(CLI::IsMember({"cpu", "opencl"}));
+  command->add_flag("!--no-variants", options->variants,
+                    "--backend opencl: skip the variants' table (breadth-first, start depths, no early-out, "
+                    "device sort, re-sent meshes)");
   command->callback([options] { run(*options); });
 });
 

@@ -56,6 +56,10 @@ constexpr std::size_t kGroupSizeCap = 64;
 /// 0.40-0.43 (one round 0.58) against 0.42-0.44.
 constexpr std::size_t kCpuGroupSizeCap = 16;
 
+/// Work-groups of the depth-first traversal per compute unit on a CPU device, whose work-items take start
+/// paths from a shared counter: more than one, so that a thread that is late to start still finds a group.
+constexpr std::uint64_t kCpuTraversalGroupsPerUnit = 2;
+
 /// Candidates per work-item of mesh_near_filter_test (its GPUCOL_LANES: 4, 8 or 16). 8 floats are one AVX
 /// register; measured on PoCL (thesis scene): see the README.
 constexpr std::uint64_t kPrefilterLanes = 8;
@@ -80,7 +84,8 @@ constexpr std::uint64_t kTrianglesPerItem = 128;
 
 /// Words of the counter buffer the traversal and the near kernel share: [0] candidates appended, [1] the
 /// candidate counter wrapped, [2] / [3] low / high word of the box tests (mesh_middle_phase.cl), [4] hits
-/// appended by mesh_near_filter_test; the rest is padding.
+/// appended by mesh_near_filter_test, [5] the next start path the depth-first traversal's work-items take;
+/// the rest is padding.
 constexpr std::size_t kCounterWords = 8;
 
 class OpenClMeshPipeline final : public MeshBatchDevice {
@@ -98,6 +103,7 @@ class OpenClMeshPipeline final : public MeshBatchDevice {
       m_counters = cl::Buffer(m_context.context(), CL_MEM_READ_WRITE, kCounterWords * sizeof(cl_uint));
       // Kernels read the leaf entry arena even when no tree has entries: give it one element.
       m_emptyEntries = cl::Buffer(m_context.context(), CL_MEM_READ_ONLY, sizeof(GpucolLeafEntry));
+      m_computeUnits = std::max<cl_uint>(1, m_context.device().getInfo<CL_DEVICE_MAX_COMPUTE_UNITS>());
     });
   }
 
@@ -182,6 +188,7 @@ class OpenClMeshPipeline final : public MeshBatchDevice {
   // last batch's counts that size those reads.
   std::uint64_t m_keysRead = 0, m_hitsRead = 0, m_lastCandidates = 0, m_lastHits = 0;
   MeshHostSort m_hostSort;
+  std::uint64_t m_computeUnits = 1;
 };
 
 void OpenClMeshPipeline::runBatch(const std::vector<DeviceMeshPair>& pairs,
@@ -534,11 +541,18 @@ std::uint64_t OpenClMeshPipeline::traverseDepthFirst(std::size_t pairCount, int 
     while (depth < kMaxStartDepth && (std::uint64_t(pairCount) << (2 * depth)) < wanted) ++depth;
   }
   const std::uint64_t items = std::uint64_t(pairCount) << (2 * depth);
-  if (items > 0xffffffffu) {
+  // Every work-item takes paths from counters[5] until one past the last, so the counter ends at most a launch
+  // past `items`: both must stay below 2^32.
+  if (items > 0x7fffffffu) {
     throw std::length_error("OpenCL mesh pipeline: depth-first start depth " + std::to_string(depth) +
-                            " with " + std::to_string(pairCount) + " pairs exceeds 2^32 work-items");
+                            " with " + std::to_string(pairCount) + " pairs exceeds 2^31 start paths");
   }
   cl::Kernel& kernel = depthFirstKernel(treeDepths);
+  // A GPU runs one work-item per path; a CPU device a few work-groups per thread, whose items take the
+  // paths one after another (see mesh_traverse_depth_first).
+  const std::uint64_t workers =
+      m_context.isGpu() ? items : std::min<std::uint64_t>(items, kCpuTraversalGroupsPerUnit * m_computeUnits *
+                                                                     groupSize(kernel, items));
   // The key buffer keeps its size between batches; it starts at one candidate per 4 work-items.
   std::size_t capacity = std::max<std::size_t>(m_keys.bytes, items * 2) / sizeof(cl_ulong);
   cl_uint counters[kCounterWords] = {};
@@ -557,7 +571,7 @@ std::uint64_t OpenClMeshPipeline::traverseDepthFirst(std::size_t pairCount, int 
     kernel.setArg(7, m_counters);
     kernel.setArg(8, cl_uint(bitsA));
     kernel.setArg(9, cl_uint(bitsB));
-    launch(kernel, items);
+    launch(kernel, workers);
     if (chainNear) {
       // Launched over the whole capacity; the work-items past the count the kernel reads return at once. When
       // the traversal overflowed, its hits are discarded with it below.

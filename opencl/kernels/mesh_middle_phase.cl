@@ -354,16 +354,15 @@ void mesh_flush_keys(__global uint* counters, __global ulong* keys, uint capacit
   }
 }
 
-__kernel void mesh_traverse_depth_first(__global const GpucolMeshPair* restrict pairs,
-                                        __global const GpucolTreeNode* restrict nodes,
-                                        __global const GpucolLeafEntry* restrict entries,
-                                        const uint pairCount, const uint startDepth,
-                                        __global ulong* restrict keys, const uint capacity,
-                                        __global uint* restrict counters, const uint bitsA,
-                                        const uint bitsB) {
-  const uint item = get_global_id(0);
+// The depth-first descent below start path `item` (pair, path) of mesh_traverse_depth_first: candidates go
+// through the private `batch` of *batchedOut keys (flushed when full), box tests are added to *testsOut.
+void mesh_depth_first_path(__global const GpucolMeshPair* restrict pairs,
+                           __global const GpucolTreeNode* restrict nodes,
+                           __global const GpucolLeafEntry* restrict entries, const uint item,
+                           const uint startDepth, __global ulong* restrict keys, const uint capacity,
+                           __global uint* restrict counters, const uint bitsA, const uint bitsB, ulong* batch,
+                           uint* batchedOut, uint* testsOut) {
   const uint pathsPerPair = 1u << (2u * startDepth);
-  if (item >= pairCount * pathsPerPair) return;
   const uint pair = item >> (2u * startDepth);
   const uint path = item & (pathsPerPair - 1u);
   __global const GpucolMeshPair* p = pairs + pair;
@@ -373,7 +372,8 @@ __kernel void mesh_traverse_depth_first(__global const GpucolMeshPair* restrict 
   __global const GpucolLeafEntry* entriesB = entries + p->entriesB;
   const Carrier4 carrier = mesh_carrier4(p);
   const ulong pairKey = (ulong)pair << (bitsA + bitsB);
-  uint tests = 0u;
+  uint tests = *testsOut;
+  uint batched = *batchedOut;
 
   // The path down to the start front. The root test repeats the host's (which sends only overlapping pairs),
   // so that this kernel alone decides, as mesh_front_start does.
@@ -408,12 +408,10 @@ __kernel void mesh_traverse_depth_first(__global const GpucolMeshPair* restrict 
     found = found && mesh_overlaps4(na.lo, na.hi, &box) != 0u;
   }
   if (!found) {
-    mesh_count_tests(counters, tests);
+    *testsOut = tests;
     return;
   }
 
-  ulong batch[GPUCOL_DFS_BATCH];
-  uint batched = 0u;
   // Children are written at the top in any case and the top moves up by the box test's outcome (no branch:
   // the tests come out about half and half), so the stack has one entry of room past its bound
   // (GPUCOL_DFS_ROOM).
@@ -527,8 +525,36 @@ __kernel void mesh_traverse_depth_first(__global const GpucolMeshPair* restrict 
       batched = 0u;
     }
   }
+  *batchedOut = batched;
+  *testsOut = tests;
+}
+
+// Work-items take start paths from a shared counter (counters[5], zero before the launch) until none is left,
+// rather than one path each: the paths' work differs widely (most die at once, a few hold most of the
+// candidates), and on a CPU device, which runs a work-group's items one after the other on one thread, a
+// fixed share left one thread idle while the other finished a heavy group. The host launches few work-items
+// there and one per path on a GPU.
+__kernel void mesh_traverse_depth_first(__global const GpucolMeshPair* restrict pairs,
+                                        __global const GpucolTreeNode* restrict nodes,
+                                        __global const GpucolLeafEntry* restrict entries,
+                                        const uint pairCount, const uint startDepth,
+                                        __global ulong* restrict keys, const uint capacity,
+                                        __global uint* restrict counters, const uint bitsA,
+                                        const uint bitsB) {
+  const uint paths = pairCount << (2u * startDepth);
+  ulong batch[GPUCOL_DFS_BATCH];
+  uint batched = 0u, tests = 0u;
+  for (uint item = atomic_inc(&counters[5]); item < paths; item = atomic_inc(&counters[5])) {
+    mesh_depth_first_path(pairs, nodes, entries, item, startDepth, keys, capacity, counters, bitsA, bitsB,
+                          batch, &batched, &tests);
+    if (tests >= 0x80000000u) {  // long before the private count could wrap
+      mesh_count_tests(counters, tests);
+      tests = 0u;
+    }
+  }
   mesh_flush_keys(counters, keys, capacity, batch, batched);
   mesh_count_tests(counters, tests);
 }
+
 
 #endif  // GPUCOL_DFS_STACK
