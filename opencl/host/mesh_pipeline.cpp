@@ -168,7 +168,7 @@ class OpenClMeshPipeline final : public MeshBatchDevice {
                                    unsigned bitsA, unsigned bitsB, bool chainNear, std::uint64_t& records,
                                    MeshBatchDeviceStats& s);
   void setNearFilterArgs(std::uint64_t capacity, unsigned bitsA, unsigned bitsB);
-  cl::Kernel& depthFirstKernel(int treeDepths);
+  cl::Kernel& depthFirstKernel(int treeDepths, bool fusedNear);
 
   OpenClContext& m_context;
   mutable std::mutex m_mutex;
@@ -176,7 +176,7 @@ class OpenClMeshPipeline final : public MeshBatchDevice {
   OpenClScan m_scan;
   OpenClRadixSort m_sort;
   cl::Kernel m_frontStart, m_frontExpand, m_nearFilterTest, m_nearTest;
-  std::map<std::size_t, cl::Kernel> m_depthFirst;  // by stack length
+  std::map<std::pair<std::size_t, bool>, cl::Kernel> m_depthFirst;  // by stack length, near phase fused
   cl::Buffer m_emptyEntries, m_counters;
   const cl_uint m_zeroCounters[kCounterWords] = {};
   DeviceArray m_pairs, m_counts, m_front, m_next, m_keys, m_values, m_hits;
@@ -494,19 +494,29 @@ std::uint64_t OpenClMeshPipeline::traverseBreadthFirst(std::size_t pairCount,
   return candidateCount;
 }
 
-cl::Kernel& OpenClMeshPipeline::depthFirstKernel(int treeDepths) {
+cl::Kernel& OpenClMeshPipeline::depthFirstKernel(int treeDepths, bool fusedNear) {
   // Each expansion pops one node pair and pushes at most four one level down, and a path has at most
   // depthA + depthB levels: 3 (depthA + depthB) + 1 entries always suffice. Rounded up to a power of two (at
   // least 64) so that few variants get built.
   std::size_t length = 64;
   while (length < 3 * std::size_t(treeDepths) + 1) length *= 2;
-  auto found = m_depthFirst.find(length);
+  const auto key = std::make_pair(length, fusedNear);
+  auto found = m_depthFirst.find(key);
   if (found != m_depthFirst.end()) return found->second;
   // A CPU device gets the prefetch hints (see GPUCOL_PREFETCH_NODE in the kernel).
-  const std::string options =
+  std::string options =
       "-DGPUCOL_DFS_STACK=" + std::to_string(length) + (m_context.isGpu() ? "" : " -DGPUCOL_CPU_PREFETCH");
-  cl::Program program = m_context.program("mesh_middle_phase", kernels::mesh_middle_phase, options);
-  return m_depthFirst.emplace(length, cl::Kernel(program, "mesh_traverse_depth_first")).first->second;
+  cl::Program program;
+  if (fusedNear) {
+    // The near phase's functions first, then the traversal that calls them (GPUCOL_FUSED_NEAR in
+    // mesh_middle_phase.cl); the shared header's include guard keeps its one copy.
+    options += " -DGPUCOL_FUSED_NEAR -DGPUCOL_LANES=" + std::to_string(kPrefilterLanes);
+    const std::string source = std::string(kernels::mesh_near_phase) + "\n" + kernels::mesh_middle_phase;
+    program = m_context.program("mesh_traversal_with_near_phase", source.c_str(), options);
+  } else {
+    program = m_context.program("mesh_middle_phase", kernels::mesh_middle_phase, options);
+  }
+  return m_depthFirst.emplace(key, cl::Kernel(program, "mesh_traverse_depth_first")).first->second;
 }
 
 void OpenClMeshPipeline::setNearFilterArgs(std::uint64_t capacity, unsigned bitsA, unsigned bitsB) {
@@ -547,7 +557,11 @@ std::uint64_t OpenClMeshPipeline::traverseDepthFirst(std::size_t pairCount, int 
     throw std::length_error("OpenCL mesh pipeline: depth-first start depth " + std::to_string(depth) +
                             " with " + std::to_string(pairCount) + " pairs exceeds 2^31 start paths");
   }
-  cl::Kernel& kernel = depthFirstKernel(treeDepths);
+  // A CPU device's default path runs the near test inside the traversal (GPUCOL_FUSED_NEAR, measured there);
+  // a GPU keeps them apart (the near test would diverge inside the traversal's warps), and so does splitTimes,
+  // to time them.
+  const bool fusedNear = chainNear && !options.splitTimes && !m_context.isGpu();
+  cl::Kernel& kernel = depthFirstKernel(treeDepths, fusedNear);
   // A GPU runs one work-item per path; a CPU device a few work-groups per thread, whose items take the
   // paths one after another (see mesh_traverse_depth_first).
   const std::uint64_t workers =
@@ -571,14 +585,20 @@ std::uint64_t OpenClMeshPipeline::traverseDepthFirst(std::size_t pairCount, int 
     kernel.setArg(7, m_counters);
     kernel.setArg(8, cl_uint(bitsA));
     kernel.setArg(9, cl_uint(bitsB));
+    if (fusedNear) {
+      kernel.setArg(10, m_cache.triangles());
+      kernel.setArg(11, m_hits.ensure(ctx, capacity * sizeof(GpucolNearHit)));
+    }
     launch(kernel, workers);
     if (chainNear) {
       // Launched over the whole capacity; the work-items past the count the kernel reads return at once. When
       // the traversal overflowed, its hits are discarded with it below.
-      setNearFilterArgs(capacity, bitsA, bitsB);
       cl::Event traversed;
-      if (options.splitTimes) queue.enqueueMarkerWithWaitList(nullptr, &traversed);
-      launch(m_nearFilterTest, (capacity + kPrefilterLanes - 1) / kPrefilterLanes);
+      if (!fusedNear) {
+        setNearFilterArgs(capacity, bitsA, bitsB);
+        if (options.splitTimes) queue.enqueueMarkerWithWaitList(nullptr, &traversed);
+        launch(m_nearFilterTest, (capacity + kPrefilterLanes - 1) / kPrefilterLanes);
+      }
       if (options.splitTimes) {
         // The host waits for the traversal only to time it: the near kernel is queued behind it already.
         queue.flush();

@@ -578,22 +578,13 @@ __kernel void mesh_near_test(__global const GpucolMeshPair* pairs, __global cons
   hits[j] = mesh_near_hit(af, bf, j);
 }
 
-// The early-out and the double test in one pass: work-item w tests candidates GPUCOL_LANES w .. in lanes
-// (mesh_prefilter_lanes), then runs the double test on the lanes that survive, one after the other, and
-// appends the records of the intersecting ones at hits[atomic counter] (at most one per candidate: `hits`
-// holds every candidate, so nothing is dropped). Their order varies between runs; the host puts them in
-// candidate order. One launch and one wait: a separate early-out kernel, a scan and gather of its survivors
-// and a test kernel on them took longer on PoCL.
-__kernel void mesh_near_filter_test(__global const GpucolMeshPair* restrict pairs,
-                                    __global const float* restrict soup,
-                                    __global const ulong* restrict keys, const uint capacity,
-                                    const uint bitsA, const uint bitsB, __global GpucolNearHit* restrict hits,
-                                    __global uint* restrict counters) {
-  // counters[0] holds the candidate count (written by the traversal just before, or by the host), of which
-  // `keys` holds at most `capacity`; hits are appended at counters[4] (mesh_pipeline.cpp's kCounterWords).
-  const uint n = min(counters[0], capacity);
-  const uint first = (uint)get_global_id(0) * GPUCOL_LANES;
-  if (first >= n) return;
+// The early-out and the double test of candidates first .. first + GPUCOL_LANES - 1 of the n in `keys`:
+// they are tested in lanes (mesh_prefilter_lanes), then the lanes that survive take the double test one
+// after the other, and the records of the intersecting ones are appended at hits[counters[4]] (at most one
+// per candidate: `hits` has room for every candidate of `keys`, so nothing is dropped).
+void mesh_test_lanes(__global const GpucolMeshPair* restrict pairs, __global const float* restrict soup,
+                     __global const ulong* restrict keys, const uint first, const uint n, const uint bitsA,
+                     const uint bitsB, __global GpucolNearHit* restrict hits, __global uint* restrict counters) {
   float corners[18][GPUCOL_LANES];
   const BoolLanes apart =
       mesh_prefilter_lanes(pairs, soup, keys, first, n, bitsA, bitsB, corners);
@@ -612,4 +603,22 @@ __kernel void mesh_near_filter_test(__global const GpucolMeshPair* restrict pair
     const GpucolNearHit hit = mesh_near_hit(af, bf, first + lane);
     if (hit.flags & GPUCOL_HIT_INTERSECTS) hits[atomic_inc(&counters[4])] = hit;
   }
+}
+
+// The early-out and the double test in one pass, work-item w on candidates GPUCOL_LANES w .. (mesh_test_lanes).
+// The hits' order varies between runs; the host puts them in candidate order. One launch and one wait: a
+// separate early-out kernel, a scan and gather of its survivors and a test kernel on them took longer on
+// PoCL. (On a CPU device the default path runs mesh_test_lanes inside the traversal instead:
+// mesh_middle_phase.cl, GPUCOL_FUSED_NEAR.)
+__kernel void mesh_near_filter_test(__global const GpucolMeshPair* restrict pairs,
+                                    __global const float* restrict soup,
+                                    __global const ulong* restrict keys, const uint capacity,
+                                    const uint bitsA, const uint bitsB, __global GpucolNearHit* restrict hits,
+                                    __global uint* restrict counters) {
+  // counters[0] holds the candidate count (written by the traversal just before, or by the host), of which
+  // `keys` holds at most `capacity`; hits are appended at counters[4] (mesh_pipeline.cpp's kCounterWords).
+  const uint n = min(counters[0], capacity);
+  const uint first = (uint)get_global_id(0) * GPUCOL_LANES;
+  if (first >= n) return;
+  mesh_test_lanes(pairs, soup, keys, first, n, bitsA, bitsB, hits, counters);
 }
