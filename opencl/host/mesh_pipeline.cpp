@@ -558,8 +558,8 @@ std::uint64_t OpenClMeshPipeline::traverseDepthFirst(std::size_t pairCount, int 
                             " with " + std::to_string(pairCount) + " pairs exceeds 2^31 start paths");
   }
   // A CPU device's default path runs the near test inside the traversal (GPUCOL_FUSED_NEAR, measured there);
-  // a GPU keeps them apart (the near test would diverge inside the traversal's warps), and so does splitTimes,
-  // to time them.
+  // a GPU keeps them apart (not measured there: inside the traversal the near test would add to its warps'
+  // divergence), and so does splitTimes, to time them.
   const bool fusedNear = chainNear && !options.splitTimes && !m_context.isGpu();
   cl::Kernel& kernel = depthFirstKernel(treeDepths, fusedNear);
   // A GPU runs one work-item per path; a CPU device a few work-groups per thread, whose items take the
