@@ -315,8 +315,10 @@ void printOpenClTables(const std::vector<OpenClRow>& rows, const std::string& de
   out << std::fixed << std::setprecision(2);
   out << "\nOpenCL device: " << device << "; thesis scene, median of " << runs << " runs\n";
   out << "\nCPU vs OpenCL, end to end (thesis Tables 6.2, 6.5). CPU total and OpenCL total: the CPU path and "
-         "the default OpenCL path (one wait for traversal, near kernel and readback) taking turns in blocks of "
-         "calls, medians of the blocks' medians; OpenCL / CPU: the median of the blocks' ratios, and their range. OpenCL middle = upload + traversal + scan + sort and near = "
+         "the default OpenCL path (one wait for traversal, near kernel and readback) taking turns in blocks "
+         "of "
+         "calls, medians of the blocks' medians; OpenCL / CPU: the median of the blocks' ratios, and their "
+         "range. OpenCL middle = upload + traversal + scan + sort and near = "
          "near kernel + compaction + readback come from runs that also wait after the traversal "
          "(splitTimes), whose total is given too\n";
   out << "| mesh | triangles | CPU middle ms | CPU near+reduction ms | CPU total ms | OpenCL middle ms | "
@@ -328,8 +330,9 @@ void printOpenClTables(const std::vector<OpenClRow>& rows, const std::string& de
     out << "| " << r.name << " | " << r.triangles << " | " << r.cpuMiddleMs << " | " << r.cpuNearMs << " | "
         << r.cpuTotalMs << " | " << s.uploadMs + s.traversalMs + s.scanMs + s.sortMs << " | "
         << s.prefilterMs + s.nearMs + s.compactionMs + s.readbackMs << " | " << r.clSplitTotalMs << " | "
-        << r.clTotalMs << " | " << std::setprecision(1) << r.ratio << "x | " << r.ratioLow << "-" << r.ratioHigh
-        << "x" << std::setprecision(2) << " | " << r.firstCallMs << " | " << (r.sameAsCpu ? "yes" : "NO") << " |\n";
+        << r.clTotalMs << " | " << std::setprecision(1) << r.ratio << "x | " << r.ratioLow << "-"
+        << r.ratioHigh << "x" << std::setprecision(2) << " | " << r.firstCallMs << " | "
+        << (r.sameAsCpu ? "yes" : "NO") << " |\n";
   }
   out << "\nOpenCL time split (thesis Figs. 6.2-6.3), ms, with a wait after the traversal (splitTimes)\n";
   out << "| mesh | upload (transforms) | traversal | prefix sum | sort | early-out | near kernel | "
@@ -376,10 +379,10 @@ void runOpenCl(const MeshPairOptions& options) {
   if (device == nullptr) throw std::runtime_error("--backend opencl: no usable OpenCL device");
   std::vector<OpenClRow> rows;
   if (options.builtin) {
-    rows.push_back(
-        measureOpenCl("icosphere (5 levels)", scenes::makeIcosphere(1.0f, 5), options.runs, options.variants));
+    rows.push_back(measureOpenCl("icosphere (5 levels)", scenes::makeIcosphere(1.0f, 5), options.runs,
+                                 options.variants));
     rows.push_back(measureOpenCl("torus 256x64", scenes::makeTorus(1.0f, 0.3f, 256, 64), options.runs,
-                                   options.variants));
+                                 options.variants));
   } else {
     for (const std::string& file : options.meshes) {
       const std::string path = options.meshDirectory + "/" + file;

@@ -551,8 +551,8 @@ std::uint64_t OpenClMeshPipeline::traverseDepthFirst(std::size_t pairCount, int 
     while (depth < kMaxStartDepth && (std::uint64_t(pairCount) << (2 * depth)) < wanted) ++depth;
   }
   const std::uint64_t items = std::uint64_t(pairCount) << (2 * depth);
-  // Every work-item takes paths from counters[5] until one past the last, so the counter ends at most a launch
-  // past `items`: both must stay below 2^32.
+  // Every work-item takes paths from counters[5] until one past the last, so the counter ends at most a
+  // launch past `items`: both must stay below 2^32.
   if (items > 0x7fffffffu) {
     throw std::length_error("OpenCL mesh pipeline: depth-first start depth " + std::to_string(depth) +
                             " with " + std::to_string(pairCount) + " pairs exceeds 2^31 start paths");
@@ -565,8 +565,9 @@ std::uint64_t OpenClMeshPipeline::traverseDepthFirst(std::size_t pairCount, int 
   // A GPU runs one work-item per path; a CPU device a few work-groups per thread, whose items take the
   // paths one after another (see mesh_traverse_depth_first).
   const std::uint64_t workers =
-      m_context.isGpu() ? items : std::min<std::uint64_t>(items, kCpuTraversalGroupsPerUnit * m_computeUnits *
-                                                                     groupSize(kernel, items));
+      m_context.isGpu() ? items
+                        : std::min<std::uint64_t>(
+                              items, kCpuTraversalGroupsPerUnit * m_computeUnits * groupSize(kernel, items));
   // The key buffer keeps its size between batches; it starts at one candidate per 4 work-items.
   std::size_t capacity = std::max<std::size_t>(m_keys.bytes, items * 2) / sizeof(cl_ulong);
   cl_uint counters[kCounterWords] = {};
