@@ -37,6 +37,7 @@ struct Row {
   std::size_t triangles = 0;
   double gpucolBuildMs = 0, gimpactBuildMs = 0;
   double middleMs = 0, nearMs = 0, reductionMs = 0, gpucolTotalMs = 0, gimpactMs = 0;
+  TurnTimes warm;  // gpucol (first) and GImpact (second) taking turns in blocks of calls
   std::uint64_t nodeTests = 0;
   std::size_t candidates = 0, intersecting = 0, contacts = 0, reduced = 0, gimpactContacts = 0;
   std::size_t gimpactPairsMissed = 0;  // GImpact pairs whose triangles' boxes overlap, not among candidates.
@@ -91,6 +92,11 @@ Row measure(const std::string& name, const TriangleMesh& loaded, int runs) {
     reduction.push_back(result.stats.reductionMs);
     gimpact.push_back(millisecondsOf([&] { peerContacts = peerPair.collide(); }));
   }
+  // The same two calls in blocks (takeTurns): each meets caches and threads as its own previous call left
+  // them. One by one, each gpucol call follows a GImpact call of several ms on one thread, after which this
+  // machine had evicted gpucol's tree from the caches and let the second core idle.
+  row.warm = takeTurns(
+      runs, [&] { collideMeshes(*shape, pose.a, *shape, pose.b); }, [&] { peerPair.collide(); }, [] {});
   row.gpucolTotalMs = median(total);
   row.middleMs = median(middle);
   row.nearMs = median(nearPhase);
@@ -130,15 +136,19 @@ void printTable(const std::vector<Row>& rows, std::ostream& out) {
   out << "| mesh | triangles | build gpucol / GImpact ms | middle ms | near ms | reduction ms | gpucol total "
          "ms "
          "| GImpact ms | speed-up | node tests | candidates | intersecting | contacts | reduced | GImpact "
-         "contacts | GImpact pairs missed by gpucol | GImpact pairs whose triangles are apart |\n";
-  out << "|---|---:|---:|---:|---:|---:|---:|---:|---:|---:|---:|---:|---:|---:|---:|---:|---:|\n";
+         "contacts | GImpact pairs missed by gpucol | GImpact pairs whose triangles are apart | in blocks: "
+         "gpucol / "
+         "GImpact ms | in blocks: speed-up (range) |\n";
+  out << "|---|---:|---:|---:|---:|---:|---:|---:|---:|---:|---:|---:|---:|---:|---:|---:|---:|---:|---:|\n";
   for (const Row& r : rows) {
     out << "| " << r.name << " | " << r.triangles << " | " << r.gpucolBuildMs << " / " << r.gimpactBuildMs
         << " | " << r.middleMs << " | " << r.nearMs << " | " << r.reductionMs << " | " << r.gpucolTotalMs
         << " | " << r.gimpactMs << " | " << std::setprecision(1) << r.gimpactMs / r.gpucolTotalMs << "x"
         << std::setprecision(2) << " | " << r.nodeTests << " | " << r.candidates << " | " << r.intersecting
         << " | " << r.contacts << " | " << r.reduced << " | " << r.gimpactContacts << " | "
-        << r.gimpactPairsMissed << " | " << r.gimpactPairsApart << " |\n";
+        << r.gimpactPairsMissed << " | " << r.gimpactPairsApart << " | " << r.warm.firstMs << " / "
+        << r.warm.secondMs << " | " << std::setprecision(1) << r.warm.ratio << "x (" << r.warm.ratioLow << "-"
+        << r.warm.ratioHigh << ")" << std::setprecision(2) << " |\n";
   }
 }
 
@@ -147,13 +157,14 @@ void writeCsv(const std::vector<Row>& rows, const std::string& path) {
   if (!csv) throw std::runtime_error("cannot write " + path);
   csv << "mesh,triangles,gpucol_build_ms,gimpact_build_ms,middle_ms,near_ms,reduction_ms,gpucol_total_ms,"
          "gimpact_ms,node_tests,candidates,intersecting,contacts,reduced,gimpact_contacts,gimpact_pairs_"
-         "missed,gimpact_pairs_apart\n";
+         "missed,gimpact_pairs_apart,blocks_gpucol_ms,blocks_gimpact_ms,blocks_speedup\n";
   for (const Row& r : rows) {
     csv << r.name << ',' << r.triangles << ',' << r.gpucolBuildMs << ',' << r.gimpactBuildMs << ','
         << r.middleMs << ',' << r.nearMs << ',' << r.reductionMs << ',' << r.gpucolTotalMs << ','
         << r.gimpactMs << ',' << r.nodeTests << ',' << r.candidates << ',' << r.intersecting << ','
         << r.contacts << ',' << r.reduced << ',' << r.gimpactContacts << ',' << r.gimpactPairsMissed << ','
-        << r.gimpactPairsApart << '\n';
+        << r.gimpactPairsApart << ',' << r.warm.firstMs << ',' << r.warm.secondMs << ',' << r.warm.ratio
+        << '\n';
   }
 }
 
@@ -232,39 +243,23 @@ OpenClRow measureOpenCl(const std::string& name, const TriangleMesh& loaded, int
   detail::setMeshDeviceOptions(MeshBatchDeviceOptions());
   row.firstCallMs = millisecondsOf([&] { collideMeshes(shape, pose.a, shape, pose.b, cl); });
   MeshPairResult clResult = collideMeshes(shape, pose.a, shape, pose.b, cl);  // warm-up
-  // The CPU path and the default OpenCL path take turns in blocks of kTurnCalls calls, so that both meet the
-  // same load on a shared machine. The first kWarmCalls calls of a block are not counted: after a switch
-  // each path ran slow for several calls (armadillo-27674 on PoCL: 1.9-2.7 ms on the first OpenCL call after
-  // CPU calls, falling to 1.0-1.4 by the sixth; the CPU path 1.0 ms on its first call against 0.6-0.7), and
-  // calls alternating one by one measured only that. Each total is the median of the blocks' medians, the
-  // ratio the median of the blocks' ratios.
-  constexpr int kTurnCalls = 14;
-  constexpr int kWarmCalls = 6;
-  std::vector<double> total, middle, nearPhase, clTotal, ratio;
-  for (int i = 0; i < runs; ++i) {
-    std::vector<double> cpuBlock, clBlock;
-    for (int k = 0; k < kTurnCalls; ++k) {
-      const double ms = millisecondsOf([&] { cpuResult = collideMeshes(shape, pose.a, shape, pose.b, cpu); });
-      if (k < kWarmCalls) continue;
-      cpuBlock.push_back(ms);
-      middle.push_back(cpuResult.stats.middlePhaseMs);
-      nearPhase.push_back(cpuResult.stats.nearPhaseMs + cpuResult.stats.reductionMs);
-    }
-    for (int k = 0; k < kTurnCalls; ++k) {
-      const double ms = millisecondsOf([&] { clResult = collideMeshes(shape, pose.a, shape, pose.b, cl); });
-      if (k >= kWarmCalls) clBlock.push_back(ms);
-    }
-    total.push_back(median(cpuBlock));
-    clTotal.push_back(median(clBlock));
-    ratio.push_back(clTotal.back() / total.back());
-  }
-  row.cpuTotalMs = median(total);
+  // The CPU path and the default OpenCL path take turns in blocks of calls (takeTurns), so that both meet the
+  // same load; each total is the median of the blocks' medians, the ratio the median of the blocks' ratios.
+  std::vector<double> middle, nearPhase;
+  const TurnTimes turns = takeTurns(
+      runs, [&] { cpuResult = collideMeshes(shape, pose.a, shape, pose.b, cpu); },
+      [&] { clResult = collideMeshes(shape, pose.a, shape, pose.b, cl); },
+      [&] {
+        middle.push_back(cpuResult.stats.middlePhaseMs);
+        nearPhase.push_back(cpuResult.stats.nearPhaseMs + cpuResult.stats.reductionMs);
+      });
+  row.cpuTotalMs = turns.firstMs;
   row.cpuMiddleMs = median(middle);
   row.cpuNearMs = median(nearPhase);
-  row.clTotalMs = median(clTotal);
-  row.ratio = median(ratio);
-  row.ratioLow = *std::min_element(ratio.begin(), ratio.end());
-  row.ratioHigh = *std::max_element(ratio.begin(), ratio.end());
+  row.clTotalMs = turns.secondMs;
+  row.ratio = turns.ratio;
+  row.ratioLow = turns.ratioLow;
+  row.ratioHigh = turns.ratioHigh;
   MeshBatchDeviceOptions split;
   split.splitTimes = true;
   row.clSplitTotalMs = timeOpenCl(shape, pose, split, runs, &row.stages, nullptr);
@@ -411,7 +406,11 @@ void run(const MeshPairOptions& options) {
     }
   }
   std::cout << "\nthesis scene, median of " << options.runs
-            << " runs (gpucol total = collideMeshes end to end)\n";
+            << " runs (gpucol total = collideMeshes end to end; gpucol and GImpact called one by one, "
+               "taking turns; \"in blocks\": the two taking turns in "
+            << options.runs << " blocks of " << kTurnCalls << " calls each, the first " << kTurnWarmCalls
+            << " of a block not counted, medians of the blocks' medians, speed-up = median of the blocks' "
+               "ratios)\n";
   printTable(rows, std::cout);
   if (!options.csvPath.empty()) writeCsv(rows, options.csvPath);
 }
