@@ -93,8 +93,8 @@ Row measure(const std::string& name, const TriangleMesh& loaded, int runs) {
     gimpact.push_back(millisecondsOf([&] { peerContacts = peerPair.collide(); }));
   }
   // The same two calls in blocks (takeTurns): each meets caches and threads as its own previous call left
-  // them. One by one, each gpucol call follows a GImpact call of several ms on one thread, after which this
-  // machine had evicted gpucol's tree from the caches and let the second core idle.
+  // them. One by one, each gpucol call follows a GImpact call of several ms on one thread, after which gpucol
+  // ran here about as slowly as after a walk over 64 MB, with the second core idle (README, Mesh pairs).
   row.warm = takeTurns(
       runs, [&] { collideMeshes(*shape, pose.a, *shape, pose.b); }, [&] { peerPair.collide(); }, [] {});
   row.gpucolTotalMs = median(total);
@@ -133,12 +133,11 @@ Row measure(const std::string& name, const TriangleMesh& loaded, int runs) {
 
 void printTable(const std::vector<Row>& rows, std::ostream& out) {
   out << std::fixed << std::setprecision(2);
-  out << "| mesh | triangles | build gpucol / GImpact ms | middle ms | near ms | reduction ms | gpucol total "
-         "ms "
-         "| GImpact ms | speed-up | node tests | candidates | intersecting | contacts | reduced | GImpact "
-         "contacts | GImpact pairs missed by gpucol | GImpact pairs whose triangles are apart | in blocks: "
-         "gpucol / "
-         "GImpact ms | in blocks: speed-up (range) |\n";
+  out << "| mesh | triangles | build gpucol / GImpact ms | middle ms | near ms | reduction ms "
+         "| gpucol total ms | GImpact ms | speed-up, one by one | node tests | candidates | intersecting "
+         "| contacts | reduced | GImpact contacts | GImpact pairs missed by gpucol "
+         "| GImpact pairs whose triangles are apart | in blocks: gpucol / GImpact ms "
+         "| in blocks: speed-up (range) |\n";
   out << "|---|---:|---:|---:|---:|---:|---:|---:|---:|---:|---:|---:|---:|---:|---:|---:|---:|---:|---:|\n";
   for (const Row& r : rows) {
     out << "| " << r.name << " | " << r.triangles << " | " << r.gpucolBuildMs << " / " << r.gimpactBuildMs
