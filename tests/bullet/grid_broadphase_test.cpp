@@ -17,6 +17,7 @@
 #include <vector>
 
 #include "broadphase/grid_pair_finder.h"
+#include "bullet/measured_backend_choice.h"
 
 namespace {
 
@@ -80,8 +81,8 @@ struct CountingCallback : btOverlappingPairCallback {
 /// Creates the proxy of boxes[id] (its client object is the id, as bruteForce and idsOf expect).
 void addProxy(btBroadphaseInterface& bp, std::vector<Box>& boxes, int id, btDispatcher* dispatcher) {
   Box& b = boxes[std::size_t(id)];
-  b.proxy = bp.createProxy(b.lo, b.hi, BOX_SHAPE_PROXYTYPE, reinterpret_cast<void*>(std::intptr_t(id)), b.group,
-                           b.mask, dispatcher);
+  b.proxy = bp.createProxy(b.lo, b.hi, BOX_SHAPE_PROXYTYPE, reinterpret_cast<void*>(std::intptr_t(id)),
+                           b.group, b.mask, dispatcher);
 }
 
 void randomBox(std::mt19937& rng, Box& b, float side) {
@@ -221,8 +222,7 @@ TEST(GridBroadphase, StaticAndSleepingProxiesAreNotRebinned) {
   }
   boxes[count].lo = btVector3(-16, -16.5f, -16), boxes[count].hi = btVector3(16, -15, 16);  // ground
   boxes[count].group = btBroadphaseProxy::StaticFilter;
-  for (int i = 0; i <= count; ++i)
-    addProxy(bp, boxes, i, &dispatcher);
+  for (int i = 0; i <= count; ++i) addProxy(bp, boxes, i, &dispatcher);
   std::uniform_real_distribution<float> step(-0.3f, 0.3f);
   for (int t = 0; t < 6; ++t) {
     for (int i = 0; i <= count; ++i) {
@@ -278,7 +278,8 @@ TEST(GridBroadphase, StaticStaticPairsAreNeverGenerated) {
       const std::set<IdPair> pairs = cachePairs(bp.getOverlappingPairCache());
       EXPECT_EQ(pairs, bruteForce(boxes)) << "bruteForceBelow " << bruteForceBelow << ", step " << t;
       // Every dynamic box overlaps every other box, and nothing else is reported.
-      const std::size_t withDynamic = std::size_t(dynamicCount) * staticCount + dynamicCount * (dynamicCount - 1) / 2;
+      const std::size_t withDynamic =
+          std::size_t(dynamicCount) * staticCount + dynamicCount * (dynamicCount - 1) / 2;
       EXPECT_EQ(pairs.size(), withDynamic);
       for (const IdPair& p : pairs) EXPECT_GE(p.second, staticCount) << p.first << "-" << p.second;
       EXPECT_EQ(bp.stats().staticProxies, std::uint32_t(staticCount));
@@ -539,9 +540,10 @@ TEST(GridBroadphase, FallingBoxesAgreeWithDbvt) {
 
 }  // namespace
 
-TEST(GridBroadphase, AutoBackendHandsLargeScenesToOpenClOnlyOnAGpu) {
-  // Backend::Auto: from kAutoOpenClFrom (100K) proxies the OpenCL finder runs only when its device is a GPU;
-  // on a CPU device (PoCL) the CPU path was faster at every measured size, so Auto keeps the CPU path.
+TEST(GridBroadphase, AutoBackendStartsOnTheCpuAndMeasuresOnlyOnAGpu) {
+  // Backend::Auto starts every size on the CPU path and tries the OpenCL finder only when the chosen device
+  // is a GPU (MeasuredBackendChoice); on a CPU device (PoCL) the CPU path was faster at every measured size,
+  // so Auto never uses it there.
   std::unique_ptr<gpucol::PairFinder> openCl = gpucol::makeOpenClPairFinder(gpucol::Config{});
   if (!openCl) GTEST_SKIP() << "no OpenCL pair finder (built without OpenCL, or no OpenCL device)";
   const bool gpu = openCl->runsOnGpu();
@@ -549,17 +551,78 @@ TEST(GridBroadphase, AutoBackendHandsLargeScenesToOpenClOnlyOnAGpu) {
   btDefaultCollisionConfiguration configuration;
   btCollisionDispatcher dispatcher(&configuration);
   const int side = 47;  // 47^3 = 103,823 unit boxes, each touching its face neighbours
+  btBroadphaseProxy* first = nullptr;
   for (int z = 0; z < side; ++z)
     for (int y = 0; y < side; ++y)
       for (int x = 0; x < side; ++x) {
         const btVector3 lo{float(x), float(y), float(z)};
-        bp.createProxy(lo, lo + btVector3(1, 1, 1), BOX_SHAPE_PROXYTYPE, nullptr,
-                       btBroadphaseProxy::DefaultFilter, btBroadphaseProxy::AllFilter, &dispatcher);
+        btBroadphaseProxy* proxy =
+            bp.createProxy(lo, lo + btVector3(1, 1, 1), BOX_SHAPE_PROXYTYPE, nullptr,
+                           btBroadphaseProxy::DefaultFilter, btBroadphaseProxy::AllFilter, &dispatcher);
+        if (!first) first = proxy;
       }
   bp.calculateOverlappingPairs(&dispatcher);
-  EXPECT_EQ(bp.stats().usedOpenCl, gpu);
+  EXPECT_FALSE(bp.stats().usedOpenCl);
   // Touching counts: every pair of boxes that share a face, an edge or a corner.
   const std::uint64_t n = side, faces = 3 * (n - 1) * n * n, edges = 6 * (n - 1) * (n - 1) * n,
                       corners = 4 * (n - 1) * (n - 1) * (n - 1);
   EXPECT_EQ(bp.stats().overlappingPairs, faces + edges + corners);
+  if (gpu) return;
+  // Later steps stay on the CPU path too (the first box moves to and fro, so that every step searches).
+  for (int step = 0; step < 8; ++step) {
+    const btVector3 shift(step % 2 == 0 ? 0.25f : 0.0f, 0, 0);
+    bp.setAabb(first, shift, shift + btVector3(1, 1, 1), &dispatcher);
+    bp.calculateOverlappingPairs(&dispatcher);
+    EXPECT_TRUE(bp.stats().searched) << "step " << step;
+    EXPECT_FALSE(bp.stats().usedOpenCl) << "step " << step;
+  }
+}
+
+TEST(GridBroadphase, AutoMeasuresBothFindersThenKeepsOne) {
+  // With Auto allowed on PoCL's CPU device, the measured choice (MeasuredBackendChoice) runs its sequence on
+  // a scene whose search takes milliseconds, and the pairs stay those of the CPU path at every step.
+  std::unique_ptr<gpucol::PairFinder> openCl = gpucol::makeOpenClPairFinder(gpucol::Config{});
+  if (!openCl) GTEST_SKIP() << "no OpenCL pair finder (built without OpenCL, or no OpenCL device)";
+  struct AutoOnCpuDevice {
+    AutoOnCpuDevice() { gpucol::detail::setAutoUsesCpuDevice(true); }
+    ~AutoOnCpuDevice() { gpucol::detail::setAutoUsesCpuDevice(false); }
+  } autoOnCpu;
+  gpucol::Config cpuConfig;
+  cpuConfig.broadphaseBackend = gpucol::Backend::Cpu;
+  gpucol::GridBroadphase autoBp, cpuBp(cpuConfig);  // Config{}: Backend::Auto
+  btDefaultCollisionConfiguration configuration;
+  btCollisionDispatcher dispatcher(&configuration);
+  std::mt19937 rng(17);
+  const int count = 40000;  // a search of milliseconds here, far above kDeviceWorthMs
+  std::vector<Box> boxes(count), cpuBoxes;
+  for (Box& b : boxes) randomBox(rng, b, 50.0f);
+  cpuBoxes = boxes;
+  for (int i = 0; i < count; ++i) {
+    addProxy(autoBp, boxes, i, &dispatcher);
+    addProxy(cpuBp, cpuBoxes, i, &dispatcher);
+  }
+  const bool measuring[] = {false, false, true, true, true, false, true, false};  // usedOpenCl
+  std::uniform_real_distribution<float> step(-0.3f, 0.3f);
+  std::vector<bool> used;
+  for (int t = 0; t < 11; ++t) {
+    autoBp.calculateOverlappingPairs(&dispatcher);
+    cpuBp.calculateOverlappingPairs(&dispatcher);
+    ASSERT_TRUE(autoBp.stats().searched);
+    ASSERT_EQ(cachePairs(autoBp.getOverlappingPairCache()), cachePairs(cpuBp.getOverlappingPairCache()))
+        << "step " << t;
+    used.push_back(autoBp.stats().usedOpenCl);
+    if (t < 8) {
+      EXPECT_EQ(used.back(), measuring[t]) << "step " << t;
+    } else {
+      EXPECT_EQ(used.back(), used[8]) << "step " << t;
+    }
+    for (int i = 0; i < count; ++i) {
+      const btVector3 d(step(rng), step(rng), step(rng));
+      boxes[i].lo += d, boxes[i].hi += d;
+      cpuBoxes[i].lo += d, cpuBoxes[i].hi += d;
+      autoBp.setAabb(boxes[i].proxy, boxes[i].lo, boxes[i].hi, &dispatcher);
+      cpuBp.setAabb(cpuBoxes[i].proxy, cpuBoxes[i].lo, cpuBoxes[i].hi, &dispatcher);
+    }
+  }
+  EXPECT_GT(autoBp.stats().overlappingPairs, 0u);
 }

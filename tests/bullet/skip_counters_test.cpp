@@ -2,9 +2,8 @@
 // pairs whose root boxes miss stop there (DispatchStats::rootBoxesMissed), small pairs stay on the CPU
 // (DispatchStats::openClPairs) and OpenCL is never started for them (gpucol::openClStarted). The broad
 // phase's skips are shown in grid_broadphase_test.cpp.
-#include <gtest/gtest.h>
-
 #include <gpucol/gpucol.h>
+#include <gtest/gtest.h>
 
 #include "opencl/host/opencl_started.h"
 #include "scenes/procedural_meshes.h"
@@ -15,7 +14,8 @@ namespace {
 
 std::shared_ptr<MeshShape> rodShape() {
   // A 4 m × 0.2 m × 0.2 m rod: turned 45° its world box is 3 m wide, far wider than the rod.
-  return std::make_shared<MeshShape>(std::make_shared<const TriangleMesh>(scenes::makeBox(2.0f, 0.1f, 0.1f, 1)));
+  return std::make_shared<MeshShape>(
+      std::make_shared<const TriangleMesh>(scenes::makeBox(2.0f, 0.1f, 0.1f, 1)));
 }
 
 btTransform pose(float angle, const btVector3& origin) {
@@ -52,14 +52,16 @@ TEST(SkipCounters, PairWhoseRootBoxesMissStopsThere) {
   EXPECT_GT(crossedStats.reducedContacts, 0u);
 }
 
-// Small mesh pairs under Backend::Auto run on the CPU, and OpenCL is never set up for them. ctest runs each test
-// in a process of its own; run by hand after a test that started OpenCL, the lazy-start half is skipped.
+// Small mesh pairs under Backend::Auto run on the CPU, and OpenCL is never set up for them. ctest runs each
+// test in a process of its own; run by hand after a test that started OpenCL, the lazy-start half is skipped.
 TEST(SkipCounters, SmallPairsStayOnTheCpuAndOpenClIsNeverStarted) {
   const bool startedBefore = openClStarted();
   test::TestWorld world(test::DispatchKind::Gpucol);
-  auto ground = std::make_shared<MeshShape>(std::make_shared<const TriangleMesh>(scenes::makeBox(5, 0.5f, 5, 2)));
+  auto ground =
+      std::make_shared<MeshShape>(std::make_shared<const TriangleMesh>(scenes::makeBox(5, 0.5f, 5, 2)));
   world.add(ground, 0, pose(0, btVector3(0, -0.5f, 0)));
-  auto box = std::make_shared<MeshShape>(std::make_shared<const TriangleMesh>(scenes::makeBox(0.5f, 0.5f, 0.5f, 2)));
+  auto box =
+      std::make_shared<MeshShape>(std::make_shared<const TriangleMesh>(scenes::makeBox(0.5f, 0.5f, 0.5f, 2)));
   world.add(box, 1, pose(0.2f, btVector3(0, 0.6f, 0)));
   std::uint64_t pairs = 0;
   for (int step = 0; step < 30; ++step) {
@@ -73,19 +75,25 @@ TEST(SkipCounters, SmallPairsStayOnTheCpuAndOpenClIsNeverStarted) {
   EXPECT_FALSE(openClStarted());
 }
 
-// A batch above Auto's size threshold (two 81,920-triangle spheres) goes to OpenCL only when the chosen device is a
-// GPU; the device lists alone decide that, so on a machine whose only device is a CPU one (PoCL) OpenCL is not set
-// up at all.
+// A large batch (two 81,920-triangle spheres) under Auto: Auto measures the device only when the chosen
+// device is a GPU, and starts on the CPU path; the device lists alone decide that, so on a machine whose only
+// device is a CPU one (PoCL) OpenCL is not set up at all, however many batches come.
 TEST(SkipCounters, LargeBatchUnderAutoStartsOpenClOnlyForAGpu) {
   if (openClStarted()) GTEST_SKIP() << "OpenCL was started by an earlier test in this process";
   const auto sphere =
       std::make_shared<MeshShape>(std::make_shared<const TriangleMesh>(scenes::makeIcosphere(0.5f, 6)));
-  const MeshPairResult result = collideMeshes(*sphere, pose(0, btVector3(0, 0, 0)), *sphere,
-                                              pose(0.3f, btVector3(0.9f, 0, 0)));
-  ASSERT_FALSE(result.reducedContacts.empty());
   const bool gpu = opencl::chosenDeviceIsGpu("");
-  EXPECT_EQ(result.stats.backendUsed, gpu ? Backend::OpenCL : Backend::Cpu);
-  EXPECT_EQ(openClStarted(), gpu);
+  for (int call = 0; call < 4; ++call) {
+    const MeshPairResult result =
+        collideMeshes(*sphere, pose(0, btVector3(0, 0, 0)), *sphere, pose(0.3f, btVector3(0.9f, 0, 0)));
+    ASSERT_FALSE(result.reducedContacts.empty());
+    if (call == 0 || !gpu) {
+      EXPECT_EQ(result.stats.backendUsed, Backend::Cpu) << "call " << call;
+    }
+  }
+  if (!gpu) {
+    EXPECT_FALSE(openClStarted());
+  }
 }
 
 }  // namespace

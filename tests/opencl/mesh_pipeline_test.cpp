@@ -394,12 +394,73 @@ TEST(MeshPipeline, AutoKeepsSmallBatchesAndCpuDevicesOnTheCpu) {
   const auto mesh = sharedMesh(scenes::centredOnVertexCentroid(loadMesh(path)));
   MeshShape shape(mesh);
   const scenes::PairPose pose = scenes::thesisPose(*mesh);
-  const MeshPairResult r = collideMeshes(shape, pose.a, shape, pose.b);  // Backend::Auto
-  EXPECT_EQ(r.stats.backendUsed, context.isGpu() ? Backend::OpenCL : Backend::Cpu);
+  // Auto starts every size on the CPU path, and on a CPU device stays there.
+  for (int call = 0; call < 10; ++call) {
+    const MeshPairResult r = collideMeshes(shape, pose.a, shape, pose.b);  // Backend::Auto
+    if (call < 2 || !context.isGpu()) {
+      EXPECT_EQ(r.stats.backendUsed, Backend::Cpu) << "call " << call;
+    }
+  }
   MeshShape small(sharedMesh(scenes::makeIcosphere(1.0f, 2)));
   btTransform near = btTransform::getIdentity();
   near.setOrigin(btVector3(1.5f, 0, 0));
-  EXPECT_EQ(collideMeshes(small, btTransform::getIdentity(), small, near).stats.backendUsed, Backend::Cpu);
+  for (int call = 0; call < 10; ++call) {
+    EXPECT_EQ(collideMeshes(small, btTransform::getIdentity(), small, near).stats.backendUsed, Backend::Cpu);
+  }
+}
+
+/// Lets Auto use PoCL's CPU device as it would a GPU, with a fresh measured choice, for one test.
+struct AutoOnCpuDevice {
+  AutoOnCpuDevice() {
+    detail::meshAutoChoice().reset();
+    detail::setAutoUsesCpuDevice(true);
+  }
+  ~AutoOnCpuDevice() {
+    detail::setAutoUsesCpuDevice(false);
+    detail::meshAutoChoice().reset();
+  }
+};
+
+TEST(MeshPipeline, AutoMeasuresBothPathsThenKeepsOne) {
+  GPUCOL_REQUIRE_OPENCL(context);
+  GPUCOL_REQUIRE_MESH(path, "armadillo-27674.ply");
+  const auto mesh = sharedMesh(scenes::centredOnVertexCentroid(loadMesh(path)));
+  MeshShape shape(mesh);
+  const scenes::PairPose pose = scenes::thesisPose(*mesh);
+  // Eight pairs in one batch: several milliseconds on the CPU path, far above kDeviceWorthMs.
+  std::vector<MeshPairQuery> queries;
+  for (int i = 0; i < 8; ++i) queries.push_back(query(shape, pose.a, shape, pose.b));
+  Config cpu;
+  cpu.meshBackend = Backend::Cpu;
+  const std::vector<MeshPairResult> expected = collideMeshesBatch(queries, cpu);
+  ASSERT_FALSE(expected[0].intersectingPairs.empty());
+  const std::uint64_t size = 8 * 2 * std::uint64_t(mesh->triangleCount());
+
+  AutoOnCpuDevice autoOnCpu;
+  // The measured sequence (MeasuredBackendChoice): two CPU calls, then the two paths in turn until each has
+  // its uncounted call and three counted ones; then one path for good.
+  const Backend measuring[] = {Backend::Cpu,    Backend::Cpu, Backend::OpenCL, Backend::OpenCL,
+                               Backend::OpenCL, Backend::Cpu, Backend::OpenCL, Backend::Cpu};
+  std::vector<Backend> used;
+  for (int call = 0; call < 12; ++call) {
+    EXPECT_EQ(detail::meshAutoChoice().decided(size).has_value(), call >= 8) << "call " << call;
+    const std::vector<MeshPairResult> got = collideMeshesBatch(queries, Config{});  // Backend::Auto
+    ASSERT_EQ(got.size(), expected.size());
+    for (std::size_t i = 0; i < got.size(); ++i) {
+      EXPECT_EQ(got[i].stats.backendUsed, got[0].stats.backendUsed);
+      EXPECT_EQ(got[i].candidatePairs, expected[i].candidatePairs) << "call " << call << " pair " << i;
+      EXPECT_EQ(got[i].intersectingPairs, expected[i].intersectingPairs) << "call " << call << " pair " << i;
+      EXPECT_EQ(got[i].contacts.size(), expected[i].contacts.size()) << "call " << call << " pair " << i;
+    }
+    used.push_back(got[0].stats.backendUsed);
+    if (call < 8) {
+      EXPECT_EQ(used.back(), measuring[call]) << "call " << call;
+    }
+  }
+  const Backend kept = *detail::meshAutoChoice().decided(size) == MeasuredBackendChoice::Path::Device
+                           ? Backend::OpenCL
+                           : Backend::Cpu;
+  for (int call = 8; call < 12; ++call) EXPECT_EQ(used[std::size_t(call)], kept) << "call " << call;
 }
 
 }  // namespace

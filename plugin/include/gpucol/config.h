@@ -4,7 +4,10 @@
 
 namespace gpucol {
 
-/// Where a stage runs: Auto chooses per batch from its size, Cpu and OpenCL force one.
+/// Where a stage runs: Cpu and OpenCL force one. Auto chooses per batch (broad phase: per step) from its
+/// size, with a crossover measured on the device in use: while the chosen OpenCL device is a GPU, the first
+/// calls of each size class run on both paths in turn and the faster keeps the class; with a CPU OpenCL
+/// device or none, Auto runs on the CPU and never starts OpenCL (README, "Options").
 enum class Backend { Auto, Cpu, OpenCL };
 
 /// The knobs of the plugin, each with a measured default (see README, "Options").
@@ -18,8 +21,9 @@ struct Config {
   /// Triangles per leaf of the non-updated AABB tree (thesis §5.3.2 uses 1).
   int trianglesPerLeaf = 1;
   /// Proxy count under which the broad phase tests all pairs without a grid. The paper found ~1000 on a GPU
-  /// (Table 7); on the CPU path the grid catches up at about 128 (`gpucol-bench broadphase --brute-force-below`:
-  /// 64 boxes 0.007 ms brute force vs 0.014 grid, 128: 0.022 vs 0.024, 256: 0.088 vs 0.036, 999: 2.45 vs 0.12).
+  /// (Table 7); on the CPU path the grid catches up at about 128 (`gpucol-bench broadphase
+  /// --brute-force-below`: 64 boxes 0.007 ms brute force vs 0.014 grid, 128: 0.022 vs 0.024, 256: 0.088 vs
+  /// 0.036, 999: 2.45 vs 0.12).
   int bruteForceBelow = 128;
   /// Substring of the OpenCL device name to use; the environment variable GPUCOL_OPENCL_DEVICE overrides it.
   std::string openclDevice;

@@ -18,7 +18,6 @@
 
 #include "bullet/mesh_device_backend.h"
 #include "bullet/warn_once.h"
-#include "opencl/host/opencl_started.h"
 #include "bvh/aabb_tree.h"
 #include "bvh/mesh_batch_device.h"
 #include "bvh/prefetch.h"
@@ -28,6 +27,7 @@
 #include "narrowphase/triangle_contact.h"
 #include "narrowphase/triangle_intersection.h"
 #include "narrowphase/triangle_plane.h"
+#include "opencl/host/opencl_started.h"
 
 namespace gpucol {
 namespace {
@@ -157,10 +157,10 @@ struct ChunkBuffers {
   ChunkTriangles crossing;
 };
 
-// The frame applied to a chunk's rows in place: A's vertices (values 0..8) times A's scale, B's (9..17) carried
-// into A's scaled frame (PairFrame). The same operations in the same order as Eigen's `bLinear * p +
-// bTranslation`, which this replaced (its 3x3 product sums a row as m0 x + (m1 y + m2 z), then the translation
-// is added), so the values are the same bits; written over whole rows the loops are vector code.
+// The frame applied to a chunk's rows in place: A's vertices (values 0..8) times A's scale, B's (9..17)
+// carried into A's scaled frame (PairFrame). The same operations in the same order as Eigen's `bLinear * p +
+// bTranslation`, which this replaced (its 3x3 product sums a row as m0 x + (m1 y + m2 z), then the
+// translation is added), so the values are the same bits; written over whole rows the loops are vector code.
 void transformRows(float* rows, std::size_t count, const PairFrame& frame) {
   constexpr std::size_t n = kNearRow;
   for (int v = 0; v < 3; ++v) {
@@ -209,8 +209,8 @@ std::vector<NearHit> runNearPhase(const MeshShape& shapeA, const MeshShape& shap
     // The mesh coordinates are copied into the rows as they are, and the frame (A's scale, B's map into A's
     // frame) is applied afterwards, row by row, as vector code (transformRows): per candidate, through Eigen
     // vectors, the near phase took 5.85M instructions per query of the thesis scene (armadillo-27674, one
-    // thread, valgrind), this way 4.97M. A mirroring scale swaps which rows vertices 1 and 2 go to, to keep the
-    // winding outward.
+    // thread, valgrind), this way 4.97M. A mirroring scale swaps which rows vertices 1 and 2 go to, to keep
+    // the winding outward.
     float* const rows = triangles.values();
     constexpr std::size_t n = kNearRow;
     const std::size_t rowA[3] = {0, frame.flipA ? 2u : 1u, frame.flipA ? 1u : 2u};
@@ -308,8 +308,8 @@ MeshContact toWorld(const TrianglePair& pair, const TriangleContact& contact, co
   out.normalWorldOnB =
       worldFromA.getBasis() * btVector3(contact.normalOnB.x(), contact.normalOnB.y(), contact.normalOnB.z());
   out.depth = contact.depth;
-  // Bullet's pair of points: the moving triangle's deepest vertex on its own body, and that vertex moved out by
-  // the depth on the other (pointOnA = pointOnB + normal * depth).
+  // Bullet's pair of points: the moving triangle's deepest vertex on its own body, and that vertex moved out
+  // by the depth on the other (pointOnA = pointOnB + normal * depth).
   const btVector3 deepest =
       worldFromA * btVector3(contact.deepestPoint.x(), contact.deepestPoint.y(), contact.deepestPoint.z());
   out.pointOnBWorld = contact.onFaceOfB ? deepest - out.normalWorldOnB * out.depth : deepest;
@@ -328,9 +328,8 @@ void collectHits(const std::vector<Hit>& hits, const PairFrame& frame, const Con
   result.contacts.reserve(hits.size());
   localContacts.reserve(hits.size());
   // Same-facing contacts count only when the pair has no other (TriangleContact::sameFacing).
-  const bool anyFacingEachOther = std::any_of(hits.begin(), hits.end(), [](const Hit& hit) {
-    return hit.hasContact && !hit.contact.sameFacing;
-  });
+  const bool anyFacingEachOther = std::any_of(
+      hits.begin(), hits.end(), [](const Hit& hit) { return hit.hasContact && !hit.contact.sameFacing; });
   for (const Hit& hit : hits) {
     const TrianglePair& pair = result.candidatePairs[hit.candidate];
     result.intersectingPairs.push_back(pair);
@@ -383,11 +382,13 @@ MeshPairResult collidePair(const MeshShape& shapeA, const btTransform& transform
   return result;
 }
 
-// What collideMeshesBatch's device path shares between batches: its options and the last batch's stages.
+// What collideMeshesBatch's device path shares between batches: its options, the last batch's stages and
+// Auto's measured choice.
 struct DeviceBackendState {
   std::mutex mutex;
   MeshBatchDeviceOptions options;
   MeshBatchDeviceStats lastStats;
+  MeasuredBackendChoice autoChoice;
 };
 
 DeviceBackendState& deviceBackendState() {
@@ -396,10 +397,12 @@ DeviceBackendState& deviceBackendState() {
 }
 
 // The batch on the device (bvh/mesh_batch_device.h), when the backend choice wants it: returns false, having
-// filled nothing, when the batch is to run on the CPU instead (Auto below the crossover or on a CPU device, no
-// device, or a device failure, which is said once). Pairs whose root boxes miss never reach the device.
+// filled nothing, when the batch is to run on the CPU instead (Auto's measured choice, Auto without a GPU, no
+// device, or a device failure, which is said once). When Auto is measuring and the batch goes to the CPU,
+// `timeCpu` is set to the batch's size for the caller to record the CPU path's time. Pairs whose root boxes
+// miss never reach the device.
 bool collideOnDevice(const std::vector<MeshPairQuery>& queries, const Config& config,
-                     std::vector<MeshPairResult>& results) {
+                     std::vector<MeshPairResult>& results, std::optional<std::uint64_t>& timeCpu) {
   for (const MeshPairQuery& q : queries) requireFinite(q.transformA, q.transformB);
   const auto start = Clock::now();
   std::vector<PairFrame> frames;
@@ -415,32 +418,45 @@ bool collideOnDevice(const std::vector<MeshPairQuery>& queries, const Config& co
     }
   }
   const double rootMs = millisecondsSince(start);
-  // Auto: small batches stay on the CPU without touching OpenCL (it is initialised only when wanted).
-  if (config.meshBackend == Backend::Auto && triangles < detail::kAutoGpuMinimumTriangles) return false;
-  // Auto also asks the device lists before setting anything up: on a machine whose only OpenCL device is a CPU
-  // one, OpenCL is never started for it.
-  if (config.meshBackend == Backend::Auto && !opencl::chosenDeviceIsGpu(config.openclDevice)) return false;
+  const bool autoChoice = config.meshBackend == Backend::Auto;
+  const bool autoUsesCpuDevice = detail::autoUsesCpuDevice();
+  MeasuredBackendChoice& measured = deviceBackendState().autoChoice;
+  // Auto asks the device lists before setting anything up: on a machine whose only OpenCL device is a CPU
+  // one, OpenCL is never started for it. Otherwise the measured choice for this size (it starts OpenCL the
+  // first time it wants the device).
+  if (autoChoice && !autoUsesCpuDevice && !opencl::chosenDeviceIsGpu(config.openclDevice)) return false;
+  if (autoChoice && measured.choose(triangles) == MeasuredBackendChoice::Path::Cpu) {
+    if (!measured.decided(triangles)) timeCpu = triangles;
+    return false;
+  }
 
   MeshBatchDevice* device = nullptr;
   try {
     const MeshBatchDeviceFactory& factory = meshBatchDeviceFactory();
     device = factory ? factory(config) : nullptr;
   } catch (const std::exception& e) {
-    warnOnce("mesh-opencl-setup", std::string("the OpenCL mesh pipeline failed to set up, using the CPU: ") + e.what());
+    warnOnce("mesh-opencl-setup",
+             std::string("the OpenCL mesh pipeline failed to set up, using the CPU: ") + e.what());
+    if (autoChoice) measured.deviceFailed();
     return false;
   }
   if (device == nullptr) {
     if (config.meshBackend == Backend::OpenCL) {
-      warnOnce("mesh-opencl-absent", meshBatchDeviceFactory()
-                                         ? "Backend::OpenCL was asked for mesh pairs, but no usable OpenCL device "
-                                           "was found: they run on the CPU"
-                                         : "Backend::OpenCL was asked for mesh pairs, but gpucol was built without "
-                                           "OpenCL: they run on the CPU");
+      warnOnce("mesh-opencl-absent",
+               meshBatchDeviceFactory()
+                   ? "Backend::OpenCL was asked for mesh pairs, but no usable OpenCL device "
+                     "was found: they run on the CPU"
+                   : "Backend::OpenCL was asked for mesh pairs, but gpucol was built without "
+                     "OpenCL: they run on the CPU");
     }
+    if (autoChoice) measured.deviceFailed();
     return false;
   }
   // Auto never picks a CPU OpenCL device: the CPU path was faster on it at every size measured.
-  if (config.meshBackend == Backend::Auto && !device->isGpu()) return false;
+  if (autoChoice && !autoUsesCpuDevice && !device->isGpu()) {
+    measured.deviceFailed();
+    return false;
+  }
 
   std::vector<DeviceMeshPair> pairs(overlapping.size());
   for (std::size_t k = 0; k < overlapping.size(); ++k) {
@@ -468,8 +484,9 @@ bool collideOnDevice(const std::vector<MeshPairQuery>& queries, const Config& co
   try {
     device->run(pairs, options, found, &stats);
   } catch (const std::exception& e) {
-    warnOnce("mesh-opencl-run", std::string("the OpenCL mesh pipeline failed, running mesh batches on the CPU: ") +
-                                    e.what());
+    warnOnce("mesh-opencl-run",
+             std::string("the OpenCL mesh pipeline failed, running mesh batches on the CPU: ") + e.what());
+    if (autoChoice) measured.deviceFailed();
     return false;
   }
   {
@@ -498,6 +515,7 @@ bool collideOnDevice(const std::vector<MeshPairQuery>& queries, const Config& co
     result.candidatePairs = std::move(found[k].candidates);
     collectHits(found[k].hits, frames[overlapping[k]], config, result);
   }
+  if (autoChoice) measured.record(triangles, MeasuredBackendChoice::Path::Device, millisecondsSince(start));
   return true;
 }
 
@@ -520,6 +538,10 @@ MeshBatchDeviceStats lastMeshDeviceStats() {
   return deviceBackendState().lastStats;
 }
 
+MeasuredBackendChoice& meshAutoChoice() {
+  return deviceBackendState().autoChoice;
+}
+
 }  // namespace detail
 
 MeshPairResult collideMeshes(const MeshShape& shapeA, const btTransform& transformA, const MeshShape& shapeB,
@@ -540,14 +562,21 @@ std::vector<MeshPairResult> collideMeshesBatch(const std::vector<MeshPairQuery>&
     }
   }
   std::vector<MeshPairResult> results(queries.size());
-  if (config.meshBackend != Backend::Cpu && !queries.empty() && collideOnDevice(queries, config, results)) {
+  std::optional<std::uint64_t> timeCpu;  // set when Auto is measuring this batch's size on the CPU path
+  if (config.meshBackend != Backend::Cpu && !queries.empty() &&
+      collideOnDevice(queries, config, results, timeCpu)) {
     return results;
   }
+  const auto start = Clock::now();
   // Pairs run in parallel; each pair's own stages are parallel too, and oneTBB balances the nesting.
   tbb::parallel_for(std::size_t(0), queries.size(), [&](std::size_t i) {
     const MeshPairQuery& q = queries[i];
     results[i] = collidePair(*q.shapeA, q.transformA, *q.shapeB, q.transformB, config);
   });
+  if (timeCpu) {
+    deviceBackendState().autoChoice.record(*timeCpu, MeasuredBackendChoice::Path::Cpu,
+                                           millisecondsSince(start));
+  }
   return results;
 }
 

@@ -23,17 +23,12 @@
 
 #include "broadphase/grid_pair_finder.h"
 #include "broadphase/pair_diff.h"
+#include "bullet/measured_backend_choice.h"
 #include "bullet/warn_once.h"
 #include "opencl/host/opencl_started.h"
 
 namespace gpucol {
 namespace {
-
-/// Auto backend: at and above this many proxies the OpenCL finder is used, when one is registered and its
-/// device is a GPU. On a CPU device (PoCL) Auto never uses it: there the CPU path was faster at every size
-/// measured, 1K to 1M boxes (README, "Broad phase"). The GPU crossover has not been measured (no GPU was
-/// available), so this value is a guess, not a measurement.
-constexpr std::uint32_t kAutoOpenClFrom = 100000;
 
 /// Proxies per parallel task of the per-step scan of the proxies' filters.
 constexpr std::uint32_t kScanGrain = 16384;
@@ -105,6 +100,11 @@ struct GridBroadphase::Impl {
   std::unique_ptr<PairFinder> cpuFinder = makeCpuPairFinder();
   std::unique_ptr<PairFinder> openClFinder;
   bool openClTried = false;
+  // Backend::Auto's choice by the number of live proxies, from this broad phase's own search times. Auto
+  // measures only when the chosen OpenCL device is a GPU: on PoCL's CPU device the CPU path was faster at
+  // every size measured, 1K to 1M boxes (README, "Broad phase"), and Auto never starts OpenCL for it.
+  MeasuredBackendChoice autoChoice;
+  bool autoMeasuring = false;  // the last search was one of autoChoice's measured calls
   // The finder's result of the last search (sorted keys) and, of those, the ones the cache's filter refused
   // (sorted): the cache holds `current` less `refused`.
   std::vector<std::uint64_t> current;
@@ -228,19 +228,30 @@ struct GridBroadphase::Impl {
 
   PairFinder& chooseFinder(GridBroadphaseStats& st) {
     const Backend b = config.broadphaseBackend;
+    bool wantOpenCl = b == Backend::OpenCL;
+    autoMeasuring = false;
     // Auto asks the device lists first, so that a machine whose only OpenCL device is a CPU one never sets
-    // OpenCL up for it (the CPU path is faster there at every size measured).
-    const bool wantOpenCl = b == Backend::OpenCL || (b == Backend::Auto && liveCount >= kAutoOpenClFrom &&
-                                                     opencl::chosenDeviceIsGpu(config.openclDevice));
+    // OpenCL up for it.
+    const bool autoMayUseDevice =
+        b == Backend::Auto && (detail::autoUsesCpuDevice() || opencl::chosenDeviceIsGpu(config.openclDevice));
+    if (autoMayUseDevice) {
+      wantOpenCl = autoChoice.choose(liveCount) == MeasuredBackendChoice::Path::Device;
+      autoMeasuring = !autoChoice.decided(liveCount).has_value();
+    }
     if (wantOpenCl && !openClTried) {
       openClTried = true;
       openClFinder = makeOpenClPairFinder(config);
       if (!openClFinder && b == Backend::OpenCL)
         std::cerr << "gpucol::GridBroadphase: no OpenCL pair finder available; using the CPU path\n";
     }
-    if (wantOpenCl && openClFinder && (b == Backend::OpenCL || openClFinder->runsOnGpu())) {
+    if (wantOpenCl && openClFinder &&
+        (b == Backend::OpenCL || openClFinder->runsOnGpu() || detail::autoUsesCpuDevice())) {
       st.usedOpenCl = true;
       return *openClFinder;
+    }
+    if (wantOpenCl && b == Backend::Auto) {
+      autoChoice.deviceFailed();  // no finder, or its device is not a GPU after all
+      autoMeasuring = false;
     }
     return *cpuFinder;
   }
@@ -421,6 +432,11 @@ void GridBroadphase::calculateOverlappingPairs(btDispatcher* dispatcher) {
   finder.findPairs(view, d.options(), d.found);
   const auto cacheStart = std::chrono::steady_clock::now();
   st.searchMs = std::chrono::duration<double, std::milli>(cacheStart - searchStart).count();
+  if (d.autoMeasuring) {
+    d.autoChoice.record(
+        d.liveCount, st.usedOpenCl ? MeasuredBackendChoice::Path::Device : MeasuredBackendChoice::Path::Cpu,
+        st.searchMs);
+  }
   const PairFinderStats& fs = finder.stats();
   st.chooseMs = fs.chooseMs, st.binMs = fs.binMs, st.testMs = fs.testMs, st.hugeMs = fs.hugeMs;
   st.sortMs = fs.sortMs;
