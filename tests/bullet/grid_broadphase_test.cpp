@@ -17,7 +17,7 @@
 #include <vector>
 
 #include "broadphase/grid_pair_finder.h"
-#include "bullet/measured_backend_choice.h"
+#include "support/auto_on_cpu_device.h"
 
 namespace {
 
@@ -583,10 +583,7 @@ TEST(GridBroadphase, AutoMeasuresBothFindersThenKeepsOne) {
   // a scene whose search takes milliseconds, and the pairs stay those of the CPU path at every step.
   std::unique_ptr<gpucol::PairFinder> openCl = gpucol::makeOpenClPairFinder(gpucol::Config{});
   if (!openCl) GTEST_SKIP() << "no OpenCL pair finder (built without OpenCL, or no OpenCL device)";
-  struct AutoOnCpuDevice {
-    AutoOnCpuDevice() { gpucol::detail::setAutoUsesCpuDevice(true); }
-    ~AutoOnCpuDevice() { gpucol::detail::setAutoUsesCpuDevice(false); }
-  } autoOnCpu;
+  const gpucol::test::AutoOnCpuDevice autoOnCpu;
   gpucol::Config cpuConfig;
   cpuConfig.broadphaseBackend = gpucol::Backend::Cpu;
   gpucol::GridBroadphase autoBp, cpuBp(cpuConfig);  // Config{}: Backend::Auto

@@ -18,6 +18,7 @@
 #include "opencl/opencl_test_device.h"
 #include "scenes/gimpact_peer.h"
 #include "scenes/procedural_meshes.h"
+#include "support/auto_on_cpu_device.h"
 #include "support/test_paths.h"
 
 namespace gpucol::test {
@@ -409,16 +410,11 @@ TEST(MeshPipeline, AutoKeepsSmallBatchesAndCpuDevicesOnTheCpu) {
   }
 }
 
-/// Lets Auto use PoCL's CPU device as it would a GPU, with a fresh measured choice, for one test.
-struct AutoOnCpuDevice {
-  AutoOnCpuDevice() {
-    detail::meshAutoChoice().reset();
-    detail::setAutoUsesCpuDevice(true);
-  }
-  ~AutoOnCpuDevice() {
-    detail::setAutoUsesCpuDevice(false);
-    detail::meshAutoChoice().reset();
-  }
+/// Auto on PoCL's CPU device (AutoOnCpuDevice) with a fresh measured choice for mesh batches, for one test.
+struct FreshMeshAutoOnCpuDevice {
+  FreshMeshAutoOnCpuDevice() { detail::meshAutoChoice().reset(); }
+  ~FreshMeshAutoOnCpuDevice() { detail::meshAutoChoice().reset(); }
+  AutoOnCpuDevice autoOnCpu;
 };
 
 TEST(MeshPipeline, AutoMeasuresBothPathsThenKeepsOne) {
@@ -436,7 +432,7 @@ TEST(MeshPipeline, AutoMeasuresBothPathsThenKeepsOne) {
   ASSERT_FALSE(expected[0].intersectingPairs.empty());
   const std::uint64_t size = 8 * 2 * std::uint64_t(mesh->triangleCount());
 
-  AutoOnCpuDevice autoOnCpu;
+  const FreshMeshAutoOnCpuDevice autoOnCpu;
   // The measured sequence (MeasuredBackendChoice): two CPU calls, then the two paths in turn until each has
   // its uncounted call and three counted ones; then one path for good.
   const Backend measuring[] = {Backend::Cpu,    Backend::Cpu, Backend::OpenCL, Backend::OpenCL,
