@@ -19,6 +19,7 @@
 #include "bullet/mesh_device_backend.h"
 #include "bullet/warn_once.h"
 #include "bvh/aabb_tree.h"
+#include "bvh/avx2_clones.h"
 #include "bvh/mesh_batch_device.h"
 #include "bvh/prefetch.h"
 #include "bvh/tree_traversal.h"
@@ -185,6 +186,101 @@ void transformRows(float* rows, std::size_t count, const PairFrame& frame) {
   }
 }
 
+// One chunk of the near phase: the candidates from `begin` on (at most kNearChunk), their hits appended to
+// `hits`. Compiled for AVX2 and baseline x86-64 (bvh/avx2_clones.h): with AVX2 the row loops below run on 8
+// lanes instead of 4, and the results are the same bits.
+GPUCOL_AVX2_CLONES void runNearChunk(const MeshShape& shapeA, const MeshShape& shapeB, const PairFrame& frame,
+                                     const std::vector<TrianglePair>& candidates, std::size_t begin,
+                                     ChunkBuffers& buffers, std::vector<NearHit>& hits) {
+  const std::size_t count = std::min(candidates.size(), begin + kNearChunk) - begin;
+  ChunkTriangles& triangles = buffers.triangles;
+  ChunkTriangles& crossing = buffers.crossing;
+  // The mesh coordinates are copied into the rows as they are, and the frame (A's scale, B's map into A's
+  // frame) is applied afterwards, row by row, as vector code (transformRows): per candidate, through Eigen
+  // vectors, the near phase took 5.85M instructions per query of the thesis scene (armadillo-27674, one
+  // thread, valgrind), this way 4.97M. A mirroring scale swaps which rows vertices 1 and 2 go to, to keep
+  // the winding outward.
+  float* const rows = triangles.values();
+  constexpr std::size_t n = kNearRow;
+  const std::size_t rowA[3] = {0, frame.flipA ? 2u : 1u, frame.flipA ? 1u : 2u};
+  const std::size_t rowB[3] = {3, frame.flipB ? 5u : 4u, frame.flipB ? 4u : 5u};
+  // B's triangles are read in no useful order. They come from the shapes' triangle soups (MeshShape::
+  // triangleSoup): one contiguous 36-byte read per triangle, prefetched kSoupAhead candidates ahead, where
+  // the mesh's index and vertex arrays cost a load of the indices and then, depending on it, three vertex
+  // loads.
+  const float* const soupA = shapeA.triangleSoup().data();
+  const float* const soupB = shapeB.triangleSoup().data();
+  float a[9] = {};
+  for (std::size_t j = 0; j < count; ++j) {
+    const std::size_t i = begin + j;
+    if (i + kSoupAhead < candidates.size()) {
+      // B's triangle, and A's too: A's come in ascending order but far apart, and perf showed the first
+      // load of each new A triangle as the near phase's largest stall once B's were prefetched.
+      const TrianglePair& ahead = candidates[i + kSoupAhead];
+      const float* aheadB = soupB + 9 * std::size_t(ahead.triangleB);
+      const float* aheadA = soupA + 9 * std::size_t(ahead.triangleA);
+      prefetch(aheadB);
+      prefetch(aheadB + 8);  // the last coordinate, on the next cache line when the triangle straddles two
+      prefetch(aheadA);
+      prefetch(aheadA + 8);
+    }
+    const TrianglePair& pair = candidates[i];
+    if (j == 0 || pair.triangleA != candidates[i - 1].triangleA) {
+      const float* p = soupA + 9 * std::size_t(pair.triangleA);
+      for (int v = 0; v < 3; ++v) {
+        for (int c = 0; c < 3; ++c) a[3 * rowA[v] + c] = p[3 * v + c];
+      }
+    }
+    for (std::size_t k = 0; k < 9; ++k) rows[k * n + j] = a[k];
+    const float* p = soupB + 9 * std::size_t(pair.triangleB);
+    for (int v = 0; v < 3; ++v) {
+      for (int c = 0; c < 3; ++c) rows[(3 * rowB[v] + c) * n + j] = p[3 * v + c];
+    }
+  }
+  transformRows(rows, count, frame);
+  // Plain pointers, loaded once: the stores into `apart` could alias the vector's own fields otherwise, and
+  // the compiler would give up on vector code.
+  const float* const v = triangles.data();
+  std::uint8_t apart[kNearChunk];
+  for (std::size_t j = 0; j < count; ++j) {
+    const Eigen::Vector3f a0(v[j], v[n + j], v[2 * n + j]), a1(v[3 * n + j], v[4 * n + j], v[5 * n + j]),
+        a2(v[6 * n + j], v[7 * n + j], v[8 * n + j]);
+    const Eigen::Vector3f b0(v[9 * n + j], v[10 * n + j], v[11 * n + j]),
+        b1(v[12 * n + j], v[13 * n + j], v[14 * n + j]), b2(v[15 * n + j], v[16 * n + j], v[17 * n + j]);
+    apart[j] = static_cast<std::uint8_t>(detail::floatCertainlyApartBranchFree(a0, a1, a2, b0, b1, b2));
+  }
+  // The pairs left go through the float interval stage, gathered into rows of their own so that its loop is
+  // vector code too; it rejects about two thirds of them, the pairs whose triangles cross each other's
+  // planes but not each other.
+  std::uint16_t survivor[kNearChunk];
+  std::size_t survivors = 0;
+  for (std::size_t j = 0; j < count; ++j) {
+    survivor[survivors] = static_cast<std::uint16_t>(j);
+    survivors += !apart[j];
+  }
+  float* const w = crossing.values();
+  for (std::size_t s = 0; s < survivors; ++s) {
+    for (std::size_t k = 0; k < 18; ++k) w[k * n + s] = v[k * n + survivor[s]];
+  }
+  for (std::size_t s = 0; s < survivors; ++s) {
+    const Eigen::Vector3f a0(w[s], w[n + s], w[2 * n + s]), a1(w[3 * n + s], w[4 * n + s], w[5 * n + s]),
+        a2(w[6 * n + s], w[7 * n + s], w[8 * n + s]);
+    const Eigen::Vector3f b0(w[9 * n + s], w[10 * n + s], w[11 * n + s]),
+        b1(w[12 * n + s], w[13 * n + s], w[14 * n + s]), b2(w[15 * n + s], w[16 * n + s], w[17 * n + s]);
+    apart[s] = static_cast<std::uint8_t>(detail::floatIntervalsApartBranchFree(a0, a1, a2, b0, b1, b2));
+  }
+  for (std::size_t s = 0; s < survivors; ++s) {
+    if (apart[s]) continue;
+    const std::size_t j = survivor[s];
+    Eigen::Vector3f a[3], b[3];
+    crossing.load(s, a, b);
+    bool intersects = false;
+    const std::optional<TriangleContact> contact = detail::generateContactAndTest(a, b, intersects);
+    if (!intersects) continue;
+    hits.push_back({begin + j, contact.has_value(), contact ? *contact : TriangleContact{}});
+  }
+}
+
 // Exact test and contact generation for every candidate (thesis §5.3.4: the cheap test first, contacts only
 // for intersecting pairs), in parallel. Each chunk of candidates keeps its own hits, and the chunks are
 // joined in order, so the output follows the candidates' order whatever the threads do.
@@ -200,97 +296,9 @@ std::vector<NearHit> runNearPhase(const MeshShape& shapeA, const MeshShape& shap
   std::vector<std::vector<NearHit>> chunkHits(chunks);
   tbb::enumerable_thread_specific<ChunkBuffers> threadBuffers;
   tbb::parallel_for(std::size_t(0), chunks, [&](std::size_t chunk) {
-    const std::size_t begin = chunk * kNearChunk;
-    const std::size_t count = std::min(candidates.size(), begin + kNearChunk) - begin;
     // Per thread, not per chunk: a chunk's rows are written before they are read.
-    ChunkBuffers& buffers = threadBuffers.local();
-    ChunkTriangles& triangles = buffers.triangles;
-    ChunkTriangles& crossing = buffers.crossing;
-    // The mesh coordinates are copied into the rows as they are, and the frame (A's scale, B's map into A's
-    // frame) is applied afterwards, row by row, as vector code (transformRows): per candidate, through Eigen
-    // vectors, the near phase took 5.85M instructions per query of the thesis scene (armadillo-27674, one
-    // thread, valgrind), this way 4.97M. A mirroring scale swaps which rows vertices 1 and 2 go to, to keep
-    // the winding outward.
-    float* const rows = triangles.values();
-    constexpr std::size_t n = kNearRow;
-    const std::size_t rowA[3] = {0, frame.flipA ? 2u : 1u, frame.flipA ? 1u : 2u};
-    const std::size_t rowB[3] = {3, frame.flipB ? 5u : 4u, frame.flipB ? 4u : 5u};
-    // B's triangles are read in no useful order. They come from the shapes' triangle soups (MeshShape::
-    // triangleSoup): one contiguous 36-byte read per triangle, prefetched kSoupAhead candidates ahead, where
-    // the mesh's index and vertex arrays cost a load of the indices and then, depending on it, three vertex
-    // loads.
-    const float* const soupA = shapeA.triangleSoup().data();
-    const float* const soupB = shapeB.triangleSoup().data();
-    float a[9] = {};
-    for (std::size_t j = 0; j < count; ++j) {
-      const std::size_t i = begin + j;
-      if (i + kSoupAhead < candidates.size()) {
-        // B's triangle, and A's too: A's come in ascending order but far apart, and perf showed the first
-        // load of each new A triangle as the near phase's largest stall once B's were prefetched.
-        const TrianglePair& ahead = candidates[i + kSoupAhead];
-        const float* aheadB = soupB + 9 * std::size_t(ahead.triangleB);
-        const float* aheadA = soupA + 9 * std::size_t(ahead.triangleA);
-        prefetch(aheadB);
-        prefetch(aheadB + 8);  // the last coordinate, on the next cache line when the triangle straddles two
-        prefetch(aheadA);
-        prefetch(aheadA + 8);
-      }
-      const TrianglePair& pair = candidates[i];
-      if (j == 0 || pair.triangleA != candidates[i - 1].triangleA) {
-        const float* p = soupA + 9 * std::size_t(pair.triangleA);
-        for (int v = 0; v < 3; ++v) {
-          for (int c = 0; c < 3; ++c) a[3 * rowA[v] + c] = p[3 * v + c];
-        }
-      }
-      for (std::size_t k = 0; k < 9; ++k) rows[k * n + j] = a[k];
-      const float* p = soupB + 9 * std::size_t(pair.triangleB);
-      for (int v = 0; v < 3; ++v) {
-        for (int c = 0; c < 3; ++c) rows[(3 * rowB[v] + c) * n + j] = p[3 * v + c];
-      }
-    }
-    transformRows(rows, count, frame);
-    // Plain pointers, loaded once: the stores into `apart` could alias the vector's own fields otherwise, and
-    // the compiler would give up on vector code.
-    const float* const v = triangles.data();
-    std::uint8_t apart[kNearChunk];
-    for (std::size_t j = 0; j < count; ++j) {
-      const Eigen::Vector3f a0(v[j], v[n + j], v[2 * n + j]), a1(v[3 * n + j], v[4 * n + j], v[5 * n + j]),
-          a2(v[6 * n + j], v[7 * n + j], v[8 * n + j]);
-      const Eigen::Vector3f b0(v[9 * n + j], v[10 * n + j], v[11 * n + j]),
-          b1(v[12 * n + j], v[13 * n + j], v[14 * n + j]), b2(v[15 * n + j], v[16 * n + j], v[17 * n + j]);
-      apart[j] = static_cast<std::uint8_t>(detail::floatCertainlyApartBranchFree(a0, a1, a2, b0, b1, b2));
-    }
-    // The pairs left go through the float interval stage, gathered into rows of their own so that its loop is
-    // vector code too; it rejects about two thirds of them, the pairs whose triangles cross each other's
-    // planes but not each other.
-    std::uint16_t survivor[kNearChunk];
-    std::size_t survivors = 0;
-    for (std::size_t j = 0; j < count; ++j) {
-      survivor[survivors] = static_cast<std::uint16_t>(j);
-      survivors += !apart[j];
-    }
-    float* const w = crossing.values();
-    for (std::size_t s = 0; s < survivors; ++s) {
-      for (std::size_t k = 0; k < 18; ++k) w[k * n + s] = v[k * n + survivor[s]];
-    }
-    for (std::size_t s = 0; s < survivors; ++s) {
-      const Eigen::Vector3f a0(w[s], w[n + s], w[2 * n + s]), a1(w[3 * n + s], w[4 * n + s], w[5 * n + s]),
-          a2(w[6 * n + s], w[7 * n + s], w[8 * n + s]);
-      const Eigen::Vector3f b0(w[9 * n + s], w[10 * n + s], w[11 * n + s]),
-          b1(w[12 * n + s], w[13 * n + s], w[14 * n + s]), b2(w[15 * n + s], w[16 * n + s], w[17 * n + s]);
-      apart[s] = static_cast<std::uint8_t>(detail::floatIntervalsApartBranchFree(a0, a1, a2, b0, b1, b2));
-    }
-    std::vector<NearHit>& hits = chunkHits[chunk];
-    for (std::size_t s = 0; s < survivors; ++s) {
-      if (apart[s]) continue;
-      const std::size_t j = survivor[s];
-      Eigen::Vector3f a[3], b[3];
-      crossing.load(s, a, b);
-      bool intersects = false;
-      const std::optional<TriangleContact> contact = detail::generateContactAndTest(a, b, intersects);
-      if (!intersects) continue;
-      hits.push_back({begin + j, contact.has_value(), contact ? *contact : TriangleContact{}});
-    }
+    runNearChunk(shapeA, shapeB, frame, candidates, chunk * kNearChunk, threadBuffers.local(),
+                 chunkHits[chunk]);
   });
   std::vector<NearHit> joined;
   std::size_t total = 0;

@@ -1,5 +1,6 @@
 #include "bvh/tree_traversal.h"
 
+#include "bvh/avx2_clones.h"
 #include "bvh/prefetch.h"
 
 #include <tbb/blocked_range.h>
@@ -271,8 +272,8 @@ class Traverser {
   /// So a popped pair first waits in a small ring of kLookahead pairs, its nodes asked for when it enters, and
   /// is expanded when it leaves, kLookahead expansions later. The order of the expansions changes, not the
   /// set of pairs tested, and the candidates are sorted at the end.
-  void run(const NodePair& start, std::vector<NodePair>& stack, std::vector<TrianglePair>& out,
-           std::uint64_t& tests) const {
+  GPUCOL_AVX2_CLONES void run(const NodePair& start, std::vector<NodePair>& stack,
+                              std::vector<TrianglePair>& out, std::uint64_t& tests) const {
     NodePair ring[kLookahead];
     std::size_t head = 0, waiting = 0;
     if (stack.size() < 5) stack.resize(5);
@@ -429,32 +430,12 @@ void sortPairs(std::vector<TrianglePair>& pairs, std::size_t trianglesA, std::si
   }
 }
 
-}  // namespace
-
-Eigen::Vector3f carriedBoxInflation(const AabbTree& b, const AffineMap& bToA) {
-  const Eigen::Vector3f rootMin = b.rootMin().cwiseAbs();
-  const Eigen::Vector3f rootMax = b.rootMax().cwiseAbs();
-  // Every node of B lies in the root box, so |c| + e <= R_B on each of B's axes.
-  const float radius = rootMin.cwiseMax(rootMax).maxCoeff();
-  const Eigen::Vector3f rowAbsSum = bToA.linear.cwiseAbs().rowwise().sum();
-  return kCarryRelativeEpsilon * (rowAbsSum * radius + bToA.translation.cwiseAbs());
-}
-
-void findCandidatePairs(const AabbTree& a, const AabbTree& b, const AffineMap& bToA,
-                        std::vector<TrianglePair>& out, TraversalStats* stats, bool parallel) {
-  out.clear();
-  const BoxCarrier carrier(b, bToA);
-  const Traverser traverser(a, b, carrier);
-
-  std::uint64_t tests = 1;
-  const AabbNode& rootA = a.node(0);
-  const AabbNode& rootB = b.node(0);
+/// The traversal below the root pair (known to overlap): serial, or breadth-first until the front is large
+/// enough and then in parallel. Compiled for AVX2 and baseline x86-64 (bvh/avx2_clones.h), as is
+/// Traverser::run, which it calls.
+GPUCOL_AVX2_CLONES void traverseFromRoot(const AabbTree& a, const AabbTree& b, const Traverser& traverser,
+                                         std::vector<TrianglePair>& out, std::uint64_t& tests, bool parallel) {
   const NodePair root{0, 0};
-  if (!overlaps(rootA.min, rootA.max, carrier.carry(rootB.min, rootB.max))) {
-    if (stats) stats->nodeTests += tests;
-    return;
-  }
-
   const std::size_t bound = stackBound(a, b);
   if (!parallel) {
     std::vector<NodePair> stack(bound);
@@ -496,6 +477,35 @@ void findCandidatePairs(const AabbTree& a, const AabbTree& b, const AffineMap& b
       }
     }
   }
+}
+
+
+}  // namespace
+
+Eigen::Vector3f carriedBoxInflation(const AabbTree& b, const AffineMap& bToA) {
+  const Eigen::Vector3f rootMin = b.rootMin().cwiseAbs();
+  const Eigen::Vector3f rootMax = b.rootMax().cwiseAbs();
+  // Every node of B lies in the root box, so |c| + e <= R_B on each of B's axes.
+  const float radius = rootMin.cwiseMax(rootMax).maxCoeff();
+  const Eigen::Vector3f rowAbsSum = bToA.linear.cwiseAbs().rowwise().sum();
+  return kCarryRelativeEpsilon * (rowAbsSum * radius + bToA.translation.cwiseAbs());
+}
+
+void findCandidatePairs(const AabbTree& a, const AabbTree& b, const AffineMap& bToA,
+                        std::vector<TrianglePair>& out, TraversalStats* stats, bool parallel) {
+  out.clear();
+  const BoxCarrier carrier(b, bToA);
+  const Traverser traverser(a, b, carrier);
+
+  std::uint64_t tests = 1;
+  const AabbNode& rootA = a.node(0);
+  const AabbNode& rootB = b.node(0);
+  if (!overlaps(rootA.min, rootA.max, carrier.carry(rootB.min, rootB.max))) {
+    if (stats) stats->nodeTests += tests;
+    return;
+  }
+
+  traverseFromRoot(a, b, traverser, out, tests, parallel);
   // Each triangle sits in exactly one leaf and each leaf pair is reached along one path, so there are no
   // duplicates; only the order depends on the traversal, and sorting makes it independent of the threads.
   sortPairs(out, a.triangleCount(), b.triangleCount());
