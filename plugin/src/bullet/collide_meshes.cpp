@@ -162,7 +162,7 @@ struct ChunkBuffers {
 // carried into A's scaled frame (PairFrame). The same operations in the same order as Eigen's `bLinear * p +
 // bTranslation`, which this replaced (its 3x3 product sums a row as m0 x + (m1 y + m2 z), then the
 // translation is added), so the values are the same bits; written over whole rows the loops are vector code.
-void transformRows(float* rows, std::size_t count, const PairFrame& frame) {
+GPUCOL_AVX2_CLONES void transformRows(float* rows, std::size_t count, const PairFrame& frame) {
   constexpr std::size_t n = kNearRow;
   for (int v = 0; v < 3; ++v) {
     for (int c = 0; c < 3; ++c) {
