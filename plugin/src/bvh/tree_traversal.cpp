@@ -479,7 +479,6 @@ GPUCOL_AVX2_CLONES void traverseFromRoot(const AabbTree& a, const AabbTree& b, c
   }
 }
 
-
 }  // namespace
 
 Eigen::Vector3f carriedBoxInflation(const AabbTree& b, const AffineMap& bToA) {
