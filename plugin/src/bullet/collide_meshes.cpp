@@ -152,6 +152,19 @@ class ChunkTriangles {
   std::unique_ptr<float[]> m_values;
 };
 
+// The two triangles of column j of a chunk's rows (ChunkTriangles' layout), read from a plain pointer so that
+// the row loops that use it stay vector code.
+struct RowTriangles {
+  RowTriangles(const float* rows, std::size_t j)
+      : a0(rows[j], rows[kNearRow + j], rows[2 * kNearRow + j]),
+        a1(rows[3 * kNearRow + j], rows[4 * kNearRow + j], rows[5 * kNearRow + j]),
+        a2(rows[6 * kNearRow + j], rows[7 * kNearRow + j], rows[8 * kNearRow + j]),
+        b0(rows[9 * kNearRow + j], rows[10 * kNearRow + j], rows[11 * kNearRow + j]),
+        b1(rows[12 * kNearRow + j], rows[13 * kNearRow + j], rows[14 * kNearRow + j]),
+        b2(rows[15 * kNearRow + j], rows[16 * kNearRow + j], rows[17 * kNearRow + j]) {}
+  Eigen::Vector3f a0, a1, a2, b0, b1, b2;
+};
+
 // The rows one thread works in: the chunk's triangles, and the survivors of the plane test.
 struct ChunkBuffers {
   ChunkTriangles triangles;
@@ -187,8 +200,14 @@ GPUCOL_AVX2_CLONES void transformRows(float* rows, std::size_t count, const Pair
 }
 
 // One chunk of the near phase: the candidates from `begin` on (at most kNearChunk), their hits appended to
-// `hits`. Compiled for AVX2 and baseline x86-64 (bvh/avx2_clones.h): with AVX2 the row loops below run on 8
-// lanes instead of 4, and the results are the same bits.
+// `hits`. Its passes: fetch the triangles into rows (A's once per run of equal triangleA: candidates come
+// sorted by it) and apply the pair's frame; run the float plane pre-test of triangle_plane.h over all of them
+// without branches; gather the pairs it could not reject and run the float interval pre-test over those; then
+// run the double test and the contact generation on the pairs left. The pre-tests only reject what the double
+// test rejects, so the result is the double test's; the plane test removes about two thirds of the candidates
+// of the thesis scene, and without a branch per pair (its outcome is close to a coin toss).
+// Compiled for AVX2 and baseline x86-64 (bvh/avx2_clones.h): with AVX2 the row loops below run on 8 lanes
+// instead of 4, and the results are the same bits.
 GPUCOL_AVX2_CLONES void runNearChunk(const MeshShape& shapeA, const MeshShape& shapeB, const PairFrame& frame,
                                      const std::vector<TrianglePair>& candidates, std::size_t begin,
                                      ChunkBuffers& buffers, std::vector<NearHit>& hits) {
@@ -243,11 +262,9 @@ GPUCOL_AVX2_CLONES void runNearChunk(const MeshShape& shapeA, const MeshShape& s
   const float* const v = triangles.data();
   std::uint8_t apart[kNearChunk];
   for (std::size_t j = 0; j < count; ++j) {
-    const Eigen::Vector3f a0(v[j], v[n + j], v[2 * n + j]), a1(v[3 * n + j], v[4 * n + j], v[5 * n + j]),
-        a2(v[6 * n + j], v[7 * n + j], v[8 * n + j]);
-    const Eigen::Vector3f b0(v[9 * n + j], v[10 * n + j], v[11 * n + j]),
-        b1(v[12 * n + j], v[13 * n + j], v[14 * n + j]), b2(v[15 * n + j], v[16 * n + j], v[17 * n + j]);
-    apart[j] = static_cast<std::uint8_t>(detail::floatCertainlyApartBranchFree(a0, a1, a2, b0, b1, b2));
+    const RowTriangles t(v, j);
+    apart[j] =
+        static_cast<std::uint8_t>(detail::floatCertainlyApartBranchFree(t.a0, t.a1, t.a2, t.b0, t.b1, t.b2));
   }
   // The pairs left go through the float interval stage, gathered into rows of their own so that its loop is
   // vector code too; it rejects about two thirds of them, the pairs whose triangles cross each other's
@@ -263,11 +280,9 @@ GPUCOL_AVX2_CLONES void runNearChunk(const MeshShape& shapeA, const MeshShape& s
     for (std::size_t k = 0; k < 18; ++k) w[k * n + s] = v[k * n + survivor[s]];
   }
   for (std::size_t s = 0; s < survivors; ++s) {
-    const Eigen::Vector3f a0(w[s], w[n + s], w[2 * n + s]), a1(w[3 * n + s], w[4 * n + s], w[5 * n + s]),
-        a2(w[6 * n + s], w[7 * n + s], w[8 * n + s]);
-    const Eigen::Vector3f b0(w[9 * n + s], w[10 * n + s], w[11 * n + s]),
-        b1(w[12 * n + s], w[13 * n + s], w[14 * n + s]), b2(w[15 * n + s], w[16 * n + s], w[17 * n + s]);
-    apart[s] = static_cast<std::uint8_t>(detail::floatIntervalsApartBranchFree(a0, a1, a2, b0, b1, b2));
+    const RowTriangles t(w, s);
+    apart[s] =
+        static_cast<std::uint8_t>(detail::floatIntervalsApartBranchFree(t.a0, t.a1, t.a2, t.b0, t.b1, t.b2));
   }
   for (std::size_t s = 0; s < survivors; ++s) {
     if (apart[s]) continue;
@@ -283,13 +298,8 @@ GPUCOL_AVX2_CLONES void runNearChunk(const MeshShape& shapeA, const MeshShape& s
 
 // Exact test and contact generation for every candidate (thesis §5.3.4: the cheap test first, contacts only
 // for intersecting pairs), in parallel. Each chunk of candidates keeps its own hits, and the chunks are
-// joined in order, so the output follows the candidates' order whatever the threads do.
-//
-// A chunk runs in three passes: fetch the triangles (A's once per run of equal triangleA: candidates come
-// sorted by it), run the float pre-test of triangle_plane.h over all of them without branches, then run the
-// double test and the contact generation on the pairs it could not reject. The pre-test only rejects what the
-// double test rejects, so the result is the double test's; it removes about two thirds of the candidates of
-// the thesis scene, and without a branch per pair (its outcome is close to a coin toss).
+// joined in order, so the output follows the candidates' order whatever the threads do. The work of a chunk
+// is runNearChunk's.
 std::vector<NearHit> runNearPhase(const MeshShape& shapeA, const MeshShape& shapeB, const PairFrame& frame,
                                   const std::vector<TrianglePair>& candidates) {
   const std::size_t chunks = (candidates.size() + kNearChunk - 1) / kNearChunk;
