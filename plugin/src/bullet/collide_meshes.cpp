@@ -125,35 +125,8 @@ constexpr std::size_t kSoupAhead = 8;
 // set).
 constexpr std::size_t kNearRow = kNearChunk + 16;
 
-// One chunk's triangles, coordinate by coordinate (structure of arrays): value k (0..8 A's vertices, 9..17
-// B's, x y z per vertex) of the chunk's j-th candidate is at [k * kNearRow + j], so the float pre-test runs
-// over the chunk as vector code.
-class ChunkTriangles {
- public:
-  // Left uninitialised: every value is written before it is read, and zeroing 38 KB per chunk was measured.
-  ChunkTriangles() : m_values(new float[18 * kNearRow]) {}
-
-  void load(std::size_t j, Eigen::Vector3f (&a)[3], Eigen::Vector3f (&b)[3]) const {
-    for (int v = 0; v < 3; ++v) {
-      a[v] = vertex(3 * v, j);
-      b[v] = vertex(9 + 3 * v, j);
-    }
-  }
-
-  const float* data() const { return m_values.get(); }
-  float* values() { return m_values.get(); }
-
-  Eigen::Vector3f vertex(int first, std::size_t j) const {
-    const float* p = m_values.get() + first * kNearRow + j;
-    return Eigen::Vector3f(p[0], p[kNearRow], p[2 * kNearRow]);
-  }
-
- private:
-  std::unique_ptr<float[]> m_values;
-};
-
-// The two triangles of column j of a chunk's rows (ChunkTriangles' layout), read from a plain pointer so that
-// the row loops that use it stay vector code.
+// The two triangles of column j of a chunk's rows (the layout of ChunkTriangles, below), read from a plain
+// pointer so that the row loops that use it stay vector code.
 struct RowTriangles {
   RowTriangles(const float* rows, std::size_t j)
       : a0(rows[j], rows[kNearRow + j], rows[2 * kNearRow + j]),
@@ -163,6 +136,27 @@ struct RowTriangles {
         b1(rows[12 * kNearRow + j], rows[13 * kNearRow + j], rows[14 * kNearRow + j]),
         b2(rows[15 * kNearRow + j], rows[16 * kNearRow + j], rows[17 * kNearRow + j]) {}
   Eigen::Vector3f a0, a1, a2, b0, b1, b2;
+};
+
+// One chunk's triangles, coordinate by coordinate (structure of arrays): value k (0..8 A's vertices, 9..17
+// B's, x y z per vertex) of the chunk's j-th candidate is at [k * kNearRow + j], so the float pre-test runs
+// over the chunk as vector code.
+class ChunkTriangles {
+ public:
+  // Left uninitialised: every value is written before it is read, and zeroing 38 KB per chunk was measured.
+  ChunkTriangles() : m_values(new float[18 * kNearRow]) {}
+
+  void load(std::size_t j, Eigen::Vector3f (&a)[3], Eigen::Vector3f (&b)[3]) const {
+    const RowTriangles t(m_values.get(), j);
+    a[0] = t.a0, a[1] = t.a1, a[2] = t.a2;
+    b[0] = t.b0, b[1] = t.b1, b[2] = t.b2;
+  }
+
+  const float* data() const { return m_values.get(); }
+  float* values() { return m_values.get(); }
+
+ private:
+  std::unique_ptr<float[]> m_values;
 };
 
 // The rows one thread works in: the chunk's triangles, and the survivors of the plane test.
