@@ -90,27 +90,28 @@ bool doublePlaneStepsReject(const TriangleF& a, const TriangleF& b) {
   return detail::allOnOneSide(dA);
 }
 
-/// The float pre-test may only reject a pair the double test rejects too, so the answers stay the double
-/// test's; its branch-free form must agree with it exactly. Checked on every random family and on pairs built
-/// to sit at the pre-test's margin: B's vertices lifted off A's plane by 1e-9..1e-3 of the size (the margin
-/// is about 3e-6), at scales from 1e-6 to 1e6.
-TEST(TriangleIntersection, FloatPreTestRejectsOnlyWhatTheDoubleTestRejects) {
-  std::mt19937_64 rng(20240612);
+/// What a float pre-test did in one test: the pairs it saw and rejected, and how the pairs built to sit at
+/// its margin went. Both outcomes must be common there, or the test never reached the pre-test's edge.
+struct PreTestTally {
   long checked = 0, rejected = 0, keptNearMargin = 0, rejectedNearMargin = 0;
-  auto check = [&](const TriangleF& a, const TriangleF& b, bool nearMargin) {
+
+  void count(bool rejectedPair, bool nearMargin) {
     ++checked;
-    const bool apart = detail::floatCertainlyApart(a[0], a[1], a[2], b[0], b[1], b[2]);
-    EXPECT_EQ(detail::floatCertainlyApartBranchFree(a[0], a[1], a[2], b[0], b[1], b[2]) != 0u, apart);
-    if (!apart) {
-      keptNearMargin += nearMargin;
-      return;
-    }
-    ++rejected;
-    rejectedNearMargin += nearMargin;
-    EXPECT_TRUE(doublePlaneStepsReject(a, b))
-        << "float rejected a pair the double test does not reject: " << a[0].transpose() << " / "
-        << b[0].transpose();
-  };
+    rejected += rejectedPair;
+    (rejectedPair ? rejectedNearMargin : keptNearMargin) += nearMargin;
+  }
+
+  void expectMarginReached() const {
+    std::cout << "  " << checked << " pairs, " << rejected << " rejected in float; at the margin "
+              << rejectedNearMargin << " rejected, " << keptNearMargin << " left to the double test\n";
+    EXPECT_GT(rejectedNearMargin, 1000);
+    EXPECT_GT(keptNearMargin, 1000);
+  }
+};
+
+/// Runs check(a, b, false) and check(b, a, false) on 20,000 pairs of every random family.
+template <class Check>
+void checkBothWaysOnEveryFamily(std::mt19937_64& rng, Check&& check) {
   for (int f = 0; f < static_cast<int>(PairFamily::Count); ++f) {
     for (int i = 0; i < 20000; ++i) {
       TriangleF a, b;
@@ -119,6 +120,25 @@ TEST(TriangleIntersection, FloatPreTestRejectsOnlyWhatTheDoubleTestRejects) {
       check(b, a, false);
     }
   }
+}
+
+/// The float pre-test may only reject a pair the double test rejects too, so the answers stay the double
+/// test's; its branch-free form must agree with it exactly. Checked on every random family and on pairs built
+/// to sit at the pre-test's margin: B's vertices lifted off A's plane by 1e-9..1e-3 of the size (the margin
+/// is about 3e-6), at scales from 1e-6 to 1e6.
+TEST(TriangleIntersection, FloatPreTestRejectsOnlyWhatTheDoubleTestRejects) {
+  std::mt19937_64 rng(20240612);
+  PreTestTally tally;
+  auto check = [&](const TriangleF& a, const TriangleF& b, bool nearMargin) {
+    const bool apart = detail::floatCertainlyApart(a[0], a[1], a[2], b[0], b[1], b[2]);
+    EXPECT_EQ(detail::floatCertainlyApartBranchFree(a[0], a[1], a[2], b[0], b[1], b[2]) != 0u, apart);
+    tally.count(apart, nearMargin);
+    if (!apart) return;
+    EXPECT_TRUE(doublePlaneStepsReject(a, b))
+        << "float rejected a pair the double test does not reject: " << a[0].transpose() << " / "
+        << b[0].transpose();
+  };
+  checkBothWaysOnEveryFamily(rng, check);
   std::uniform_real_distribution<double> unit(-1.0, 1.0), logLift(-9.0, -3.0), logScale(-6.0, 6.0);
   for (int i = 0; i < 100000; ++i) {
     const double scale = std::pow(10.0, logScale(rng));
@@ -135,11 +155,7 @@ TEST(TriangleIntersection, FloatPreTestRejectsOnlyWhatTheDoubleTestRejects) {
     check(a, b, true);
     check(b, a, true);
   }
-  std::cout << "  " << checked << " pairs, " << rejected << " rejected in float; at the margin "
-            << rejectedNearMargin << " rejected, " << keptNearMargin << " left to the double test\n";
-  // The margin pairs reach both outcomes, so the comparison above really ran at the pre-test's edge.
-  EXPECT_GT(rejectedNearMargin, 1000);
-  EXPECT_GT(keptNearMargin, 1000);
+  tally.expectMarginReached();
 }
 
 /// The float interval stage may only reject a pair the double test rejects (trianglesIntersectDouble and
@@ -150,15 +166,11 @@ TEST(TriangleIntersection, FloatPreTestRejectsOnlyWhatTheDoubleTestRejects) {
 /// a third of them 1000 sizes from the origin.
 TEST(TriangleIntersection, FloatIntervalStageRejectsOnlyWhatTheDoubleTestRejects) {
   std::mt19937_64 rng(20261121);
-  long checked = 0, rejected = 0, keptNearMargin = 0, rejectedNearMargin = 0;
+  PreTestTally tally;
   auto check = [&](const TriangleF& a, const TriangleF& b, bool nearMargin) {
-    ++checked;
-    if (!detail::floatIntervalsApartBranchFree(a[0], a[1], a[2], b[0], b[1], b[2])) {
-      keptNearMargin += nearMargin;
-      return;
-    }
-    ++rejected;
-    rejectedNearMargin += nearMargin;
+    const bool apart = detail::floatIntervalsApartBranchFree(a[0], a[1], a[2], b[0], b[1], b[2]) != 0u;
+    tally.count(apart, nearMargin);
+    if (!apart) return;
     bool intersects = true;
     detail::generateContactAndTest({a[0], a[1], a[2]}, {b[0], b[1], b[2]}, intersects);
     EXPECT_FALSE(detail::trianglesIntersectDouble(a[0], a[1], a[2], b[0], b[1], b[2]))
@@ -166,14 +178,7 @@ TEST(TriangleIntersection, FloatIntervalStageRejectsOnlyWhatTheDoubleTestRejects
         << b[0].transpose();
     EXPECT_FALSE(intersects);
   };
-  for (int f = 0; f < static_cast<int>(PairFamily::Count); ++f) {
-    for (int i = 0; i < 20000; ++i) {
-      TriangleF a, b;
-      test::randomPair(static_cast<PairFamily>(f), rng, a, b);
-      check(a, b, false);
-      check(b, a, false);
-    }
-  }
+  checkBothWaysOnEveryFamily(rng, check);
   std::uniform_real_distribution<double> unit(-1.0, 1.0), beyond(1.2, 3.0), logGap(-7.0, -1.0),
       logAngle(-3.0, std::log10(M_PI / 2)), logScale(-3.0, 3.0);
   for (int i = 0; i < 100000; ++i) {
@@ -207,10 +212,7 @@ TEST(TriangleIntersection, FloatIntervalStageRejectsOnlyWhatTheDoubleTestRejects
     check(a, b, true);
     check(b, a, true);
   }
-  std::cout << "  " << checked << " pairs, " << rejected << " rejected in float; at the margin "
-            << rejectedNearMargin << " rejected, " << keptNearMargin << " left to the double test\n";
-  EXPECT_GT(rejectedNearMargin, 1000);
-  EXPECT_GT(keptNearMargin, 1000);
+  tally.expectMarginReached();
 }
 
 /// Touching configurations built from coordinates that float represents exactly must count as
