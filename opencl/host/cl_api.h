@@ -39,4 +39,12 @@ decltype(auto) translateClErrors(const char* what, Body&& body) {
   }
 }
 
+/// Sets arguments first, first + 1, ... of `kernel` to `args`, in order (one clSetKernelArg each, checked
+/// like every call), so that a launch's arguments read as one list.
+template <class... Args>
+void setKernelArgs(cl::Kernel& kernel, cl_uint first, const Args&... args) {
+  cl_uint index = first;
+  (kernel.setArg(index++, args), ...);
+}
+
 }  // namespace gpucol::opencl

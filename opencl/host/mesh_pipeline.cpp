@@ -303,13 +303,8 @@ void OpenClMeshPipeline::runBatch(const std::vector<DeviceMeshPair>& pairs,
     records = read[4];
   } else {
     records = candidateCount;
-    m_nearTest.setArg(0, m_pairs.buffer);
-    m_nearTest.setArg(1, m_cache.triangles());
-    m_nearTest.setArg(2, m_keys.buffer);
-    m_nearTest.setArg(3, cl_uint(candidateCount));
-    m_nearTest.setArg(4, cl_uint(bitsA));
-    m_nearTest.setArg(5, cl_uint(bitsB));
-    m_nearTest.setArg(6, m_hits.ensure(ctx, candidateCount * sizeof(GpucolNearHit)));
+    setKernelArgs(m_nearTest, 0, m_pairs.buffer, m_cache.triangles(), m_keys.buffer, cl_uint(candidateCount),
+                  cl_uint(bitsA), cl_uint(bitsB), m_hits.ensure(ctx, candidateCount * sizeof(GpucolNearHit)));
     launch(m_nearTest, candidateCount);
     queue.finish();
   }
@@ -417,13 +412,9 @@ std::uint64_t OpenClMeshPipeline::traverseBreadthFirst(std::size_t pairCount,
                             " with " + std::to_string(pairCount) + " pairs exceeds 2^32 work-items");
   }
   auto start = Clock::now();
-  m_frontStart.setArg(0, m_pairs.buffer);
-  m_frontStart.setArg(1, m_cache.nodes());
-  m_frontStart.setArg(2, cl_uint(pairCount));
-  m_frontStart.setArg(3, cl_uint(options.startDepth));
-  m_frontStart.setArg(4, cl_uint(0));
-  m_frontStart.setArg(5, m_counts.ensure(ctx, startItems * sizeof(cl_uint)));
-  m_frontStart.setArg(6, m_front.ensure(ctx, sizeof(GpucolFrontEntry)));
+  setKernelArgs(m_frontStart, 0, m_pairs.buffer, m_cache.nodes(), cl_uint(pairCount),
+                cl_uint(options.startDepth), cl_uint(0), m_counts.ensure(ctx, startItems * sizeof(cl_uint)),
+                m_front.ensure(ctx, sizeof(GpucolFrontEntry)));
   launch(m_frontStart, startItems);
   queue.finish();
   s.traversalMs += millisecondsSince(start);
@@ -451,19 +442,10 @@ std::uint64_t OpenClMeshPipeline::traverseBreadthFirst(std::size_t pairCount,
     if (3 * n > 0xffffffffu)
       throw std::length_error("OpenCL mesh pipeline: the traversal front exceeds 2^32 / 3");
     start = Clock::now();
-    m_frontExpand.setArg(0, m_pairs.buffer);
-    m_frontExpand.setArg(1, m_cache.nodes());
-    m_frontExpand.setArg(2, entries);
-    m_frontExpand.setArg(3, m_front.buffer);
-    m_frontExpand.setArg(4, cl_uint(n));
-    m_frontExpand.setArg(5, cl_uint(0));
-    m_frontExpand.setArg(6, m_counts.ensure(ctx, 3 * n * sizeof(cl_uint)));
-    m_frontExpand.setArg(7, m_next.ensure(ctx, sizeof(GpucolFrontEntry)));
-    m_frontExpand.setArg(8, m_keys.ensure(ctx, sizeof(cl_ulong)));
-    m_frontExpand.setArg(9, cl_uint(0));
-    m_frontExpand.setArg(10, cl_uint(0));
-    m_frontExpand.setArg(11, cl_uint(bitsA));
-    m_frontExpand.setArg(12, cl_uint(bitsB));
+    setKernelArgs(m_frontExpand, 0, m_pairs.buffer, m_cache.nodes(), entries, m_front.buffer, cl_uint(n),
+                  cl_uint(0), m_counts.ensure(ctx, 3 * n * sizeof(cl_uint)),
+                  m_next.ensure(ctx, sizeof(GpucolFrontEntry)), m_keys.ensure(ctx, sizeof(cl_ulong)),
+                  cl_uint(0), cl_uint(0), cl_uint(bitsA), cl_uint(bitsB));
     launch(m_frontExpand, n);
     queue.finish();
     s.traversalMs += millisecondsSince(start);
@@ -495,10 +477,9 @@ std::uint64_t OpenClMeshPipeline::traverseBreadthFirst(std::size_t pairCount,
       keyCapacity = m_keys.bytes;
     }
     m_frontExpand.setArg(5, cl_uint(1));
-    m_frontExpand.setArg(7, m_next.ensure(ctx, std::size_t(children) * sizeof(GpucolFrontEntry)));
-    m_frontExpand.setArg(8, m_keys.ensure(ctx, std::max<std::size_t>(keyCapacity, 8)));
-    m_frontExpand.setArg(9, cl_uint(candidateCount));
-    m_frontExpand.setArg(10, cl_uint(children));
+    setKernelArgs(m_frontExpand, 7, m_next.ensure(ctx, std::size_t(children) * sizeof(GpucolFrontEntry)),
+                  m_keys.ensure(ctx, std::max<std::size_t>(keyCapacity, 8)), cl_uint(candidateCount),
+                  cl_uint(children));
     launch(m_frontExpand, n);
     queue.finish();
     s.traversalMs += millisecondsSince(start);
@@ -536,14 +517,9 @@ cl::Kernel& OpenClMeshPipeline::depthFirstKernel(int treeDepths, bool fusedNear)
 
 void OpenClMeshPipeline::setNearFilterArgs(std::uint64_t capacity, unsigned bitsA, unsigned bitsB) {
   const cl::Context& ctx = m_context.context();
-  m_nearFilterTest.setArg(0, m_pairs.buffer);
-  m_nearFilterTest.setArg(1, m_cache.triangles());
-  m_nearFilterTest.setArg(2, m_keys.buffer);
-  m_nearFilterTest.setArg(3, cl_uint(capacity));
-  m_nearFilterTest.setArg(4, cl_uint(bitsA));
-  m_nearFilterTest.setArg(5, cl_uint(bitsB));
-  m_nearFilterTest.setArg(6, m_hits.ensure(ctx, capacity * sizeof(GpucolNearHit)));
-  m_nearFilterTest.setArg(7, m_counters);
+  setKernelArgs(m_nearFilterTest, 0, m_pairs.buffer, m_cache.triangles(), m_keys.buffer, cl_uint(capacity),
+                cl_uint(bitsA), cl_uint(bitsB), m_hits.ensure(ctx, capacity * sizeof(GpucolNearHit)),
+                m_counters);
 }
 
 std::uint64_t OpenClMeshPipeline::traverseDepthFirst(std::size_t pairCount, int treeDepths,
@@ -591,19 +567,11 @@ std::uint64_t OpenClMeshPipeline::traverseDepthFirst(std::size_t pairCount, int 
     capacity = std::min<std::size_t>(capacity, 0xffffffffu);
     // From a host array, not waited for: the in-order queue runs it before the kernel.
     queue.enqueueWriteBuffer(m_counters, CL_FALSE, 0, sizeof m_zeroCounters, m_zeroCounters);
-    kernel.setArg(0, m_pairs.buffer);
-    kernel.setArg(1, m_cache.nodes());
-    kernel.setArg(2, entries);
-    kernel.setArg(3, cl_uint(pairCount));
-    kernel.setArg(4, cl_uint(depth));
-    kernel.setArg(5, m_keys.ensure(ctx, capacity * sizeof(cl_ulong)));
-    kernel.setArg(6, cl_uint(capacity));
-    kernel.setArg(7, m_counters);
-    kernel.setArg(8, cl_uint(bitsA));
-    kernel.setArg(9, cl_uint(bitsB));
+    setKernelArgs(kernel, 0, m_pairs.buffer, m_cache.nodes(), entries, cl_uint(pairCount), cl_uint(depth),
+                  m_keys.ensure(ctx, capacity * sizeof(cl_ulong)), cl_uint(capacity), m_counters,
+                  cl_uint(bitsA), cl_uint(bitsB));
     if (fusedNear) {
-      kernel.setArg(10, m_cache.triangles());
-      kernel.setArg(11, m_hits.ensure(ctx, capacity * sizeof(GpucolNearHit)));
+      setKernelArgs(kernel, 10, m_cache.triangles(), m_hits.ensure(ctx, capacity * sizeof(GpucolNearHit)));
     }
     launch(kernel, workers);
     if (chainNear) {

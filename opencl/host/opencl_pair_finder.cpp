@@ -236,41 +236,27 @@ void OpenClPairFinder::bin(Kernels& k, const std::vector<std::uint32_t>& slots, 
   q.enqueueWriteBuffer(b.slots.ensure(c, b.count * 4), CL_FALSE, 0, b.count * 4, slots.data());
   // Stage 4: count cells per box, scan, fill (cell, slot) entries.
   setProxyArgs(k.countCells);
-  k.countCells.setArg(9, m_grid.buffer);
-  k.countCells.setArg(10, b.slots.buffer);
-  k.countCells.setArg(11, b.count);
-  k.countCells.setArg(12, b.counts.ensure(c, b.count * 4));
-  k.countCells.setArg(13, m_overflow.buffer);
+  setKernelArgs(k.countCells, 9, m_grid.buffer, b.slots.buffer, b.count, b.counts.ensure(c, b.count * 4),
+                m_overflow.buffer);
   launch(k.countCells, b.count);
   b.keys = m_scan.exclusiveScan(b.counts.buffer, b.count);
   setProxyArgs(k.writeKeys);
-  k.writeKeys.setArg(9, m_grid.buffer);
-  k.writeKeys.setArg(10, b.slots.buffer);
-  k.writeKeys.setArg(11, b.count);
-  k.writeKeys.setArg(12, b.counts.buffer);
-  k.writeKeys.setArg(13, b.cellKeys.ensure(c, std::size_t(b.keys) * 8));
-  k.writeKeys.setArg(14, b.keySlots.ensure(c, std::size_t(b.keys) * 4));
+  setKernelArgs(k.writeKeys, 9, m_grid.buffer, b.slots.buffer, b.count, b.counts.buffer,
+                b.cellKeys.ensure(c, std::size_t(b.keys) * 8), b.keySlots.ensure(c, std::size_t(b.keys) * 4));
   launch(k.writeKeys, b.keys == 0 ? 0 : b.count);
   // Stage 5: stable sort by cell; slots stay ascending inside a cell.
   const std::uint64_t cells = std::uint64_t(grid.dimX) * grid.dimY * grid.dimZ;
   m_sort.sort(b.cellKeys.buffer, b.keySlots.buffer, b.keys, indexBits(cells));
   // Stage 6: runs of equal cells, m(m-1)/2 candidates each, scanned.
-  k.markRuns.setArg(0, b.cellKeys.buffer);
-  k.markRuns.setArg(1, b.keys);
-  k.markRuns.setArg(2, b.runHeads.ensure(c, std::size_t(b.keys) * 4));
+  setKernelArgs(k.markRuns, 0, b.cellKeys.buffer, b.keys, b.runHeads.ensure(c, std::size_t(b.keys) * 4));
   launch(k.markRuns, b.keys);
   b.runs = m_scan.exclusiveScan(b.runHeads.buffer, b.keys);
-  k.writeRuns.setArg(0, b.cellKeys.buffer);
-  k.writeRuns.setArg(1, b.keys);
-  k.writeRuns.setArg(2, b.runHeads.buffer);
-  k.writeRuns.setArg(3, b.runs);
-  k.writeRuns.setArg(4, b.runStart.ensure(c, (std::size_t(b.runs) + 1) * 4));
-  k.writeRuns.setArg(5, b.runCell.ensure(c, std::size_t(b.runs) * 4));
+  setKernelArgs(k.writeRuns, 0, b.cellKeys.buffer, b.keys, b.runHeads.buffer, b.runs,
+                b.runStart.ensure(c, (std::size_t(b.runs) + 1) * 4),
+                b.runCell.ensure(c, std::size_t(b.runs) * 4));
   launch(k.writeRuns, b.keys);
-  k.countRunPairs.setArg(0, b.runStart.buffer);
-  k.countRunPairs.setArg(1, b.runs);
-  k.countRunPairs.setArg(2, b.runPairs.ensure(c, std::size_t(b.runs) * 4));
-  k.countRunPairs.setArg(3, m_overflow.buffer);
+  setKernelArgs(k.countRunPairs, 0, b.runStart.buffer, b.runs, b.runPairs.ensure(c, std::size_t(b.runs) * 4),
+                m_overflow.buffer);
   launch(k.countRunPairs, b.runs);
   b.candidates = m_scan.exclusiveScan(b.runPairs.buffer, b.runs);
   cl_uint overflow = 0;
@@ -295,18 +281,9 @@ void OpenClPairFinder::testBins(Kernels& k, Bins& b, const cl::Buffer& out, std:
                                         ? m_tuning.candidatesPerItem
                                         : std::max(minChunk, (b.candidates + targetItems - 1) / targetItems);
   setProxyArgs(k.testCandidates);
-  k.testCandidates.setArg(9, m_grid.buffer);
-  k.testCandidates.setArg(10, b.runStart.buffer);
-  k.testCandidates.setArg(11, b.runCell.buffer);
-  k.testCandidates.setArg(12, b.runPairs.buffer);
-  k.testCandidates.setArg(13, b.runs);
-  k.testCandidates.setArg(14, b.candidates);
-  k.testCandidates.setArg(15, cl_uint(chunkLength));
-  k.testCandidates.setArg(16, b.keySlots.buffer);
-  k.testCandidates.setArg(17, slotBits);
-  k.testCandidates.setArg(18, out);
-  k.testCandidates.setArg(19, capacity);
-  k.testCandidates.setArg(20, m_counter.buffer);
+  setKernelArgs(k.testCandidates, 9, m_grid.buffer, b.runStart.buffer, b.runCell.buffer, b.runPairs.buffer,
+                b.runs, b.candidates, cl_uint(chunkLength), b.keySlots.buffer, slotBits, out, capacity,
+                m_counter.buffer);
   launch(k.testCandidates, (b.candidates + chunkLength - 1) / chunkLength);
 }
 
@@ -318,15 +295,8 @@ void OpenClPairFinder::testHuge(Kernels& k, const DeviceArray& huge, std::uint32
   }
   const std::uint32_t activeCount = std::uint32_t(m_active.size());
   setProxyArgs(k.testHuge);
-  k.testHuge.setArg(9, huge.buffer);
-  k.testHuge.setArg(10, hugeCount);
-  k.testHuge.setArg(11, m_activeBuf.buffer);
-  k.testHuge.setArg(12, activeCount);
-  k.testHuge.setArg(13, isHuge.buffer);
-  k.testHuge.setArg(14, slotBits);
-  k.testHuge.setArg(15, out);
-  k.testHuge.setArg(16, capacity);
-  k.testHuge.setArg(17, m_counter.buffer);
+  setKernelArgs(k.testHuge, 9, huge.buffer, hugeCount, m_activeBuf.buffer, activeCount, isHuge.buffer,
+                slotBits, out, capacity, m_counter.buffer);
   launchStrided(k.testHuge, std::uint64_t(hugeCount) * activeCount);
 }
 
@@ -455,8 +425,7 @@ void OpenClPairFinder::sendChanges(const ProxyArrays& p, Kernels& k) {
     for (cl_uint i = 0; i < 10; ++i) {
       k.updateProxies.setArg(i, arrays[i]->buffer);
     }
-    k.updateProxies.setArg(10, m_updatesBuf.buffer);
-    k.updateProxies.setArg(11, count);
+    setKernelArgs(k.updateProxies, 10, m_updatesBuf.buffer, count);
     launch(k.updateProxies, count);
   }
   m_syncedCount = p.count;
@@ -503,13 +472,8 @@ void OpenClPairFinder::fullSearch(const ProxyArrays& p, const PairFinderOptions&
       testHuge(k, m_hugeBuf, std::uint32_t(m_huge.size()), m_isHugeBuf, out, capacity, slotBits);
     } else {
       setProxyArgs(k.bruteTest);
-      k.bruteTest.setArg(9, m_activeBuf.buffer);
-      k.bruteTest.setArg(10, activeCount);
-      k.bruteTest.setArg(11, cl_ulong(gpucol_pair_count(activeCount)));
-      k.bruteTest.setArg(12, slotBits);
-      k.bruteTest.setArg(13, out);
-      k.bruteTest.setArg(14, capacity);
-      k.bruteTest.setArg(15, m_counter.buffer);
+      setKernelArgs(k.bruteTest, 9, m_activeBuf.buffer, activeCount, cl_ulong(gpucol_pair_count(activeCount)),
+                    slotBits, out, capacity, m_counter.buffer);
       launchStrided(k.bruteTest, gpucol_pair_count(activeCount));
     }
     if (pairsFit(capacity)) break;
@@ -591,20 +555,10 @@ void OpenClPairFinder::incremental(const ProxyArrays& p, const PairFinderOptions
     const cl::Buffer& out = m_pairs.ensure(c, std::size_t(capacity) * 8);
     if (binnedCount > 0) {
       setProxyArgs(k.testMoved);
-      k.testMoved.setArg(9, m_grid.buffer);
-      k.testMoved.setArg(10, m_restingBuf.buffer);
-      k.testMoved.setArg(11, m_bins.runStart.buffer);
-      k.testMoved.setArg(12, m_bins.runCell.buffer);
-      k.testMoved.setArg(13, m_bins.runs);
-      k.testMoved.setArg(14, m_bins.keySlots.buffer);
-      k.testMoved.setArg(15, m_hugeBuf.buffer);
-      k.testMoved.setArg(16, m_keptHugeCount);
-      k.testMoved.setArg(17, m_movedBins.slots.buffer);
-      k.testMoved.setArg(18, binnedCount);
-      k.testMoved.setArg(19, slotBits);
-      k.testMoved.setArg(20, out);
-      k.testMoved.setArg(21, capacity);
-      k.testMoved.setArg(22, m_counter.buffer);
+      setKernelArgs(k.testMoved, 9, m_grid.buffer, m_restingBuf.buffer, m_bins.runStart.buffer,
+                    m_bins.runCell.buffer, m_bins.runs, m_bins.keySlots.buffer, m_hugeBuf.buffer,
+                    m_keptHugeCount, m_movedBins.slots.buffer, binnedCount, slotBits, out, capacity,
+                    m_counter.buffer);
       launch(k.testMoved, binnedCount);
     }
     testBins(k, m_movedBins, out, capacity, slotBits);

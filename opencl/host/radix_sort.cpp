@@ -61,25 +61,13 @@ void OpenClRadixSort::sort(const cl::Buffer& keys, const cl::Buffer& values, std
       const unsigned bits = std::min(kRadixBits, keyBits - shift);
       const cl_uint digitMask = (1u << bits) - 1u;
       const std::size_t digits = std::size_t(digitMask) + 1;
-      m_count.setArg(0, keysFrom);
-      m_count.setArg(1, static_cast<cl_uint>(n));
-      m_count.setArg(2, static_cast<cl_uint>(shift));
-      m_count.setArg(3, digitMask);
-      m_count.setArg(4, static_cast<cl_uint>(chunkLength));
-      m_count.setArg(5, static_cast<cl_uint>(chunks));
-      m_count.setArg(6, m_counts);
+      setKernelArgs(m_count, 0, keysFrom, static_cast<cl_uint>(n), static_cast<cl_uint>(shift), digitMask,
+                    static_cast<cl_uint>(chunkLength), static_cast<cl_uint>(chunks), m_counts);
       queue.enqueueNDRangeKernel(m_count, cl::NullRange, cl::NDRange(global), cl::NDRange(m_groupSize));
       m_scan.exclusiveScan(m_counts, digits * chunks);
-      m_scatter.setArg(0, keysFrom);
-      m_scatter.setArg(1, valuesFrom);
-      m_scatter.setArg(2, keysTo);
-      m_scatter.setArg(3, valuesTo);
-      m_scatter.setArg(4, static_cast<cl_uint>(n));
-      m_scatter.setArg(5, static_cast<cl_uint>(shift));
-      m_scatter.setArg(6, digitMask);
-      m_scatter.setArg(7, static_cast<cl_uint>(chunkLength));
-      m_scatter.setArg(8, static_cast<cl_uint>(chunks));
-      m_scatter.setArg(9, m_counts);
+      setKernelArgs(m_scatter, 0, keysFrom, valuesFrom, keysTo, valuesTo, static_cast<cl_uint>(n),
+                    static_cast<cl_uint>(shift), digitMask, static_cast<cl_uint>(chunkLength),
+                    static_cast<cl_uint>(chunks), m_counts);
       queue.enqueueNDRangeKernel(m_scatter, cl::NullRange, cl::NDRange(global), cl::NDRange(m_groupSize));
       std::swap(keysFrom, keysTo);
       std::swap(valuesFrom, valuesTo);

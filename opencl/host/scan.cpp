@@ -71,11 +71,8 @@ std::uint32_t OpenClScan::scanLevelChunked(const cl::Buffer& data, std::size_t n
   const std::size_t chunks = (n + chunkLength - 1) / chunkLength;
   const std::size_t global = (chunks + m_chunkGroupSize - 1) / m_chunkGroupSize * m_chunkGroupSize;
   const cl::Buffer sums = levelBuffer(level, chunks);
-  m_chunkTotals.setArg(0, data);
-  m_chunkTotals.setArg(1, static_cast<cl_uint>(n));
-  m_chunkTotals.setArg(2, static_cast<cl_uint>(chunkLength));
-  m_chunkTotals.setArg(3, sums);
-  m_chunkTotals.setArg(4, m_overflow);
+  setKernelArgs(m_chunkTotals, 0, data, static_cast<cl_uint>(n), static_cast<cl_uint>(chunkLength), sums,
+                m_overflow);
   queue.enqueueNDRangeKernel(m_chunkTotals, cl::NullRange, cl::NDRange(global), cl::NDRange(m_chunkGroupSize));
   std::uint32_t total = 0;
   if (chunks == 1) {
@@ -86,10 +83,7 @@ std::uint32_t OpenClScan::scanLevelChunked(const cl::Buffer& data, std::size_t n
   } else {
     total = scanLevelChunked(sums, chunks, level + 1);
   }
-  m_scanChunks.setArg(0, data);
-  m_scanChunks.setArg(1, static_cast<cl_uint>(n));
-  m_scanChunks.setArg(2, static_cast<cl_uint>(chunkLength));
-  m_scanChunks.setArg(3, sums);
+  setKernelArgs(m_scanChunks, 0, data, static_cast<cl_uint>(n), static_cast<cl_uint>(chunkLength), sums);
   queue.enqueueNDRangeKernel(m_scanChunks, cl::NullRange, cl::NDRange(global), cl::NDRange(m_chunkGroupSize));
   return total;
 }
@@ -99,11 +93,8 @@ std::uint32_t OpenClScan::scanLevel(const cl::Buffer& data, std::size_t n, std::
   const std::size_t blockLength = 2 * m_blockItems;
   const std::size_t blocks = (n + blockLength - 1) / blockLength;
   const cl::Buffer sums = levelBuffer(level, blocks);
-  m_scanBlocks.setArg(0, data);
-  m_scanBlocks.setArg(1, static_cast<cl_uint>(n));
-  m_scanBlocks.setArg(2, sums);
-  m_scanBlocks.setArg(3, m_overflow);
-  m_scanBlocks.setArg(4, cl::Local(blockLength * sizeof(cl_uint)));
+  setKernelArgs(m_scanBlocks, 0, data, static_cast<cl_uint>(n), sums, m_overflow,
+                cl::Local(blockLength * sizeof(cl_uint)));
   queue.enqueueNDRangeKernel(m_scanBlocks, cl::NullRange, cl::NDRange(blocks * m_blockItems),
                              cl::NDRange(m_blockItems));
   if (blocks == 1) {
@@ -113,10 +104,7 @@ std::uint32_t OpenClScan::scanLevel(const cl::Buffer& data, std::size_t n, std::
   }
   const std::uint32_t total = scanLevel(sums, blocks, level + 1);
   const std::size_t global = (n + m_addGroupSize - 1) / m_addGroupSize * m_addGroupSize;
-  m_addOffsets.setArg(0, data);
-  m_addOffsets.setArg(1, static_cast<cl_uint>(n));
-  m_addOffsets.setArg(2, sums);
-  m_addOffsets.setArg(3, static_cast<cl_uint>(blockLength));
+  setKernelArgs(m_addOffsets, 0, data, static_cast<cl_uint>(n), sums, static_cast<cl_uint>(blockLength));
   queue.enqueueNDRangeKernel(m_addOffsets, cl::NullRange, cl::NDRange(global), cl::NDRange(m_addGroupSize));
   return total;
 }
