@@ -106,6 +106,20 @@ MeshPairQuery query(const MeshShape& a, const btTransform& ta, const MeshShape& 
   return MeshPairQuery{&a, ta, &b, tb};
 }
 
+/// The thesis scene on a real mesh (the benchmark's): the mesh centred on its vertex centroid, one shape, and
+/// the two poses of scenes::thesisPose.
+struct ThesisScene {
+  explicit ThesisScene(const std::string& path)
+      : mesh(sharedMesh(scenes::centredOnVertexCentroid(loadMesh(path)))),
+        shape(mesh),
+        pose(scenes::thesisPose(*mesh)) {}
+  std::shared_ptr<const TriangleMesh> mesh;
+  MeshShape shape;
+  scenes::PairPose pose;
+  /// The scene's pair as one query of a batch.
+  MeshPairQuery pair() const { return query(shape, pose.a, shape, pose.b); }
+};
+
 TEST(MeshPipeline, RealMeshesAtRandomPoses) {
   GPUCOL_REQUIRE_OPENCL(context);
   GPUCOL_REQUIRE_MESH(armadilloPath, "armadillo-2766.ply");
@@ -128,12 +142,11 @@ TEST(MeshPipeline, RealMeshesAtRandomPoses) {
 TEST(MeshPipeline, ThesisSceneBothWalksAtEveryStartDepthWithAndWithoutEarlyOut) {
   GPUCOL_REQUIRE_OPENCL(context);
   GPUCOL_REQUIRE_MESH(path, "armadillo-2766.ply");
-  const auto mesh = sharedMesh(scenes::centredOnVertexCentroid(loadMesh(path)));
-  MeshShape shape(mesh);
-  const scenes::PairPose pose = scenes::thesisPose(*mesh);
+  const ThesisScene scene(path);
   Config cpu;
   cpu.meshBackend = Backend::Cpu;
-  const std::uint64_t cpuNodeTests = collideMeshes(shape, pose.a, shape, pose.b, cpu).stats.nodeTests;
+  const std::uint64_t cpuNodeTests =
+      collideMeshes(scene.shape, scene.pose.a, scene.shape, scene.pose.b, cpu).stats.nodeTests;
   DeviceOptionsGuard guard;
   for (MeshTraversal traversal : {MeshTraversal::DepthFirst, MeshTraversal::BreadthFirst}) {
     for (int depth : {0, 1, 3, 6}) {
@@ -151,7 +164,7 @@ TEST(MeshPipeline, ThesisSceneBothWalksAtEveryStartDepthWithAndWithoutEarlyOut) 
                        ", start depth " + std::to_string(depth) +
                        (prefilter ? ", early-out" : ", no early-out") +
                        (deviceSort ? ", device sort" : ", host sort"));
-          const Compared seen = expectSameAsCpu({query(shape, pose.a, shape, pose.b)}, 100.0f);
+          const Compared seen = expectSameAsCpu({scene.pair()}, 100.0f);
           EXPECT_GT(seen.intersecting, 100u);
           // Larger than one work-group of this device: the launches span several groups.
           EXPECT_GT(seen.candidates, context.device().getInfo<CL_DEVICE_MAX_WORK_GROUP_SIZE>());
@@ -173,9 +186,7 @@ TEST(MeshPipeline, ThesisSceneBothWalksAtEveryStartDepthWithAndWithoutEarlyOut) 
 TEST(MeshPipeline, OneWaitReadsWhatItsGuessMissed) {
   GPUCOL_REQUIRE_OPENCL(context);
   GPUCOL_REQUIRE_MESH(path, "armadillo-2766.ply");
-  const auto mesh = sharedMesh(scenes::centredOnVertexCentroid(loadMesh(path)));
-  MeshShape armadillo(mesh);
-  const scenes::PairPose pose = scenes::thesisPose(*mesh);
+  const ThesisScene armadillo(path);
   MeshShape sphere(sharedMesh(scenes::makeIcosphere(1.0f, 2)));
   const btTransform ta(btQuaternion(btVector3(0, 1, 1), 0.3f), btVector3(0, 0, 0));
   const btTransform tb(btQuaternion(btVector3(1, 0, 1), 1.1f), btVector3(1.9f, 0, 0));
@@ -186,7 +197,7 @@ TEST(MeshPipeline, OneWaitReadsWhatItsGuessMissed) {
     detail::setMeshDeviceOptions(options);
     SCOPED_TRACE(splitTimes ? "wait after the traversal" : "one wait");
     for (bool large : {true, false, true, true, false}) {
-      const Compared seen = large ? expectSameAsCpu({query(armadillo, pose.a, armadillo, pose.b)}, 100.0f)
+      const Compared seen = large ? expectSameAsCpu({armadillo.pair()}, 100.0f)
                                   : expectSameAsCpu({query(sphere, ta, sphere, tb)}, 3.0f);
       EXPECT_GT(seen.intersecting, large ? 100u : 0u);
     }
@@ -392,12 +403,11 @@ TEST(MeshPipeline, MeshesStayResidentUntilTheirLastOwnerIsGone) {
 TEST(MeshPipeline, AutoKeepsSmallBatchesAndCpuDevicesOnTheCpu) {
   GPUCOL_REQUIRE_OPENCL(context);
   GPUCOL_REQUIRE_MESH(path, "armadillo-27674.ply");
-  const auto mesh = sharedMesh(scenes::centredOnVertexCentroid(loadMesh(path)));
-  MeshShape shape(mesh);
-  const scenes::PairPose pose = scenes::thesisPose(*mesh);
+  const ThesisScene scene(path);
   // Auto starts every size on the CPU path, and on a CPU device stays there.
   for (int call = 0; call < 10; ++call) {
-    const MeshPairResult r = collideMeshes(shape, pose.a, shape, pose.b);  // Backend::Auto
+    const MeshPairResult r =
+        collideMeshes(scene.shape, scene.pose.a, scene.shape, scene.pose.b);  // Backend::Auto
     if (call < 2 || !context.isGpu()) {
       EXPECT_EQ(r.stats.backendUsed, Backend::Cpu) << "call " << call;
     }
@@ -420,17 +430,15 @@ struct FreshMeshAutoOnCpuDevice {
 TEST(MeshPipeline, AutoMeasuresBothPathsThenKeepsOne) {
   GPUCOL_REQUIRE_OPENCL(context);
   GPUCOL_REQUIRE_MESH(path, "armadillo-27674.ply");
-  const auto mesh = sharedMesh(scenes::centredOnVertexCentroid(loadMesh(path)));
-  MeshShape shape(mesh);
-  const scenes::PairPose pose = scenes::thesisPose(*mesh);
+  const ThesisScene scene(path);
   // Eight pairs in one batch: several milliseconds on the CPU path, far above kDeviceWorthMs.
   std::vector<MeshPairQuery> queries;
-  for (int i = 0; i < 8; ++i) queries.push_back(query(shape, pose.a, shape, pose.b));
+  for (int i = 0; i < 8; ++i) queries.push_back(scene.pair());
   Config cpu;
   cpu.meshBackend = Backend::Cpu;
   const std::vector<MeshPairResult> expected = collideMeshesBatch(queries, cpu);
   ASSERT_FALSE(expected[0].intersectingPairs.empty());
-  const std::uint64_t size = 8 * 2 * std::uint64_t(mesh->triangleCount());
+  const std::uint64_t size = 8 * 2 * std::uint64_t(scene.mesh->triangleCount());
 
   const FreshMeshAutoOnCpuDevice autoOnCpu;
   // The measured sequence (MeasuredBackendChoice): two CPU calls, then the two paths in turn until each has
