@@ -1,8 +1,5 @@
 #include "bvh/tree_traversal.h"
 
-#include "bvh/avx2_clones.h"
-#include "bvh/prefetch.h"
-
 #include <tbb/blocked_range.h>
 #include <tbb/enumerable_thread_specific.h>
 #include <tbb/parallel_for.h>
@@ -10,11 +7,25 @@
 #include <algorithm>
 #include <cmath>
 #include <cstddef>
+#include <cstring>
 #include <memory>
 #include <utility>
 
+#include "bvh/avx2_clones.h"
+#include "bvh/prefetch.h"
+
 #if defined(__SSE2__)
 #include <emmintrin.h>
+#endif
+
+/// The node-against-node step carries B's two children together, one per half of an 8-float vector (GCC/Clang
+/// vector extensions: one AVX instruction per step in the AVX2 clone, two SSE ones in the baseline clone).
+/// __builtin_shufflevector is Clang's and GCC's from version 12; older compilers carry the children one by
+/// one.
+#if defined(__SSE2__) && (defined(__clang__) || (defined(__GNUC__) && __GNUC__ >= 12))
+#define GPUCOL_PAIRED_CARRY 1
+#else
+#define GPUCOL_PAIRED_CARRY 0
 #endif
 
 namespace gpucol {
@@ -25,6 +36,38 @@ struct CarriedBox {
   float min[4];
   float max[4];
 };
+
+#if GPUCOL_PAIRED_CARRY
+using Float4 = float __attribute__((vector_size(16)));
+using Float8 = float __attribute__((vector_size(32)));
+using Int8 = std::int32_t __attribute__((vector_size(32)));
+
+/// Four floats from memory (no alignment needed).
+inline Float4 load4(const float* p) {
+  Float4 v;
+  std::memcpy(&v, p, sizeof v);
+  return v;
+}
+
+/// Two boxes of B carried into A's frame: the first in lanes 0-3 of each corner, the second in lanes 4-7
+/// (lanes 3 and 7 are padding).
+struct CarriedBoxPair {
+  Float8 min;
+  Float8 max;
+
+  /// Bits 0-2: the box [lo, hi] overlaps the first box on x, y, z; bits 4-6: the same for the second. `lo`
+  /// and `hi` are 4-float readable corners as in BoxCarrier::carry; lanes 3 and 7 compare padding.
+  int overlapBits(const float* lo, const float* hi) const {
+    const Float4 l = load4(lo), h = load4(hi);
+    const Float8 lo2 = __builtin_shufflevector(l, l, 0, 1, 2, 3, 0, 1, 2, 3);
+    const Float8 hi2 = __builtin_shufflevector(h, h, 0, 1, 2, 3, 0, 1, 2, 3);
+    const Int8 ok = (lo2 <= max) & (min <= hi2);
+    const __m128 first = reinterpret_cast<__m128>(__builtin_shufflevector(ok, ok, 0, 1, 2, 3));
+    const __m128 second = reinterpret_cast<__m128>(__builtin_shufflevector(ok, ok, 4, 5, 6, 7));
+    return _mm_movemask_ps(first) | (_mm_movemask_ps(second) << 4);
+  }
+};
+#endif
 
 /// A pair of nodes whose boxes are already known to overlap. B's carried box is not kept: it is needed again
 /// only where A alone descends, and carrying it again there (the same operations, so the same bits) costs
@@ -90,7 +133,43 @@ class BoxCarrier {
     m_translation = _mm_setr_ps(m_t[0], m_t[1], m_t[2], 0.0f);
     m_inflationLanes = _mm_setr_ps(m_inflation[0], m_inflation[1], m_inflation[2], 0.0f);
 #endif
+#if GPUCOL_PAIRED_CARRY
+    for (int j = 0; j < 3; ++j) {
+      m_column2[j] = Float8{m_m[0][j], m_m[1][j], m_m[2][j], 0.0f, m_m[0][j], m_m[1][j], m_m[2][j], 0.0f};
+      m_absColumn2[j] =
+          Float8{m_abs[0][j], m_abs[1][j], m_abs[2][j], 0.0f, m_abs[0][j], m_abs[1][j], m_abs[2][j], 0.0f};
+    }
+    m_translation2 = Float8{m_t[0], m_t[1], m_t[2], 0.0f, m_t[0], m_t[1], m_t[2], 0.0f};
+    m_inflation2 = Float8{m_inflation[0], m_inflation[1], m_inflation[2], 0.0f,
+                          m_inflation[0], m_inflation[1], m_inflation[2], 0.0f};
+#endif
   }
+
+#if GPUCOL_PAIRED_CARRY
+  /// carry() of two nodes at once, lane for lane the same operations in the same order, so the same bits.
+  CarriedBoxPair carryPair(const AabbNode& first, const AabbNode& second) const {
+    const Int8 keepXyz = {-1, -1, -1, 0, -1, -1, -1, 0};
+    const Float8 l =
+        reinterpret_cast<Float8>(reinterpret_cast<Int8>(__builtin_shufflevector(
+                                     load4(first.min), load4(second.min), 0, 1, 2, 3, 4, 5, 6, 7)) &
+                                 keepXyz);
+    const Float8 h =
+        reinterpret_cast<Float8>(reinterpret_cast<Int8>(__builtin_shufflevector(
+                                     load4(first.max), load4(second.max), 0, 1, 2, 3, 4, 5, 6, 7)) &
+                                 keepXyz);
+    const Float8 c = (l + h) * 0.5f;
+    const Float8 e = (h - l) * 0.5f;
+    const Float8 centre = ((m_column2[0] * __builtin_shufflevector(c, c, 0, 0, 0, 0, 4, 4, 4, 4) +
+                            m_column2[1] * __builtin_shufflevector(c, c, 1, 1, 1, 1, 5, 5, 5, 5)) +
+                           m_column2[2] * __builtin_shufflevector(c, c, 2, 2, 2, 2, 6, 6, 6, 6)) +
+                          m_translation2;
+    const Float8 extent = ((m_absColumn2[0] * __builtin_shufflevector(e, e, 0, 0, 0, 0, 4, 4, 4, 4) +
+                            m_absColumn2[1] * __builtin_shufflevector(e, e, 1, 1, 1, 1, 5, 5, 5, 5)) +
+                           m_absColumn2[2] * __builtin_shufflevector(e, e, 2, 2, 2, 2, 6, 6, 6, 6)) +
+                          m_inflation2;
+    return {centre - extent, centre + extent};
+  }
+#endif
 
   /// centre' = M c + t, extents' = |M| e + inflation: contains every point of the box mapped by M, t.
   /// `lo` and `hi` point at the corners of an AabbNode or AabbLeafEntry (4 floats readable from each).
@@ -142,6 +221,12 @@ class BoxCarrier {
   __m128 m_absColumn[3];
   __m128 m_translation;
   __m128 m_inflationLanes;
+#endif
+#if GPUCOL_PAIRED_CARRY
+  Float8 m_column2[3];
+  Float8 m_absColumn2[3];
+  Float8 m_translation2;
+  Float8 m_inflation2;
 #endif
 };
 
@@ -222,6 +307,19 @@ class Traverser {
       prefetch(m_nodesA + childA1.first);
       prefetch(m_nodesB + m_nodesB[childrenB[0]].first);
       prefetch(m_nodesB + m_nodesB[childrenB[1]].first);
+#if GPUCOL_PAIRED_CARRY
+      const CarriedBoxPair boxes = m_carrier.carryPair(m_nodesB[childrenB[0]], m_nodesB[childrenB[1]]);
+      const int with0 = boxes.overlapBits(childA0.min, childA0.max);
+      const int with1 = boxes.overlapBits(childA1.min, childA1.max);
+      *top = {a0, childrenB[0]};
+      top += (with0 & 0x07) == 0x07;
+      *top = {a1, childrenB[0]};
+      top += (with1 & 0x07) == 0x07;
+      *top = {a0, childrenB[1]};
+      top += (with0 & 0x70) == 0x70;
+      *top = {a1, childrenB[1]};
+      top += (with1 & 0x70) == 0x70;
+#else
       for (std::uint32_t cb : childrenB) {
         const CarriedBox box = m_carrier.carry(m_nodesB[cb].min, m_nodesB[cb].max);
         *top = {a0, cb};
@@ -229,6 +327,7 @@ class Traverser {
         *top = {a1, cb};
         top += overlaps(childA1.min, childA1.max, box);
       }
+#endif
       tests += 4;
       return top;
     }
@@ -239,11 +338,20 @@ class Traverser {
     if (leafA) {
       // Leaf against node: two tests, B's children carried.
       const std::uint32_t childrenB[2] = {pair.b + 1, nb.first};
+#if GPUCOL_PAIRED_CARRY
+      const int with =
+          m_carrier.carryPair(m_nodesB[childrenB[0]], m_nodesB[childrenB[1]]).overlapBits(na.min, na.max);
+      *top = {pair.a, childrenB[0]};
+      top += (with & 0x07) == 0x07;
+      *top = {pair.a, childrenB[1]};
+      top += (with & 0x70) == 0x70;
+#else
       for (std::uint32_t cb : childrenB) {
         const CarriedBox box = m_carrier.carry(m_nodesB[cb].min, m_nodesB[cb].max);
         *top = {pair.a, cb};
         top += overlaps(na.min, na.max, box);
       }
+#endif
       tests += 2;
       return top;
     }
@@ -279,6 +387,10 @@ class Traverser {
     if (stack.size() < 5) stack.resize(5);
     NodePair* base = stack.data();
     NodePair* top = base;
+    // The last position from which four more entries fit; kept in a register with the count of tests, where
+    // the vector's size and the caller's counter would be loaded from memory again after every store.
+    NodePair* roomForFour = base + (stack.size() - 4);
+    std::uint64_t localTests = 0;
     *top++ = start;
     for (;;) {
       while (waiting < kLookahead && top != base) {
@@ -293,14 +405,16 @@ class Traverser {
       --waiting;
       // With pairs waiting in the ring the descent follows several paths at once, so stackBound() no longer
       // bounds the stack: it grows (doubling) when four more entries might not fit.
-      if (static_cast<std::size_t>(top - base) + 4 > stack.size()) {
+      if (top > roomForFour) {
         const std::size_t used = static_cast<std::size_t>(top - base);
         stack.resize(2 * stack.size());
         base = stack.data();
         top = base + used;
+        roomForFour = base + (stack.size() - 4);
       }
-      top = expand(pair, top, out, tests);
+      top = expand(pair, top, out, localTests);
     }
+    tests += localTests;
   }
 
  private:
