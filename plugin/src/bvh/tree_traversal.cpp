@@ -544,6 +544,31 @@ void sortPairs(std::vector<TrianglePair>& pairs, std::size_t trianglesA, std::si
   }
 }
 
+/// Merges sorted lists into `out`, which may be one of them. Two at a time, the shortest first.
+void mergeSorted(std::vector<std::vector<TrianglePair>*> lists, std::vector<TrianglePair>& out) {
+  // Results of merges, pointed at by `lists`: reserved so that they never move.
+  std::vector<std::vector<TrianglePair>> merged;
+  merged.reserve(lists.size());
+  while (lists.size() > 2) {
+    std::sort(lists.begin(), lists.end(), [](const auto* l, const auto* r) { return l->size() > r->size(); });
+    const std::vector<TrianglePair>* x = lists.back();
+    lists.pop_back();
+    const std::vector<TrianglePair>* y = lists.back();
+    lists.pop_back();
+    std::vector<TrianglePair> both(x->size() + y->size());
+    std::merge(x->begin(), x->end(), y->begin(), y->end(), both.begin());
+    merged.push_back(std::move(both));
+    lists.push_back(&merged.back());
+  }
+  std::vector<TrianglePair> result(lists[0]->size() + (lists.size() > 1 ? lists[1]->size() : 0));
+  if (lists.size() > 1) {
+    std::merge(lists[0]->begin(), lists[0]->end(), lists[1]->begin(), lists[1]->end(), result.begin());
+  } else {
+    std::copy(lists[0]->begin(), lists[0]->end(), result.begin());
+  }
+  out.swap(result);
+}
+
 /// The traversal below the root pair (known to overlap): serial, or breadth-first until the front is large
 /// enough and then in parallel. Compiled for AVX2 and baseline x86-64 (bvh/avx2_clones.h), as is
 /// Traverser::run, which it calls.
@@ -582,15 +607,20 @@ GPUCOL_AVX2_CLONES void traverseFromRoot(const AabbTree& a, const AabbTree& b, c
                             traverser.run(front[i], w.stack, w.out, w.tests);
                           }
                         });
-      std::size_t total = out.size();
-      for (const WorkerState& w : workers) total += w.out.size();
-      out.reserve(total);
-      for (const WorkerState& w : workers) {
-        out.insert(out.end(), w.out.begin(), w.out.end());
+      // Each list (the breadth-first levels' and each worker's) is sorted on its own, the lists in parallel,
+      // and then merged: the sort was serial with the other threads idle.
+      std::vector<std::vector<TrianglePair>*> lists{&out};
+      for (WorkerState& w : workers) {
+        lists.push_back(&w.out);
         tests += w.tests;
       }
+      tbb::parallel_for(std::size_t(0), lists.size(),
+                        [&](std::size_t i) { sortPairs(*lists[i], a.triangleCount(), b.triangleCount()); });
+      mergeSorted(lists, out);
+      return;
     }
   }
+  sortPairs(out, a.triangleCount(), b.triangleCount());
 }
 
 }  // namespace
@@ -618,10 +648,10 @@ void findCandidatePairs(const AabbTree& a, const AabbTree& b, const AffineMap& b
     return;
   }
 
-  traverseFromRoot(a, b, traverser, out, tests, parallel);
   // Each triangle sits in exactly one leaf and each leaf pair is reached along one path, so there are no
-  // duplicates; only the order depends on the traversal, and sorting makes it independent of the threads.
-  sortPairs(out, a.triangleCount(), b.triangleCount());
+  // duplicates; only the order depends on the traversal, and the sort in traverseFromRoot makes it
+  // independent of the threads.
+  traverseFromRoot(a, b, traverser, out, tests, parallel);
   if (stats) stats->nodeTests += tests;
 }
 
