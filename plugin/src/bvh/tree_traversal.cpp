@@ -18,8 +18,9 @@
 #include <emmintrin.h>
 #endif
 
-/// The node-against-node step carries B's two children together, one per half of an 8-float vector (GCC/Clang
-/// vector extensions: one AVX instruction per step in the AVX2 clone, two SSE ones in the baseline clone).
+/// Where B descends (against a node or a leaf of A), its two children are carried together, one per half of
+/// an 8-float vector (GCC/Clang vector extensions: one AVX instruction per step in the AVX2 clone, two SSE
+/// ones in the baseline clone).
 /// __builtin_shufflevector is Clang's and GCC's from version 12; older compilers carry the children one by
 /// one.
 #if defined(__SSE2__) && (defined(__clang__) || (defined(__GNUC__) && __GNUC__ >= 12))
@@ -544,29 +545,15 @@ void sortPairs(std::vector<TrianglePair>& pairs, std::size_t trianglesA, std::si
   }
 }
 
-/// Merges sorted lists into `out`, which may be one of them. Two at a time, the shortest first.
-void mergeSorted(std::vector<std::vector<TrianglePair>*> lists, std::vector<TrianglePair>& out) {
-  // Results of merges, pointed at by `lists`: reserved so that they never move.
-  std::vector<std::vector<TrianglePair>> merged;
-  merged.reserve(lists.size());
-  while (lists.size() > 2) {
-    std::sort(lists.begin(), lists.end(), [](const auto* l, const auto* r) { return l->size() > r->size(); });
-    const std::vector<TrianglePair>* x = lists.back();
-    lists.pop_back();
-    const std::vector<TrianglePair>* y = lists.back();
-    lists.pop_back();
-    std::vector<TrianglePair> both(x->size() + y->size());
-    std::merge(x->begin(), x->end(), y->begin(), y->end(), both.begin());
-    merged.push_back(std::move(both));
-    lists.push_back(&merged.back());
+/// Merges sorted lists into `out`, which may be one of them: each list in turn into the result so far.
+void mergeSorted(const std::vector<std::vector<TrianglePair>*>& lists, std::vector<TrianglePair>& out) {
+  std::vector<TrianglePair> merged, next;
+  for (const std::vector<TrianglePair>* list : lists) {
+    next.resize(merged.size() + list->size());
+    std::merge(merged.begin(), merged.end(), list->begin(), list->end(), next.begin());
+    merged.swap(next);
   }
-  std::vector<TrianglePair> result(lists[0]->size() + (lists.size() > 1 ? lists[1]->size() : 0));
-  if (lists.size() > 1) {
-    std::merge(lists[0]->begin(), lists[0]->end(), lists[1]->begin(), lists[1]->end(), result.begin());
-  } else {
-    std::copy(lists[0]->begin(), lists[0]->end(), result.begin());
-  }
-  out.swap(result);
+  out.swap(merged);
 }
 
 /// The traversal below the root pair (known to overlap): serial, or breadth-first until the front is large
