@@ -41,25 +41,42 @@ struct Row {
   std::uint64_t nodeTests = 0;
   std::size_t candidates = 0, intersecting = 0, contacts = 0, reduced = 0, gimpactContacts = 0;
   std::size_t gimpactPairsMissed = 0;  // GImpact pairs whose triangles' boxes overlap, not among candidates.
-  std::size_t gimpactPairsApart = 0;   // GImpact pairs whose triangles' boxes do not even overlap.
+  std::size_t gimpactPairsApart = 0;   // GImpact pairs whose triangles' boxes miss in either body's frame.
 };
 
-// World-space box of triangle `t` of `mesh` under `transform`, in double.
-void worldTriangleBox(const TriangleMesh& mesh, const btTransform& transform, std::uint32_t t,
-                      double (&lo)[3], double (&hi)[3]) {
+/// The box, in double, of triangle t of `mesh` placed in the world by `placement`, seen in the frame of the
+/// world transform `frame`.
+void triangleBoxInFrame(const TriangleMesh& mesh, const btTransform& placement, const btTransform& frame,
+                        std::uint32_t t, double (&lo)[3], double (&hi)[3]) {
   for (int axis = 0; axis < 3; ++axis) {
     lo[axis] = 1e300;
     hi[axis] = -1e300;
   }
   for (int corner = 0; corner < 3; ++corner) {
     const float* p = mesh.positions().data() + 3 * std::size_t(mesh.indices()[3 * std::size_t(t) + corner]);
+    double world[3];
     for (int r = 0; r < 3; ++r) {
-      double w = transform.getOrigin()[r];
-      for (int c = 0; c < 3; ++c) w += double(transform.getBasis()[r][c]) * double(p[c]);
-      lo[r] = std::min(lo[r], w);
-      hi[r] = std::max(hi[r], w);
+      world[r] = placement.getOrigin()[r];
+      for (int c = 0; c < 3; ++c) world[r] += double(placement.getBasis()[r][c]) * double(p[c]);
+    }
+    for (int r = 0; r < 3; ++r) {
+      double local = 0;
+      for (int c = 0; c < 3; ++c) local += double(frame.getBasis()[c][r]) * (world[c] - frame.getOrigin()[c]);
+      lo[r] = std::min(lo[r], local);
+      hi[r] = std::max(hi[r], local);
     }
   }
+}
+
+/// The two triangles' boxes overlap in `frame` (touching counts).
+bool boxesOverlapInFrame(const TriangleMesh& mesh, const scenes::PairPose& pose, const TrianglePair& pair,
+                         const btTransform& frame) {
+  double loA[3], hiA[3], loB[3], hiB[3];
+  triangleBoxInFrame(mesh, pose.a, frame, pair.triangleA, loA, hiA);
+  triangleBoxInFrame(mesh, pose.b, frame, pair.triangleB, loB, hiB);
+  bool overlap = true;
+  for (int axis = 0; axis < 3; ++axis) overlap &= loA[axis] <= hiB[axis] && loB[axis] <= hiA[axis];
+  return overlap;
 }
 
 Row measure(const std::string& name, const TriangleMesh& loaded, int runs) {
@@ -109,20 +126,15 @@ Row measure(const std::string& name, const TriangleMesh& loaded, int runs) {
   row.reduced = result.reducedContacts.size();
   row.gimpactContacts = peerContacts.size();
 
-  // Every triangle pair GImpact made a contact from and whose triangles' boxes overlap (in double, world
-  // space) must be among gpucol's candidates: the middle phase loses nothing. Pairs whose boxes miss cannot
-  // touch; GImpact's contacts from such pairs are counted apart. Whether a pair truly intersects is the exact
-  // test's call, checked against a double-precision reference in the test suite.
+  // Every triangle pair GImpact made a contact from and whose triangles' boxes overlap in both bodies' frames
+  // (in double) must be among gpucol's candidates: the middle phase loses nothing. Pairs whose boxes miss in
+  // either frame cannot touch; GImpact's contacts from such pairs are counted apart. Whether a pair truly
+  // intersects is the exact test's call, checked against a double-precision reference in the test suite.
   const std::set<TrianglePair> candidates(result.candidatePairs.begin(), result.candidatePairs.end());
   std::set<TrianglePair> peerPairs;
   for (const auto& c : peerContacts) peerPairs.insert({c.triangleA, c.triangleB});
   for (const auto& p : peerPairs) {
-    double loA[3], hiA[3], loB[3], hiB[3];
-    worldTriangleBox(*mesh, pose.a, p.triangleA, loA, hiA);
-    worldTriangleBox(*mesh, pose.b, p.triangleB, loB, hiB);
-    bool boxesOverlap = true;
-    for (int axis = 0; axis < 3; ++axis) boxesOverlap &= loA[axis] <= hiB[axis] && loB[axis] <= hiA[axis];
-    if (!boxesOverlap) {
+    if (!boxesOverlapInFrame(*mesh, pose, p, pose.a) || !boxesOverlapInFrame(*mesh, pose, p, pose.b)) {
       ++row.gimpactPairsApart;
     } else if (!candidates.count(p)) {
       ++row.gimpactPairsMissed;

@@ -24,9 +24,11 @@
 
 namespace gpucol::opencl {
 
-static_assert(sizeof(GpucolMeshPair) == 47 * 4 && offsetof(GpucolMeshPair, absLinear) == 48 &&
-                  offsetof(GpucolMeshPair, bLinear) == 96 && offsetof(GpucolMeshPair, scaleA) == 144 &&
-                  offsetof(GpucolMeshPair, nodesA) == 156 && offsetof(GpucolMeshPair, flipB) == 184,
+static_assert(sizeof(GpucolBoxMap) == 24 * 4 && offsetof(GpucolBoxMap, absLinear) == 48,
+              "GpucolBoxMap layout differs from the kernels'");
+static_assert(sizeof(GpucolMeshPair) == 71 * 4 && offsetof(GpucolMeshPair, intoB) == 96 &&
+                  offsetof(GpucolMeshPair, bLinear) == 192 && offsetof(GpucolMeshPair, scaleA) == 240 &&
+                  offsetof(GpucolMeshPair, nodesA) == 252 && offsetof(GpucolMeshPair, flipB) == 280,
               "GpucolMeshPair layout differs from the kernels'");
 static_assert(sizeof(GpucolFrontEntry) == 12, "GpucolFrontEntry layout differs from the kernels'");
 static_assert(sizeof(GpucolNearHit) == 48 && offsetof(GpucolNearHit, point) == 8 &&
@@ -40,6 +42,18 @@ using Clock = std::chrono::steady_clock;
 
 double millisecondsSince(Clock::time_point start) {
   return std::chrono::duration<double, std::milli>(Clock::now() - start).count();
+}
+
+/// One frame's box test (bvh/tree_traversal.h) in the kernels' layout.
+void writeBoxMap(const BoxMap& in, GpucolBoxMap& out) {
+  for (int r = 0; r < 3; ++r) {
+    for (int c = 0; c < 3; ++c) {
+      out.linear[3 * r + c] = in.map.linear(r, c);
+      out.absLinear[3 * r + c] = std::fabs(in.map.linear(r, c));
+    }
+    out.translation[r] = in.map.translation(r);
+    out.inflation[r] = in.inflation(r);
+  }
 }
 
 /// Largest start depth: 4^d paths per pair must stay far below the 2^32 work-items of one launch.
@@ -217,15 +231,10 @@ void OpenClMeshPipeline::runBatch(const std::vector<DeviceMeshPair>& pairs,
     treeDepths = std::max(treeDepths, in.treeA->depth() + in.treeB->depth());
     smallerTriangles += std::min(in.meshA->triangleCount(), in.meshB->triangleCount());
     GpucolMeshPair& p = m_hostPairs[i];
-    const Eigen::Vector3f inflation = carriedBoxInflation(*in.treeB, in.treeMap);
+    writeBoxMap(boxMapIntoA(*in.treeB, in.treeMap), p.intoA);
+    writeBoxMap(boxMapIntoB(*in.treeA, in.treeMap), p.intoB);
     for (int r = 0; r < 3; ++r) {
-      for (int c = 0; c < 3; ++c) {
-        p.linear[3 * r + c] = in.treeMap.linear(r, c);
-        p.absLinear[3 * r + c] = std::fabs(in.treeMap.linear(r, c));
-        p.bLinear[3 * r + c] = in.bLinear(r, c);
-      }
-      p.translation[r] = in.treeMap.translation(r);
-      p.inflation[r] = inflation(r);
+      for (int c = 0; c < 3; ++c) p.bLinear[3 * r + c] = in.bLinear(r, c);
       p.bTranslation[r] = in.bTranslation(r);
       p.scaleA[r] = in.scaleA(r);
     }

@@ -5,8 +5,9 @@
 // (scan.cl, Fig. 5.8) and sizes the next front and the candidate list from the totals; the writing pass
 // repeats the tests and writes at the scanned offsets. So nothing has a fixed capacity.
 //
-// The box tests are those of plugin/src/bvh/tree_traversal.cpp (BoxCarrier::carry and overlaps) with the
-// same operations in the same order and no contraction, so the device finds exactly the CPU's candidates.
+// The box tests are those of plugin/src/bvh/tree_traversal.cpp (BoxCarrier::carry and overlaps, in both
+// frames: B's box carried into A's, A's into B's) with the same operations in the same order and no
+// contraction, so the device finds exactly the CPU's candidates.
 #include "opencl/shared/mesh_pipeline_types.h"
 
 #pragma OPENCL FP_CONTRACT OFF
@@ -17,7 +18,7 @@ typedef struct CarriedBox {
 } CarriedBox;
 
 // centre' = M c + t, extent' = |M| e + inflation, summed in the CPU's order (((x0 + x1) + x2) + t).
-CarriedBox mesh_carry(__global const GpucolMeshPair* p, __global const float* lo, __global const float* hi) {
+CarriedBox mesh_carry(__global const GpucolBoxMap* m, __global const float* lo, __global const float* hi) {
   float c[3], e[3];
   for (int j = 0; j < 3; ++j) {
     c[j] = (lo[j] + hi[j]) * 0.5f;
@@ -25,11 +26,11 @@ CarriedBox mesh_carry(__global const GpucolMeshPair* p, __global const float* lo
   }
   CarriedBox out;
   for (int i = 0; i < 3; ++i) {
-    const float ci = ((p->linear[3 * i] * c[0] + p->linear[3 * i + 1] * c[1]) + p->linear[3 * i + 2] * c[2]) +
-                     p->translation[i];
+    const float ci = ((m->linear[3 * i] * c[0] + m->linear[3 * i + 1] * c[1]) + m->linear[3 * i + 2] * c[2]) +
+                     m->translation[i];
     const float ei =
-        ((p->absLinear[3 * i] * e[0] + p->absLinear[3 * i + 1] * e[1]) + p->absLinear[3 * i + 2] * e[2]) +
-        p->inflation[i];
+        ((m->absLinear[3 * i] * e[0] + m->absLinear[3 * i + 1] * e[1]) + m->absLinear[3 * i + 2] * e[2]) +
+        m->inflation[i];
     out.min[i] = ci - ei;
     out.max[i] = ci + ei;
   }
@@ -42,12 +43,19 @@ bool mesh_overlaps(__global const float* lo, __global const float* hi, const Car
          (lo[2] <= b->max[2]) & (b->min[2] <= hi[2]);
 }
 
+// A's box [loA, hiA] and B's [loB, hiB] overlap in A's frame (B's carried in) and in B's (A's carried in).
+bool mesh_boxes_overlap(__global const GpucolMeshPair* p, __global const float* loA, __global const float* hiA,
+                        __global const float* loB, __global const float* hiB) {
+  const CarriedBox inA = mesh_carry(&p->intoA, loB, hiB);
+  const CarriedBox inB = mesh_carry(&p->intoB, loA, hiA);
+  return mesh_overlaps(loA, hiA, &inA) & mesh_overlaps(loB, hiB, &inB);
+}
+
 bool mesh_nodes_overlap(__global const GpucolMeshPair* p, __global const GpucolTreeNode* nodes, uint a,
                         uint b) {
   __global const GpucolTreeNode* na = nodes + p->nodesA + a;
   __global const GpucolTreeNode* nb = nodes + p->nodesB + b;
-  const CarriedBox box = mesh_carry(p, nb->min, nb->max);
-  return mesh_overlaps(na->min, na->max, &box);
+  return mesh_boxes_overlap(p, na->min, na->max, nb->min, nb->max);
 }
 
 ulong mesh_candidate_key(uint pair, uint triangleA, uint triangleB, uint bitsA, uint bitsB) {
@@ -135,10 +143,9 @@ __kernel void mesh_front_expand(__global const GpucolMeshPair* pairs, __global c
     const uint childrenB[2] = {entry.b + 1u, nb->first};
     for (int k = 0; k < 2; ++k) {
       __global const GpucolTreeNode* cb = nodes + p->nodesB + childrenB[k];
-      const CarriedBox box = mesh_carry(p, cb->min, cb->max);
       for (int m = 0; m < 2; ++m) {
         __global const GpucolTreeNode* ca = nodes + p->nodesA + childrenA[m];
-        if (mesh_overlaps(ca->min, ca->max, &box)) {
+        if (mesh_boxes_overlap(p, ca->min, ca->max, cb->min, cb->max)) {
           if (write) {
             child.a = childrenA[m];
             child.b = childrenB[k];
@@ -153,8 +160,7 @@ __kernel void mesh_front_expand(__global const GpucolMeshPair* pairs, __global c
     const uint childrenB[2] = {entry.b + 1u, nb->first};
     for (int k = 0; k < 2; ++k) {
       __global const GpucolTreeNode* cb = nodes + p->nodesB + childrenB[k];
-      const CarriedBox box = mesh_carry(p, cb->min, cb->max);
-      if (mesh_overlaps(na->min, na->max, &box)) {
+      if (mesh_boxes_overlap(p, na->min, na->max, cb->min, cb->max)) {
         if (write) {
           child.a = entry.a;
           child.b = childrenB[k];
@@ -166,10 +172,9 @@ __kernel void mesh_front_expand(__global const GpucolMeshPair* pairs, __global c
     tests = 2u;
   } else if (!leafA && leafB) {
     const uint childrenA[2] = {entry.a + 1u, na->first};
-    const CarriedBox box = mesh_carry(p, nb->min, nb->max);
     for (int m = 0; m < 2; ++m) {
       __global const GpucolTreeNode* ca = nodes + p->nodesA + childrenA[m];
-      if (mesh_overlaps(ca->min, ca->max, &box)) {
+      if (mesh_boxes_overlap(p, ca->min, ca->max, nb->min, nb->max)) {
         if (write) {
           child.a = childrenA[m];
           child.b = entry.b;
@@ -185,30 +190,29 @@ __kernel void mesh_front_expand(__global const GpucolMeshPair* pairs, __global c
     candidates = 1u;
   } else {
     for (uint j = 0u; j < nb->count; ++j) {
-      CarriedBox triB;
+      __global const float* loB = nb->min;
+      __global const float* hiB = nb->max;
       uint triangleB = nb->first;
-      if (nb->count == 1u) {
-        triB = mesh_carry(p, nb->min, nb->max);
-      } else {
+      if (nb->count != 1u) {
         __global const GpucolLeafEntry* eb = entries + p->entriesB + nb->first + j;
-        triB = mesh_carry(p, eb->min, eb->max);
+        loB = eb->min;
+        hiB = eb->max;
         triangleB = eb->triangle;
       }
-      if (na->count == 1u) {
-        ++tests;
-        if (mesh_overlaps(na->min, na->max, &triB)) {
-          if (write)
-            keys[keyAt + candidates] = mesh_candidate_key(entry.pair, na->first, triangleB, bitsA, bitsB);
-          ++candidates;
-        }
-        continue;
-      }
       for (uint k = 0u; k < na->count; ++k) {
-        __global const GpucolLeafEntry* ea = entries + p->entriesA + na->first + k;
+        __global const float* loA = na->min;
+        __global const float* hiA = na->max;
+        uint triangleA = na->first;
+        if (na->count != 1u) {
+          __global const GpucolLeafEntry* ea = entries + p->entriesA + na->first + k;
+          loA = ea->min;
+          hiA = ea->max;
+          triangleA = ea->triangle;
+        }
         ++tests;
-        if (mesh_overlaps(ea->min, ea->max, &triB)) {
+        if (mesh_boxes_overlap(p, loA, hiA, loB, hiB)) {
           if (write)
-            keys[keyAt + candidates] = mesh_candidate_key(entry.pair, ea->triangle, triangleB, bitsA, bitsB);
+            keys[keyAt + candidates] = mesh_candidate_key(entry.pair, triangleA, triangleB, bitsA, bitsB);
           ++candidates;
         }
       }
@@ -240,8 +244,8 @@ __kernel void mesh_front_expand(__global const GpucolMeshPair* pairs, __global c
 // at most four, one level further down), so the stack cannot overflow.
 #ifdef GPUCOL_DFS_STACK
 
-// The pair's map in vector form, read once per work-item: columns of M and |M| with the translation and the
-// inflation, lane 3 zero. The depth-first kernel carries a box with 4-lane operations in the scalar code's
+// One frame's map (GpucolBoxMap) in vector form, read once per work-item: columns of M and |M| with the
+// translation and the inflation, lane 3 zero. The depth-first kernel carries a box with 4-lane operations in the scalar code's
 // order (((M_i0 c_0 + M_i1 c_1) + M_i2 c_2) + t_i), as tree_traversal.cpp's SSE path does, so the bits are
 // mesh_carry's: a CPU device runs this divergent loop one work-item at a time, and 4 lanes are what it can
 // vectorise there.
@@ -252,14 +256,14 @@ typedef struct Carrier4 {
   float4 inflation;
 } Carrier4;
 
-Carrier4 mesh_carrier4(__global const GpucolMeshPair* p) {
+Carrier4 mesh_carrier4(__global const GpucolBoxMap* m) {
   Carrier4 k;
   for (int j = 0; j < 3; ++j) {
-    k.column[j] = (float4)(p->linear[j], p->linear[3 + j], p->linear[6 + j], 0.0f);
-    k.absColumn[j] = (float4)(p->absLinear[j], p->absLinear[3 + j], p->absLinear[6 + j], 0.0f);
+    k.column[j] = (float4)(m->linear[j], m->linear[3 + j], m->linear[6 + j], 0.0f);
+    k.absColumn[j] = (float4)(m->absLinear[j], m->absLinear[3 + j], m->absLinear[6 + j], 0.0f);
   }
-  k.translation = (float4)(p->translation[0], p->translation[1], p->translation[2], 0.0f);
-  k.inflation = (float4)(p->inflation[0], p->inflation[1], p->inflation[2], 0.0f);
+  k.translation = (float4)(m->translation[0], m->translation[1], m->translation[2], 0.0f);
+  k.inflation = (float4)(m->inflation[0], m->inflation[1], m->inflation[2], 0.0f);
   return k;
 }
 
@@ -302,6 +306,14 @@ Box4 mesh_carry4(const Carrier4* k, float4 lo, float4 hi) {
 uint mesh_overlaps4(float4 lo, float4 hi, const Box4* b) {
   const int4 ok = (lo <= b->hi) & (b->lo <= hi);
   return (uint)(ok.x & ok.y & ok.z) & 1u;
+}
+
+// mesh_boxes_overlap on 4 lanes: A's box and B's overlap in both frames; 1 or 0.
+uint mesh_boxes_overlap4(const Carrier4* intoA, const Carrier4* intoB, float4 loA, float4 hiA, float4 loB,
+                         float4 hiB) {
+  const Box4 inA = mesh_carry4(intoA, loB, hiB);
+  const Box4 inB = mesh_carry4(intoB, loA, hiA);
+  return mesh_overlaps4(loA, hiA, &inA) & mesh_overlaps4(loB, hiB, &inB);
 }
 
 // Asks for a node to be brought into the cache. On a CPU device the traversal waits on cache misses (the node
@@ -391,7 +403,8 @@ void mesh_depth_first_path(__global const GpucolMeshPair* restrict pairs,
   __global const GpucolTreeNode* treeB = nodes + p->nodesB;
   __global const GpucolLeafEntry* entriesA = entries + p->entriesA;
   __global const GpucolLeafEntry* entriesB = entries + p->entriesB;
-  const Carrier4 carrier = mesh_carrier4(p);
+  const Carrier4 intoA = mesh_carrier4(&p->intoA);
+  const Carrier4 intoB = mesh_carrier4(&p->intoB);
   const ulong pairKey = (ulong)pair << (bitsA + bitsB);
   uint tests = *testsOut;
   uint batched = *batchedOut;
@@ -400,8 +413,7 @@ void mesh_depth_first_path(__global const GpucolMeshPair* restrict pairs,
   // so that this kernel alone decides, as mesh_front_start does.
   uint a = 0u, b = 0u;
   Node4 na = mesh_node4(treeA), nb = mesh_node4(treeB);
-  Box4 box = mesh_carry4(&carrier, nb.lo, nb.hi);
-  bool found = mesh_overlaps4(na.lo, na.hi, &box) != 0u;
+  bool found = mesh_boxes_overlap4(&intoA, &intoB, na.lo, na.hi, nb.lo, nb.hi) != 0u;
   for (uint level = 0u; found && level < startDepth; ++level) {
     const uint rest = path >> (2u * level);
     const bool leafA = na.count != 0u;
@@ -425,8 +437,7 @@ void mesh_depth_first_path(__global const GpucolMeshPair* restrict pairs,
     }
     na = mesh_node4(treeA + a);
     nb = mesh_node4(treeB + b);
-    box = mesh_carry4(&carrier, nb.lo, nb.hi);
-    found = found && mesh_overlaps4(na.lo, na.hi, &box) != 0u;
+    found = found && mesh_boxes_overlap4(&intoA, &intoB, na.lo, na.hi, nb.lo, nb.hi) != 0u;
   }
   if (!found) {
     *testsOut = tests;
@@ -472,66 +483,70 @@ void mesh_depth_first_path(__global const GpucolMeshPair* restrict pairs,
       GPUCOL_PREFETCH_NODE(treeA + ca1.first);
       GPUCOL_PREFETCH_NODE(treeB + cb0.first);
       GPUCOL_PREFETCH_NODE(treeB + cb1.first);
-      const Box4 box0 = mesh_carry4(&carrier, cb0.lo, cb0.hi);
-      const Box4 box1 = mesh_carry4(&carrier, cb1.lo, cb1.hi);
+      // Each child carried once into the other frame, for two tests.
+      const Box4 box0 = mesh_carry4(&intoA, cb0.lo, cb0.hi);
+      const Box4 box1 = mesh_carry4(&intoA, cb1.lo, cb1.hi);
+      const Box4 boxA0 = mesh_carry4(&intoB, ca0.lo, ca0.hi);
+      const Box4 boxA1 = mesh_carry4(&intoB, ca1.lo, ca1.hi);
       stack[top] = (uint2)(a0, b0);
-      top += mesh_overlaps4(ca0.lo, ca0.hi, &box0);
+      top += mesh_overlaps4(ca0.lo, ca0.hi, &box0) & mesh_overlaps4(cb0.lo, cb0.hi, &boxA0);
       stack[top] = (uint2)(a1, b0);
-      top += mesh_overlaps4(ca1.lo, ca1.hi, &box0);
+      top += mesh_overlaps4(ca1.lo, ca1.hi, &box0) & mesh_overlaps4(cb0.lo, cb0.hi, &boxA1);
       stack[top] = (uint2)(a0, b1);
-      top += mesh_overlaps4(ca0.lo, ca0.hi, &box1);
+      top += mesh_overlaps4(ca0.lo, ca0.hi, &box1) & mesh_overlaps4(cb1.lo, cb1.hi, &boxA0);
       stack[top] = (uint2)(a1, b1);
-      top += mesh_overlaps4(ca1.lo, ca1.hi, &box1);
+      top += mesh_overlaps4(ca1.lo, ca1.hi, &box1) & mesh_overlaps4(cb1.lo, cb1.hi, &boxA1);
       tests += 4u;
     } else if (leafA && !leafB) {
       const uint b0 = b + 1u, b1 = nb.first;
       const Node4 cb0 = mesh_node4(treeB + b0), cb1 = mesh_node4(treeB + b1);
       GPUCOL_PREFETCH_NODE(treeB + cb0.first);
       GPUCOL_PREFETCH_NODE(treeB + cb1.first);
-      const Box4 box0 = mesh_carry4(&carrier, cb0.lo, cb0.hi);
-      const Box4 box1 = mesh_carry4(&carrier, cb1.lo, cb1.hi);
+      const Box4 box0 = mesh_carry4(&intoA, cb0.lo, cb0.hi);
+      const Box4 box1 = mesh_carry4(&intoA, cb1.lo, cb1.hi);
+      const Box4 boxA = mesh_carry4(&intoB, na.lo, na.hi);
       stack[top] = (uint2)(a, b0);
-      top += mesh_overlaps4(na.lo, na.hi, &box0);
+      top += mesh_overlaps4(na.lo, na.hi, &box0) & mesh_overlaps4(cb0.lo, cb0.hi, &boxA);
       stack[top] = (uint2)(a, b1);
-      top += mesh_overlaps4(na.lo, na.hi, &box1);
+      top += mesh_overlaps4(na.lo, na.hi, &box1) & mesh_overlaps4(cb1.lo, cb1.hi, &boxA);
       tests += 2u;
     } else if (!leafA && leafB) {
       const uint a0 = a + 1u, a1 = na.first;
       const Node4 ca0 = mesh_node4(treeA + a0), ca1 = mesh_node4(treeA + a1);
       GPUCOL_PREFETCH_NODE(treeA + ca0.first);
       GPUCOL_PREFETCH_NODE(treeA + ca1.first);
-      const Box4 boxB = mesh_carry4(&carrier, nb.lo, nb.hi);
+      const Box4 boxB = mesh_carry4(&intoA, nb.lo, nb.hi);
+      const Box4 boxA0 = mesh_carry4(&intoB, ca0.lo, ca0.hi);
+      const Box4 boxA1 = mesh_carry4(&intoB, ca1.lo, ca1.hi);
       stack[top] = (uint2)(a0, b);
-      top += mesh_overlaps4(ca0.lo, ca0.hi, &boxB);
+      top += mesh_overlaps4(ca0.lo, ca0.hi, &boxB) & mesh_overlaps4(nb.lo, nb.hi, &boxA0);
       stack[top] = (uint2)(a1, b);
-      top += mesh_overlaps4(ca1.lo, ca1.hi, &boxB);
+      top += mesh_overlaps4(ca1.lo, ca1.hi, &boxB) & mesh_overlaps4(nb.lo, nb.hi, &boxA1);
       tests += 2u;
     } else if (na.count == 1u && nb.count == 1u) {
       batch[batched++] = pairKey | ((ulong)na.first << bitsB) | (ulong)nb.first;
     } else {
       // Leaves of several triangles test their triangles' boxes, as mesh_front_expand does.
       for (uint j = 0u; j < nb.count; ++j) {
-        Box4 triB;
+        float4 loB = nb.lo, hiB = nb.hi;
         uint triangleB = nb.first;
-        if (nb.count == 1u) {
-          triB = mesh_carry4(&carrier, nb.lo, nb.hi);
-        } else {
+        if (nb.count != 1u) {
           __global const GpucolLeafEntry* eb = entriesB + nb.first + j;
-          triB =
-              mesh_carry4(&carrier, (float4)(vload3(0, eb->min), 0.0f), (float4)(vload3(0, eb->max), 0.0f));
+          loB = (float4)(vload3(0, eb->min), 0.0f);
+          hiB = (float4)(vload3(0, eb->max), 0.0f);
           triangleB = eb->triangle;
         }
         for (uint k = 0u; k < na.count; ++k) {
-          float4 lo = na.lo, hi = na.hi;
+          float4 loA = na.lo, hiA = na.hi;
           uint triangleA = na.first;
           if (na.count != 1u) {
             __global const GpucolLeafEntry* ea = entriesA + na.first + k;
-            lo = (float4)(vload3(0, ea->min), 0.0f);
-            hi = (float4)(vload3(0, ea->max), 0.0f);
+            loA = (float4)(vload3(0, ea->min), 0.0f);
+            hiA = (float4)(vload3(0, ea->max), 0.0f);
             triangleA = ea->triangle;
           }
           ++tests;
-          if (mesh_overlaps4(lo, hi, &triB)) {
+          if (mesh_boxes_overlap4(&intoA, &intoB, loA, hiA, loB, hiB)) {
             batch[batched++] = pairKey | ((ulong)triangleA << bitsB) | (ulong)triangleB;
             if (batched == GPUCOL_DFS_BATCH) {
               mesh_flush_keys(pairs, counters, keys, capacity, batch, batched, bitsA, bitsB GPUCOL_NEAR_ARGS);

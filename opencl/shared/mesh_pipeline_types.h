@@ -11,16 +11,22 @@ typedef uint gpucol_mesh_uint;
 typedef uint32_t gpucol_mesh_uint;
 #endif
 
-/* One mesh pair of a batch. Matrices are row-major. The traversal carries B's boxes into A's unscaled mesh
-   frame (linear, translation, inflation: the CPU traversal's AffineMap and carriedBoxInflation); the near
-   phase builds A's triangles in A's scaled frame (scaleA, flipA) and carries B's in (bLinear, bTranslation,
-   flipB), as plugin/src/bullet/collide_meshes.cpp does. The offsets place each mesh in the resident arenas.
- */
-typedef struct GpucolMeshPair {
+/* One frame's side of the traversal's box test (bvh/tree_traversal.h, BoxMap): the map that carries the other
+   tree's boxes into this frame, row-major, its absolute values, and the widening. */
+typedef struct GpucolBoxMap {
   float linear[9];
   float translation[3];
   float absLinear[9];
   float inflation[3];
+} GpucolBoxMap;
+
+/* One mesh pair of a batch. Matrices are row-major. The traversal tests boxes in both frames, as the CPU's
+   does: B's boxes carried into A's unscaled mesh frame (intoA) and A's into B's (intoB); the near phase
+   builds A's triangles in A's scaled frame (scaleA, flipA) and carries B's in (bLinear, bTranslation, flipB),
+   as plugin/src/bullet/collide_meshes.cpp does. The offsets place each mesh in the resident arenas. */
+typedef struct GpucolMeshPair {
+  GpucolBoxMap intoA;
+  GpucolBoxMap intoB;
   float bLinear[9];
   float bTranslation[3];
   float scaleA[3];

@@ -34,41 +34,67 @@ BoxD triangleBoxD(const Soup& soup, std::size_t t) {
   return box;
 }
 
-/// The brute-force references of one query, every triangle pair tested in double.
+/// The brute-force references of one query, every triangle pair tested in double, in both frames (A's, with
+/// B's boxes carried in, and B's, with A's carried in by the traversal's inverse map).
 struct Reference {
-  std::vector<TrianglePair> carriedExact;     ///< Leaf (= triangle) boxes of B carried in double, no widening.
+  std::vector<TrianglePair> carriedExact;     ///< Leaf (= triangle) boxes carried in double, no widening.
   std::vector<TrianglePair> carriedWidened;   ///< The same, widened by twice the traversal's documented epsilon.
-  std::vector<TrianglePair> tightTriangles;   ///< B's triangle moved into A's frame in double, then boxed.
+  std::vector<TrianglePair>
+      tightTriangles;  ///< Each triangle moved into the other's frame in double, then boxed.
 };
 
-Reference bruteForce(const Soup& a, const Soup& b, const AabbTree& treeB, const AffineMap& map) {
-  const Eigen::Matrix3d m = map.linear.cast<double>();
-  const Eigen::Vector3d t = map.translation.cast<double>();
-  const Eigen::Vector3d widen = 2.0 * carriedBoxInflation(treeB, map).cast<double>();
-  std::vector<BoxD> boxesA(a.triangleCount());
-  for (std::size_t i = 0; i < a.triangleCount(); ++i) boxesA[i] = triangleBoxD(a, i);
-  std::vector<BoxD> carried(b.triangleCount()), widened(b.triangleCount()), tight(b.triangleCount());
-  for (std::size_t j = 0; j < b.triangleCount(); ++j) {
-    const BoxD box = triangleBoxD(b, j);
+/// One frame's boxes of the other mesh's triangles: carried as boxes (exact and widened) and moved as
+/// triangles.
+struct CarriedBoxes {
+  std::vector<BoxD> exact, widened, tight;
+};
+
+CarriedBoxes carryTriangles(const Soup& soup, const BoxMap& boxMap) {
+  const Eigen::Matrix3d m = boxMap.map.linear.cast<double>();
+  const Eigen::Vector3d t = boxMap.map.translation.cast<double>();
+  const Eigen::Vector3d widen = 2.0 * boxMap.inflation.cast<double>();
+  CarriedBoxes out;
+  for (std::size_t j = 0; j < soup.triangleCount(); ++j) {
+    const BoxD box = triangleBoxD(soup, j);
     const Eigen::Vector3d c = m * (0.5 * (box.min + box.max)) + t;
     const Eigen::Vector3d e = m.cwiseAbs() * (0.5 * (box.max - box.min));
-    carried[j] = {c - e, c + e};
-    widened[j] = {c - e - widen, c + e + widen};
-    const Eigen::Vector3d p = m * b.vertex(j, 0) + t;
-    tight[j] = {p, p};
+    out.exact.push_back({c - e, c + e});
+    out.widened.push_back({c - e - widen, c + e + widen});
+    const Eigen::Vector3d p = m * soup.vertex(j, 0) + t;
+    BoxD tight{p, p};
     for (int k = 1; k < 3; ++k) {
-      const Eigen::Vector3d q = m * b.vertex(j, k) + t;
-      tight[j].min = tight[j].min.cwiseMin(q);
-      tight[j].max = tight[j].max.cwiseMax(q);
+      const Eigen::Vector3d q = m * soup.vertex(j, k) + t;
+      tight.min = tight.min.cwiseMin(q);
+      tight.max = tight.max.cwiseMax(q);
     }
+    out.tight.push_back(tight);
   }
+  return out;
+}
+
+Reference bruteForce(const Soup& a, const Soup& b, const AabbTree& treeA, const AabbTree& treeB,
+                     const AffineMap& map) {
+  std::vector<BoxD> boxesA(a.triangleCount()), boxesB(b.triangleCount());
+  for (std::size_t i = 0; i < a.triangleCount(); ++i) boxesA[i] = triangleBoxD(a, i);
+  for (std::size_t j = 0; j < b.triangleCount(); ++j) boxesB[j] = triangleBoxD(b, j);
+  // B's frame's map is the traversal's own (the inverse rounded to float), checked here against the inverse.
+  const BoxMap intoB = boxMapIntoB(treeA, map);
+  const Eigen::Matrix3d inverse = map.linear.cast<double>().inverse();
+  EXPECT_TRUE(intoB.map.linear.cast<double>().isApprox(inverse, 1e-6));
+  EXPECT_TRUE(intoB.map.translation.cast<double>().isApprox(-inverse * map.translation.cast<double>(), 1e-6));
+  EXPECT_TRUE(intoB.inflation.allFinite());
+  const CarriedBoxes bInA = carryTriangles(b, boxMapIntoA(treeB, map));
+  const CarriedBoxes aInB = carryTriangles(a, intoB);
   Reference ref;
   for (std::size_t i = 0; i < a.triangleCount(); ++i) {
     for (std::size_t j = 0; j < b.triangleCount(); ++j) {
       const TrianglePair pair{static_cast<std::uint32_t>(i), static_cast<std::uint32_t>(j)};
-      if (overlapsD(boxesA[i], carried[j])) ref.carriedExact.push_back(pair);
-      if (overlapsD(boxesA[i], widened[j])) ref.carriedWidened.push_back(pair);
-      if (overlapsD(boxesA[i], tight[j])) ref.tightTriangles.push_back(pair);
+      auto inBoth = [&](const std::vector<BoxD>& bCarried, const std::vector<BoxD>& aCarried) {
+        return overlapsD(boxesA[i], bCarried[j]) && overlapsD(boxesB[j], aCarried[i]);
+      };
+      if (inBoth(bInA.exact, aInB.exact)) ref.carriedExact.push_back(pair);
+      if (inBoth(bInA.widened, aInB.widened)) ref.carriedWidened.push_back(pair);
+      if (inBoth(bInA.tight, aInB.tight)) ref.tightTriangles.push_back(pair);
     }
   }
   return ref;
@@ -83,7 +109,7 @@ bool isSortedUnique(const std::vector<TrianglePair>& pairs) {
 std::size_t checkQuery(const Soup& a, const Soup& b, const AffineMap& map) {
   const AabbTree treeA = AabbTree::build(a.xyz, a.indices);
   const AabbTree treeB = AabbTree::build(b.xyz, b.indices);
-  const Reference ref = bruteForce(a, b, treeB, map);
+  const Reference ref = bruteForce(a, b, treeA, treeB, map);
 
   std::vector<TrianglePair> parallel, serial;
   TraversalStats parallelStats, serialStats;
@@ -93,12 +119,13 @@ std::size_t checkQuery(const Soup& a, const Soup& b, const AffineMap& map) {
   EXPECT_EQ(parallel, serial) << "parallel and serial traversals must give the same list";
   EXPECT_EQ(parallelStats.nodeTests, serialStats.nodeTests) << "each node pair is tested once, whatever the order";
 
-  // (a) Exactly the leaf-box overlaps, up to the conservative widening only.
+  // (a) Exactly the leaf-box overlaps in both frames, up to the conservative widening only.
   EXPECT_TRUE(std::includes(parallel.begin(), parallel.end(), ref.carriedExact.begin(), ref.carriedExact.end()))
       << "a pair whose carried leaf boxes overlap was missed";
   EXPECT_TRUE(std::includes(ref.carriedWidened.begin(), ref.carriedWidened.end(), parallel.begin(), parallel.end()))
       << "a pair beyond the documented widening was reported";
-  // (b) Never loses a pair whose tight triangle boxes overlap in A's frame.
+  // (b) Never loses a pair whose tight triangle boxes overlap in both frames (as those of intersecting
+  // triangles do).
   EXPECT_TRUE(std::includes(parallel.begin(), parallel.end(), ref.tightTriangles.begin(), ref.tightTriangles.end()))
       << "a pair whose moved triangles' boxes overlap was missed";
 
@@ -234,6 +261,60 @@ TEST(TreeTraversal, TouchingBoxesCount) {
   findCandidatePairs(tree, tree, map, out, &stats);
   EXPECT_TRUE(out.empty());
   EXPECT_EQ(stats.nodeTests, 1u);
+}
+
+TEST(TreeTraversal, TheSecondFrameRemovesPairsThatOneFrameKeeps) {
+  // Two thin slivers in the z = 0 plane, parallel and 0.85 apart: A along the diagonal of its unit square, B
+  // along its own x axis, turned 45 degrees about z and moved 0.85 along the diagonal's normal (1, -1) /
+  // sqrt(2). In A's frame B's box is a square of side 0.71 that reaches into A's box; in B's frame A's box
+  // turned by 45 degrees reaches only 0.71 from A's diagonal, short of B. One frame alone would report the
+  // pair.
+  Soup a, b;
+  a.xyz = {0, 0, 0, 1, 1, 0, 1, 1, 0.01f};
+  a.indices = {0, 1, 2};
+  b.xyz = {0, 0, 0, 1, 0, 0, 1, 0, 0.01f};
+  b.indices = {0, 1, 2};
+  const AabbTree treeA = AabbTree::build(a.xyz, a.indices);
+  const AabbTree treeB = AabbTree::build(b.xyz, b.indices);
+  AffineMap map;
+  map.linear = Eigen::AngleAxisf(float(M_PI / 4), Eigen::Vector3f::UnitZ()).toRotationMatrix();
+  map.translation = 0.85f * Eigen::Vector3f(1, -1, 0).normalized();
+  // Each frame's test on the two roots (= the two triangles' boxes), as the traversal defines it.
+  auto overlapsAfterCarry = [](const AabbNode& still, const AabbNode& moved, const BoxMap& m) {
+    const Eigen::Vector3f lo(moved.min[0], moved.min[1], moved.min[2]),
+        hi(moved.max[0], moved.max[1], moved.max[2]);
+    const Eigen::Vector3f c = m.map.linear * (0.5f * (lo + hi)) + m.map.translation;
+    const Eigen::Vector3f e = m.map.linear.cwiseAbs() * (0.5f * (hi - lo)) + m.inflation;
+    return (Eigen::Vector3f(still.min[0], still.min[1], still.min[2]).array() <= (c + e).array()).all() &&
+           ((c - e).array() <= Eigen::Vector3f(still.max[0], still.max[1], still.max[2]).array()).all();
+  };
+  ASSERT_TRUE(overlapsAfterCarry(treeA.node(0), treeB.node(0), boxMapIntoA(treeB, map)))
+      << "the case needs A's frame to keep the pair";
+  ASSERT_FALSE(overlapsAfterCarry(treeB.node(0), treeA.node(0), boxMapIntoB(treeA, map)))
+      << "and B's frame to drop it";
+  std::vector<TrianglePair> out;
+  findCandidatePairs(treeA, treeB, map, out);
+  EXPECT_TRUE(out.empty());
+  EXPECT_FALSE(rootBoxesOverlap(treeA, treeB, map));
+}
+
+TEST(TreeTraversal, AnInverseBeyondFloatLeavesTheTestToAsFrame) {
+  // B shrunk by 1e-39 (a subnormal factor): the inverse map would need 1e39, beyond float, so B's frame's
+  // test must pass everything rather than compare against infinities and NaNs; B, now a point inside A's box,
+  // is found.
+  Soup a;
+  a.xyz = {0, 0, 0, 1, 0, 0, 0, 1, 0};
+  a.indices = {0, 1, 2};
+  const AabbTree tree = AabbTree::build(a.xyz, a.indices);
+  AffineMap map;
+  map.linear = Eigen::Matrix3f::Identity() * 1e-39f;
+  map.translation = Eigen::Vector3f(0.25f, 0.25f, 0.0f);
+  const BoxMap intoB = boxMapIntoB(tree, map);
+  EXPECT_TRUE(std::isinf(intoB.inflation.x()));
+  std::vector<TrianglePair> out;
+  findCandidatePairs(tree, tree, map, out);
+  EXPECT_EQ(out.size(), 1u);
+  EXPECT_TRUE(rootBoxesOverlap(tree, tree, map));
 }
 
 TEST(TreeTraversal, FarFromTheOriginStillNeverMissesAPair) {

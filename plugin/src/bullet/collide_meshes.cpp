@@ -94,17 +94,6 @@ PairFrame makePairFrame(const MeshShape& a, const btTransform& transformA, const
   return frame;
 }
 
-// Root boxes first: a pair whose meshes' boxes miss costs one box test (DESIGN.md, "skip what a scene
-// does not need"). The carried box gets the same conservative widening as every box of the traversal.
-bool rootBoxesOverlap(const AabbTree& a, const AabbTree& b, const AffineMap& bToA) {
-  const Eigen::Vector3f centre = 0.5f * (b.rootMin() + b.rootMax());
-  const Eigen::Vector3f extent = 0.5f * (b.rootMax() - b.rootMin());
-  const Eigen::Vector3f carriedCentre = bToA.linear * centre + bToA.translation;
-  const Eigen::Vector3f carriedExtent = bToA.linear.cwiseAbs() * extent + carriedBoxInflation(b, bToA);
-  return ((carriedCentre - carriedExtent).array() <= a.rootMax().array()).all() &&
-         ((carriedCentre + carriedExtent).array() >= a.rootMin().array()).all();
-}
-
 // One candidate pair whose triangles intersect, by its index among the candidates, with its contact if one is
 // kept.
 struct NearHit {
@@ -375,6 +364,8 @@ MeshPairResult collidePair(const MeshShape& shapeA, const btTransform& transform
   const PairFrame frame = makePairFrame(shapeA, transformA, shapeB, transformB);
 
   auto start = Clock::now();
+  // Root boxes first: a pair whose meshes' boxes miss costs one box test (DESIGN.md, "skip what a scene does
+  // not need").
   result.stats.nodeTests = 1;
   if (!rootBoxesOverlap(shapeA.tree(), shapeB.tree(), frame.treeMap)) {
     result.stats.rootBoxesMissed = true;

@@ -4,10 +4,12 @@
 #include <tbb/enumerable_thread_specific.h>
 #include <tbb/parallel_for.h>
 
+#include <Eigen/LU>
 #include <algorithm>
 #include <cmath>
 #include <cstddef>
 #include <cstring>
+#include <limits>
 #include <memory>
 #include <utility>
 
@@ -109,22 +111,22 @@ inline __m128 splat(__m128 v) {
 }
 #endif
 
-/// The map of one call, prepared once (thesis §3.3.3: with non-updated AABBs the rotation is set up once for
-/// the two hierarchies and reused by every box test), with |M| and the inflation.
+/// One frame's map of one call (BoxMap), prepared once (thesis §3.3.3: with non-updated AABBs the rotation is
+/// set up once for the two hierarchies and reused by every box test), with |M| and the inflation.
 ///
 /// With SSE (every x86-64 CPU) a box is carried as three column products of 4 lanes, the same operations in
 /// the same order as the scalar code (((M_i0 c_0 + M_i1 c_1) + M_i2 c_2) + t_i), so both give the same bits.
 class BoxCarrier {
  public:
-  BoxCarrier(const AabbTree& b, const AffineMap& map) {
-    const Eigen::Vector3f inflation = carriedBoxInflation(b, map);
+  explicit BoxCarrier(const BoxMap& boxMap) {
+    const AffineMap& map = boxMap.map;
     for (int i = 0; i < 3; ++i) {
       for (int j = 0; j < 3; ++j) {
         m_m[i][j] = map.linear(i, j);
         m_abs[i][j] = std::fabs(map.linear(i, j));
       }
       m_t[i] = map.translation(i);
-      m_inflation[i] = inflation(i);
+      m_inflation[i] = boxMap.inflation(i);
     }
 #if defined(__SSE2__)
     for (int j = 0; j < 3; ++j) {
@@ -275,12 +277,13 @@ std::size_t stackBound(const AabbTree& a, const AabbTree& b) {
 /// cost more than the test itself.
 class Traverser {
  public:
-  Traverser(const AabbTree& a, const AabbTree& b, const BoxCarrier& carrier)
+  Traverser(const AabbTree& a, const AabbTree& b, const BoxCarrier& intoA, const BoxCarrier& intoB)
       : m_nodesA(a.nodes().data()),
         m_nodesB(b.nodes().data()),
         m_entriesA(a.leafEntries().data()),
         m_entriesB(b.leafEntries().data()),
-        m_carrier(carrier) {}
+        m_intoA(intoA),
+        m_intoB(intoB) {}
 
   /// Expands one overlapping pair by one level: children pairs that overlap are written from `top` on (room
   /// for four is needed), leaf pairs go to `out`. Returns the new top.
@@ -304,14 +307,22 @@ class Traverser {
       // now will read when popped; asking for them now overlaps those cache misses with this expansion. For a
       // leaf child `first` is a triangle index and the hint reads an unrelated node: harmless, it never
       // faults.
+      const AabbNode& childB0 = m_nodesB[childrenB[0]];
+      const AabbNode& childB1 = m_nodesB[childrenB[1]];
       prefetch(m_nodesA + childA0.first);
       prefetch(m_nodesA + childA1.first);
-      prefetch(m_nodesB + m_nodesB[childrenB[0]].first);
-      prefetch(m_nodesB + m_nodesB[childrenB[1]].first);
+      prefetch(m_nodesB + childB0.first);
+      prefetch(m_nodesB + childB1.first);
 #if GPUCOL_PAIRED_CARRY
-      const CarriedBoxPair boxes = m_carrier.carryPair(m_nodesB[childrenB[0]], m_nodesB[childrenB[1]]);
-      const int with0 = boxes.overlapBits(childA0.min, childA0.max);
-      const int with1 = boxes.overlapBits(childA1.min, childA1.max);
+      // In A's frame B's children are carried together: with0 holds A0 against B0 (bits 0-2) and B1 (bits
+      // 4-6). In B's frame A's children are: inB0 holds A0 (bits 0-2) and A1 (bits 4-6) against B0. Each
+      // pair's bits in A's frame are kept where its bits in B's frame are set too.
+      const CarriedBoxPair boxesB = m_intoA.carryPair(childB0, childB1);
+      const CarriedBoxPair boxesA = m_intoB.carryPair(childA0, childA1);
+      const int inB0 = boxesA.overlapBits(childB0.min, childB0.max);
+      const int inB1 = boxesA.overlapBits(childB1.min, childB1.max);
+      const int with0 = boxesB.overlapBits(childA0.min, childA0.max) & ((inB0 & 0x07) | ((inB1 & 0x07) << 4));
+      const int with1 = boxesB.overlapBits(childA1.min, childA1.max) & (((inB0 >> 4) & 0x07) | (inB1 & 0x70));
       *top = {a0, childrenB[0]};
       top += (with0 & 0x07) == 0x07;
       *top = {a1, childrenB[0]};
@@ -321,12 +332,15 @@ class Traverser {
       *top = {a1, childrenB[1]};
       top += (with1 & 0x70) == 0x70;
 #else
+      const CarriedBox boxA0 = m_intoB.carry(childA0.min, childA0.max);
+      const CarriedBox boxA1 = m_intoB.carry(childA1.min, childA1.max);
       for (std::uint32_t cb : childrenB) {
-        const CarriedBox box = m_carrier.carry(m_nodesB[cb].min, m_nodesB[cb].max);
+        const AabbNode& childB = m_nodesB[cb];
+        const CarriedBox boxB = m_intoA.carry(childB.min, childB.max);
         *top = {a0, cb};
-        top += overlaps(childA0.min, childA0.max, box);
+        top += overlaps(childA0.min, childA0.max, boxB) & overlaps(childB.min, childB.max, boxA0);
         *top = {a1, cb};
-        top += overlaps(childA1.min, childA1.max, box);
+        top += overlaps(childA1.min, childA1.max, boxB) & overlaps(childB.min, childB.max, boxA1);
       }
 #endif
       tests += 4;
@@ -337,31 +351,36 @@ class Traverser {
       return top;
     }
     if (leafA) {
-      // Leaf against node: two tests, B's children carried.
+      // Leaf against node: two tests, B's children carried into A's frame and A's leaf into B's.
       const std::uint32_t childrenB[2] = {pair.b + 1, nb.first};
+      const AabbNode& childB0 = m_nodesB[childrenB[0]];
+      const AabbNode& childB1 = m_nodesB[childrenB[1]];
+      const CarriedBox boxA = m_intoB.carry(na.min, na.max);
 #if GPUCOL_PAIRED_CARRY
-      const int with =
-          m_carrier.carryPair(m_nodesB[childrenB[0]], m_nodesB[childrenB[1]]).overlapBits(na.min, na.max);
+      const int with = m_intoA.carryPair(childB0, childB1).overlapBits(na.min, na.max);
       *top = {pair.a, childrenB[0]};
-      top += (with & 0x07) == 0x07;
+      top += ((with & 0x07) == 0x07) & overlaps(childB0.min, childB0.max, boxA);
       *top = {pair.a, childrenB[1]};
-      top += (with & 0x70) == 0x70;
+      top += ((with & 0x70) == 0x70) & overlaps(childB1.min, childB1.max, boxA);
 #else
       for (std::uint32_t cb : childrenB) {
-        const CarriedBox box = m_carrier.carry(m_nodesB[cb].min, m_nodesB[cb].max);
+        const AabbNode& childB = m_nodesB[cb];
+        const CarriedBox boxB = m_intoA.carry(childB.min, childB.max);
         *top = {pair.a, cb};
-        top += overlaps(na.min, na.max, box);
+        top += overlaps(na.min, na.max, boxB) & overlaps(childB.min, childB.max, boxA);
       }
 #endif
       tests += 2;
       return top;
     }
-    // Node against leaf: two tests, B's box already carried.
+    // Node against leaf: two tests, B's leaf carried into A's frame and A's children into B's.
     const std::uint32_t childrenA[2] = {pair.a + 1, na.first};
-    const CarriedBox boxB = m_carrier.carry(nb.min, nb.max);
+    const CarriedBox boxB = m_intoA.carry(nb.min, nb.max);
     for (std::uint32_t ca : childrenA) {
+      const AabbNode& childA = m_nodesA[ca];
       *top = {ca, pair.b};
-      top += overlaps(m_nodesA[ca].min, m_nodesA[ca].max, boxB);
+      top += overlaps(childA.min, childA.max, boxB) &
+             overlaps(nb.min, nb.max, m_intoB.carry(childA.min, childA.max));
     }
     tests += 2;
     return top;
@@ -428,25 +447,28 @@ class Traverser {
       out.push_back({na.first, nb.first});
       return;
     }
-    // A leaf of B with one triangle: its box is the triangle's.
-    const CarriedBox leafBoxB = nb.count == 1 ? m_carrier.carry(nb.min, nb.max) : CarriedBox{};
+    // A leaf of one triangle has the triangle's box, a leaf of several an entry per triangle.
     for (std::uint32_t j = 0; j < nb.count; ++j) {
-      CarriedBox triB = leafBoxB;
+      const float* loB = nb.min;
+      const float* hiB = nb.max;
       std::uint32_t triangleB = nb.first;
       if (nb.count > 1) {
         const AabbLeafEntry& entry = m_entriesB[nb.first + j];
-        triB = m_carrier.carry(entry.min, entry.max);
-        triangleB = entry.triangle;
+        loB = entry.min, hiB = entry.max, triangleB = entry.triangle;
       }
-      if (na.count == 1) {
-        ++tests;
-        if (overlaps(na.min, na.max, triB)) out.push_back({na.first, triangleB});
-        continue;
-      }
+      const CarriedBox triB = m_intoA.carry(loB, hiB);
       for (std::uint32_t i = 0; i < na.count; ++i) {
-        const AabbLeafEntry& entry = m_entriesA[na.first + i];
+        const float* loA = na.min;
+        const float* hiA = na.max;
+        std::uint32_t triangleA = na.first;
+        if (na.count > 1) {
+          const AabbLeafEntry& entry = m_entriesA[na.first + i];
+          loA = entry.min, hiA = entry.max, triangleA = entry.triangle;
+        }
         ++tests;
-        if (overlaps(entry.min, entry.max, triB)) out.push_back({entry.triangle, triangleB});
+        if (overlaps(loA, hiA, triB) && overlaps(loB, hiB, m_intoB.carry(loA, hiA))) {
+          out.push_back({triangleA, triangleB});
+        }
       }
     }
   }
@@ -455,7 +477,8 @@ class Traverser {
   const AabbNode* m_nodesB;
   const AabbLeafEntry* m_entriesA;
   const AabbLeafEntry* m_entriesB;
-  const BoxCarrier& m_carrier;
+  const BoxCarrier& m_intoA;  // B's boxes into A's frame
+  const BoxCarrier& m_intoB;  // A's boxes into B's frame
 };
 
 /// The breadth-first front: a growable array whose entries are left uninitialised until written (a
@@ -610,7 +633,37 @@ GPUCOL_AVX2_CLONES void traverseFromRoot(const AabbTree& a, const AabbTree& b, c
   sortPairs(out, a.triangleCount(), b.triangleCount());
 }
 
+/// The roots' boxes overlap in both frames.
+bool rootsOverlap(const AabbTree& a, const AabbTree& b, const BoxCarrier& intoA, const BoxCarrier& intoB) {
+  const AabbNode& rootA = a.node(0);
+  const AabbNode& rootB = b.node(0);
+  return overlaps(rootA.min, rootA.max, intoA.carry(rootB.min, rootB.max)) &&
+         overlaps(rootB.min, rootB.max, intoB.carry(rootA.min, rootA.max));
+}
+
 }  // namespace
+
+BoxMap boxMapIntoA(const AabbTree& b, const AffineMap& bToA) {
+  return {bToA, carriedBoxInflation(b, bToA)};
+}
+
+BoxMap boxMapIntoB(const AabbTree& a, const AffineMap& bToA) {
+  const Eigen::Matrix3d inverse = bToA.linear.cast<double>().inverse();
+  BoxMap out;
+  out.map.linear = inverse.cast<float>();
+  out.map.translation = (-(inverse * bToA.translation.cast<double>())).cast<float>();
+  out.inflation = carriedBoxInflation(a, out.map);
+  if (!out.map.linear.allFinite() || !out.map.translation.allFinite() || !out.inflation.allFinite()) {
+    out.map = AffineMap();
+    out.map.linear.setZero();
+    out.inflation.setConstant(std::numeric_limits<float>::infinity());
+  }
+  return out;
+}
+
+bool rootBoxesOverlap(const AabbTree& a, const AabbTree& b, const AffineMap& bToA) {
+  return rootsOverlap(a, b, BoxCarrier(boxMapIntoA(b, bToA)), BoxCarrier(boxMapIntoB(a, bToA)));
+}
 
 Eigen::Vector3f carriedBoxInflation(const AabbTree& b, const AffineMap& bToA) {
   const Eigen::Vector3f rootMin = b.rootMin().cwiseAbs();
@@ -624,13 +677,12 @@ Eigen::Vector3f carriedBoxInflation(const AabbTree& b, const AffineMap& bToA) {
 void findCandidatePairs(const AabbTree& a, const AabbTree& b, const AffineMap& bToA,
                         std::vector<TrianglePair>& out, TraversalStats* stats, bool parallel) {
   out.clear();
-  const BoxCarrier carrier(b, bToA);
-  const Traverser traverser(a, b, carrier);
+  const BoxCarrier intoA(boxMapIntoA(b, bToA));
+  const BoxCarrier intoB(boxMapIntoB(a, bToA));
+  const Traverser traverser(a, b, intoA, intoB);
 
   std::uint64_t tests = 1;
-  const AabbNode& rootA = a.node(0);
-  const AabbNode& rootB = b.node(0);
-  if (!overlaps(rootA.min, rootA.max, carrier.carry(rootB.min, rootB.max))) {
+  if (!rootsOverlap(a, b, intoA, intoB)) {
     if (stats) stats->nodeTests += tests;
     return;
   }

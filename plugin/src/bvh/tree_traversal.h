@@ -33,10 +33,36 @@ constexpr float kCarryRelativeEpsilon = 16.0f / 16777216.0f;
 /// root box. Exposed so tests can check the traversal against the same definition in double.
 Eigen::Vector3f carriedBoxInflation(const AabbTree& b, const AffineMap& bToA);
 
-/// All (triangle of A, triangle of B) whose leaf boxes overlap (touching counts), B's boxes carried into A's frame;
-/// sorted by (triangleA, triangleB), no duplicates. Parallel with oneTBB over the traversal front when `parallel`.
-/// `stats`, when given, has its counters increased (so one struct can sum several calls).
-/// Follows thesis Alg. 5.1 (simultaneous descent: node-node gives 4 tests, leaf-node 2) with an explicit stack.
+/// One frame's side of the box test: the map that carries the other tree's boxes into this frame, with the
+/// widening that makes each carried float box contain the exactly carried one.
+struct BoxMap {
+  AffineMap map;
+  Eigen::Vector3f inflation = Eigen::Vector3f::Zero();
+};
+
+/// The test in A's frame: B's boxes carried in by bToA, widened by carriedBoxInflation(b, bToA).
+BoxMap boxMapIntoA(const AabbTree& b, const AffineMap& bToA);
+
+/// The test in B's frame: A's boxes carried in by the inverse of bToA (inverted in double, then rounded to
+/// float, so each entry is within an ulp or two of the exact inverse's, which the widening covers as it
+/// covers the carry's own rounding), widened by carriedBoxInflation(a, inverse). Where the inverse does not
+/// fit in float (a local scaling near float's limits), a zero map with infinite widening: every carried box
+/// is all of space and the test in A's frame alone decides.
+BoxMap boxMapIntoB(const AabbTree& a, const AffineMap& bToA);
+
+/// True when the root boxes of a and b overlap in both frames (the traversal's first test; a pair whose roots
+/// miss has no candidates).
+bool rootBoxesOverlap(const AabbTree& a, const AabbTree& b, const AffineMap& bToA);
+
+/// All (triangle of A, triangle of B) whose leaf boxes overlap in both meshes' frames: in A's (B's box
+/// carried in) and in B's (A's box carried in by the inverse map); touching counts. Triangles that intersect
+/// pass both tests, since each carried box contains its triangle. The box of a box turned by the pose is
+/// loose in the other frame (the thesis pose's 0.5 rad about y widens it by cos + sin = 1.36 on x and z), and
+/// the second frame's test removes about a fifth of the node pairs and of the candidates that A's frame alone
+/// keeps on the thesis scene. Sorted by (triangleA, triangleB), no duplicates. Parallel with oneTBB over the
+/// traversal front when `parallel`. `stats`, when given, has its counters increased (so one struct can sum
+/// several calls). Follows thesis Alg. 5.1 (simultaneous descent: node-node gives 4 tests, leaf-node 2) with
+/// an explicit stack.
 void findCandidatePairs(const AabbTree& a, const AabbTree& b, const AffineMap& bToA,
                         std::vector<TrianglePair>& out, TraversalStats* stats = nullptr, bool parallel = true);
 
