@@ -3,6 +3,7 @@
 #include <tbb/blocked_range.h>
 #include <tbb/enumerable_thread_specific.h>
 #include <tbb/parallel_for.h>
+#include <tbb/task_arena.h>
 
 #include <Eigen/LU>
 #include <algorithm>
@@ -87,15 +88,18 @@ static_assert(offsetof(AabbNode, max) == 12 && sizeof(AabbNode) >= 28,
 static_assert(offsetof(AabbLeafEntry, max) == 12 && sizeof(AabbLeafEntry) >= 28,
               "AabbLeafEntry corners must be 4-float readable");
 
-/// Front size at which the breadth-first expansion stops and the parallel depth-first traversal starts:
-/// a thousand independent subproblems (64 tasks of kParallelGrain) keep every core busy even when most of them
-/// die after a test or two, and the breadth-first levels before them run on one thread. Measured on the
-/// thesis scene with two threads: 4096 took 0.40 ms on armadillo-27674 (the serial levels were a large part),
-/// 1024 0.35 ms, 256 0.35 ms but 1.80 ms instead of 1.67 on armadillo-399904 (too few tasks to balance).
-constexpr std::size_t kParallelFront = 1024;
+/// Front pairs per thread at which the breadth-first expansion stops and the parallel depth-first traversal
+/// starts. The breadth-first levels run on one thread, so the front should be no larger than the threads need
+/// to share the work out: with 2 threads, fronts of 64 (grain 2) against 1024 (grain 16), the thesis scene,
+/// fastest of 200 queries, 3 alternating rounds: armadillo-2766 0.149-0.165 against 0.169-0.170 ms, -27674
+/// 0.449-0.462 against 0.478-0.485, -99976 0.908-0.920 against 1.003-1.041, -399904 2.010-2.265 against
+/// 2.097-2.142; the breadth-first levels took 0.04-0.08 ms of armadillo-27674's 0.48 with 1024. Per thread,
+/// so a machine with more cores still gets tens of start pairs per thread to balance.
+constexpr std::size_t kFrontPerThread = 32;
 
-/// Front pairs per parallel_for chunk.
-constexpr std::size_t kParallelGrain = 16;
+/// Front pairs per parallel_for chunk: the front is small, and one start pair's subtree can be most of the
+/// work.
+constexpr std::size_t kParallelGrain = 2;
 
 /// Expansions between asking for a pair's nodes and expanding it (Traverser::run). Measured on the thesis
 /// scene, one thread, GImpact run between queries, fastest of 41: without it the middle phase took 0.96-1.02 ms
@@ -595,7 +599,9 @@ GPUCOL_AVX2_CLONES void traverseFromRoot(const AabbTree& a, const AabbTree& b, c
     PairBuffer frontBuffer, nextBuffer;
     frontBuffer.reserve(1)[0] = root;
     std::size_t frontSize = 1;
-    while (frontSize != 0 && frontSize < kParallelFront) {
+    const std::size_t parallelFront =
+        kFrontPerThread * static_cast<std::size_t>(std::max(1, tbb::this_task_arena::max_concurrency()));
+    while (frontSize != 0 && frontSize < parallelFront) {
       const NodePair* const front = frontBuffer.data();
       NodePair* const next = nextBuffer.reserve(4 * frontSize);
       NodePair* top = next;
