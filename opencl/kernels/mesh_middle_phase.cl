@@ -58,6 +58,30 @@ bool mesh_nodes_overlap(__global const GpucolMeshPair* p, __global const GpucolT
   return mesh_boxes_overlap(p, na->min, na->max, nb->min, nb->max);
 }
 
+// The box and index of the i-th triangle of a leaf (tree_traversal.cpp's leafTriangle): a leaf of one
+// triangle has the triangle's box, a leaf of several an entry per triangle.
+typedef struct LeafTriangle {
+  __global const float* lo;
+  __global const float* hi;
+  uint triangle;
+} LeafTriangle;
+
+LeafTriangle mesh_leaf_triangle(__global const GpucolTreeNode* leaf, __global const GpucolLeafEntry* entries,
+                                uint i) {
+  LeafTriangle out;
+  if (leaf->count == 1u) {
+    out.lo = leaf->min;
+    out.hi = leaf->max;
+    out.triangle = leaf->first;
+  } else {
+    __global const GpucolLeafEntry* entry = entries + leaf->first + i;
+    out.lo = entry->min;
+    out.hi = entry->max;
+    out.triangle = entry->triangle;
+  }
+  return out;
+}
+
 ulong mesh_candidate_key(uint pair, uint triangleA, uint triangleB, uint bitsA, uint bitsB) {
   return ((ulong)pair << (bitsA + bitsB)) | ((ulong)triangleA << bitsB) | (ulong)triangleB;
 }
@@ -190,29 +214,14 @@ __kernel void mesh_front_expand(__global const GpucolMeshPair* pairs, __global c
     candidates = 1u;
   } else {
     for (uint j = 0u; j < nb->count; ++j) {
-      __global const float* loB = nb->min;
-      __global const float* hiB = nb->max;
-      uint triangleB = nb->first;
-      if (nb->count != 1u) {
-        __global const GpucolLeafEntry* eb = entries + p->entriesB + nb->first + j;
-        loB = eb->min;
-        hiB = eb->max;
-        triangleB = eb->triangle;
-      }
+      const LeafTriangle triangleB = mesh_leaf_triangle(nb, entries + p->entriesB, j);
       for (uint k = 0u; k < na->count; ++k) {
-        __global const float* loA = na->min;
-        __global const float* hiA = na->max;
-        uint triangleA = na->first;
-        if (na->count != 1u) {
-          __global const GpucolLeafEntry* ea = entries + p->entriesA + na->first + k;
-          loA = ea->min;
-          hiA = ea->max;
-          triangleA = ea->triangle;
-        }
+        const LeafTriangle triangleA = mesh_leaf_triangle(na, entries + p->entriesA, k);
         ++tests;
-        if (mesh_boxes_overlap(p, loA, hiA, loB, hiB)) {
+        if (mesh_boxes_overlap(p, triangleA.lo, triangleA.hi, triangleB.lo, triangleB.hi)) {
           if (write)
-            keys[keyAt + candidates] = mesh_candidate_key(entry.pair, triangleA, triangleB, bitsA, bitsB);
+            keys[keyAt + candidates] =
+                mesh_candidate_key(entry.pair, triangleA.triangle, triangleB.triangle, bitsA, bitsB);
           ++candidates;
         }
       }

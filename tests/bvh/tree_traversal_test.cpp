@@ -235,12 +235,14 @@ TEST(TreeTraversal, ThreadCountDoesNotChangeTheOutput) {
   }
 }
 
+/// The tree of one triangle given by its 9 coordinates.
+AabbTree oneTriangleTree(const std::vector<float>& xyz) {
+  return AabbTree::build(xyz, std::vector<std::uint32_t>{0, 1, 2});
+}
+
 TEST(TreeTraversal, TouchingBoxesCount) {
   // Two unit right triangles in the z = 0 plane; B moved by exactly 1 along x, so the boxes share the face x = 1.
-  Soup a;
-  a.xyz = {0, 0, 0, 1, 0, 0, 0, 1, 0};
-  a.indices = {0, 1, 2};
-  const AabbTree tree = AabbTree::build(a.xyz, a.indices);
+  const AabbTree tree = oneTriangleTree({0, 0, 0, 1, 0, 0, 0, 1, 0});
   AffineMap map;
   map.translation = Eigen::Vector3f(1, 0, 0);
   std::vector<TrianglePair> out;
@@ -248,10 +250,7 @@ TEST(TreeTraversal, TouchingBoxesCount) {
   ASSERT_EQ(out.size(), 1u);
   // A triangle collapsed onto B's origin with an identity map: the widening is exactly zero (R_B = 0, t = 0), so
   // this checks the comparison itself: a box that is one point on A's corner touches it.
-  Soup point;
-  point.xyz = {0, 0, 0, 0, 0, 0, 0, 0, 0};
-  point.indices = {0, 1, 2};
-  const AabbTree pointTree = AabbTree::build(point.xyz, point.indices);
+  const AabbTree pointTree = oneTriangleTree({0, 0, 0, 0, 0, 0, 0, 0, 0});
   ASSERT_EQ(carriedBoxInflation(pointTree, AffineMap()), Eigen::Vector3f::Zero());
   findCandidatePairs(tree, pointTree, AffineMap(), out);
   ASSERT_EQ(out.size(), 1u);
@@ -269,13 +268,8 @@ TEST(TreeTraversal, TheSecondFrameRemovesPairsThatOneFrameKeeps) {
   // sqrt(2). In A's frame B's box is a square of side 0.71 that reaches into A's box; in B's frame A's box
   // turned by 45 degrees reaches only 0.71 from A's diagonal, short of B. One frame alone would report the
   // pair.
-  Soup a, b;
-  a.xyz = {0, 0, 0, 1, 1, 0, 1, 1, 0.01f};
-  a.indices = {0, 1, 2};
-  b.xyz = {0, 0, 0, 1, 0, 0, 1, 0, 0.01f};
-  b.indices = {0, 1, 2};
-  const AabbTree treeA = AabbTree::build(a.xyz, a.indices);
-  const AabbTree treeB = AabbTree::build(b.xyz, b.indices);
+  const AabbTree treeA = oneTriangleTree({0, 0, 0, 1, 1, 0, 1, 1, 0.01f});
+  const AabbTree treeB = oneTriangleTree({0, 0, 0, 1, 0, 0, 1, 0, 0.01f});
   AffineMap map;
   map.linear = Eigen::AngleAxisf(float(M_PI / 4), Eigen::Vector3f::UnitZ()).toRotationMatrix();
   map.translation = 0.85f * Eigen::Vector3f(1, -1, 0).normalized();
@@ -302,10 +296,7 @@ TEST(TreeTraversal, AnInverseBeyondFloatLeavesTheTestToAsFrame) {
   // B shrunk by 1e-39 (a subnormal factor): the inverse map would need 1e39, beyond float, so B's frame's
   // test must pass everything rather than compare against infinities and NaNs; B, now a point inside A's box,
   // is found.
-  Soup a;
-  a.xyz = {0, 0, 0, 1, 0, 0, 0, 1, 0};
-  a.indices = {0, 1, 2};
-  const AabbTree tree = AabbTree::build(a.xyz, a.indices);
+  const AabbTree tree = oneTriangleTree({0, 0, 0, 1, 0, 0, 0, 1, 0});
   AffineMap map;
   map.linear = Eigen::Matrix3f::Identity() * 1e-39f;
   map.translation = Eigen::Vector3f(0.25f, 0.25f, 0.0f);

@@ -451,30 +451,31 @@ class Traverser {
       out.push_back({na.first, nb.first});
       return;
     }
-    // A leaf of one triangle has the triangle's box, a leaf of several an entry per triangle.
     for (std::uint32_t j = 0; j < nb.count; ++j) {
-      const float* loB = nb.min;
-      const float* hiB = nb.max;
-      std::uint32_t triangleB = nb.first;
-      if (nb.count > 1) {
-        const AabbLeafEntry& entry = m_entriesB[nb.first + j];
-        loB = entry.min, hiB = entry.max, triangleB = entry.triangle;
-      }
-      const CarriedBox triB = m_intoA.carry(loB, hiB);
+      const LeafTriangle triangleB = leafTriangle(nb, m_entriesB, j);
+      const CarriedBox boxB = m_intoA.carry(triangleB.lo, triangleB.hi);
       for (std::uint32_t i = 0; i < na.count; ++i) {
-        const float* loA = na.min;
-        const float* hiA = na.max;
-        std::uint32_t triangleA = na.first;
-        if (na.count > 1) {
-          const AabbLeafEntry& entry = m_entriesA[na.first + i];
-          loA = entry.min, hiA = entry.max, triangleA = entry.triangle;
-        }
+        const LeafTriangle triangleA = leafTriangle(na, m_entriesA, i);
         ++tests;
-        if (overlaps(loA, hiA, triB) && overlaps(loB, hiB, m_intoB.carry(loA, hiA))) {
-          out.push_back({triangleA, triangleB});
+        if (overlaps(triangleA.lo, triangleA.hi, boxB) &&
+            overlaps(triangleB.lo, triangleB.hi, m_intoB.carry(triangleA.lo, triangleA.hi))) {
+          out.push_back({triangleA.triangle, triangleB.triangle});
         }
       }
     }
+  }
+
+  /// The box and index of the i-th triangle of a leaf: a leaf of one triangle has the triangle's box, a leaf
+  /// of several an entry per triangle.
+  struct LeafTriangle {
+    const float* lo;
+    const float* hi;
+    std::uint32_t triangle;
+  };
+  static LeafTriangle leafTriangle(const AabbNode& leaf, const AabbLeafEntry* entries, std::uint32_t i) {
+    if (leaf.count == 1) return {leaf.min, leaf.max, leaf.first};
+    const AabbLeafEntry& entry = entries[leaf.first + i];
+    return {entry.min, entry.max, entry.triangle};
   }
 
   const AabbNode* m_nodesA;
