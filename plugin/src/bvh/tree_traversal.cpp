@@ -21,7 +21,7 @@
 #include <emmintrin.h>
 #endif
 
-/// Where B descends (against a node or a leaf of A), its two children are carried together, one per half of
+/// Where a node descends, its two children are carried into the other tree's frame together, one per half of
 /// an 8-float vector (GCC/Clang vector extensions: one AVX instruction per step in the AVX2 clone, two SSE
 /// ones in the baseline clone).
 /// __builtin_shufflevector is Clang's and GCC's from version 12; older compilers carry the children one by
@@ -53,8 +53,8 @@ inline Float4 load4(const float* p) {
   return v;
 }
 
-/// Two boxes of B carried into A's frame: the first in lanes 0-3 of each corner, the second in lanes 4-7
-/// (lanes 3 and 7 are padding).
+/// Two boxes carried into the other tree's frame: the first in lanes 0-3 of each corner, the second in lanes
+/// 4-7 (lanes 3 and 7 are padding).
 struct CarriedBoxPair {
   Float8 min;
   Float8 max;
@@ -380,12 +380,22 @@ class Traverser {
     // Node against leaf: two tests, B's leaf carried into A's frame and A's children into B's.
     const std::uint32_t childrenA[2] = {pair.a + 1, na.first};
     const CarriedBox boxB = m_intoA.carry(nb.min, nb.max);
+#if GPUCOL_PAIRED_CARRY
+    const AabbNode& childA0 = m_nodesA[childrenA[0]];
+    const AabbNode& childA1 = m_nodesA[childrenA[1]];
+    const int inB = m_intoB.carryPair(childA0, childA1).overlapBits(nb.min, nb.max);
+    *top = {childrenA[0], pair.b};
+    top += overlaps(childA0.min, childA0.max, boxB) & ((inB & 0x07) == 0x07);
+    *top = {childrenA[1], pair.b};
+    top += overlaps(childA1.min, childA1.max, boxB) & ((inB & 0x70) == 0x70);
+#else
     for (std::uint32_t ca : childrenA) {
       const AabbNode& childA = m_nodesA[ca];
       *top = {ca, pair.b};
       top += overlaps(childA.min, childA.max, boxB) &
              overlaps(nb.min, nb.max, m_intoB.carry(childA.min, childA.max));
     }
+#endif
     tests += 2;
     return top;
   }
