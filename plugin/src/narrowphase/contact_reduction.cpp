@@ -63,22 +63,16 @@ std::vector<std::uint32_t> reduceContacts(const std::vector<ReductionInput>& con
   Eigen::Vector3f inverseExtent;
   for (int k = 0; k < 3; ++k) inverseExtent[k] = extent[k] > 0.0f ? 1.0f / extent[k] : 0.0f;
 
-  // Sort by bin, then deepest first, then index: the first contact of each bin's run is the one kept.
-  // The thesis keeps the contact farthest from the origin of the 6-D cube; we keep the deepest instead,
-  // because the solver needs the largest penetration of a region to push the bodies fully apart and
-  // that choice does not depend on where the bounding box happens to put the origin. Ties go to the
-  // lowest index so the result is deterministic.
+  // Each bin keeps its deepest contact, ties to the lowest index. The thesis keeps the contact farthest from
+  // the origin of the 6-D cube; we keep the deepest instead, because the solver needs the largest penetration
+  // of a region to push the bodies fully apart and that choice does not depend on where the bounding box
+  // happens to put the origin. Ties go to the lowest index so the result is deterministic.
   if (resolution <= kPackedMaximumResolution) {
-    // The six bins packed into one integer, most significant first, so that the integers sort as the
-    // BinKeys would; the sort then moves 16-byte records instead of comparing six-element arrays through
-    // an index (on the thesis scene, armadillo-27674's 466 contacts, the reduction took 0.38M instructions
-    // per query that way and 0.16M this way; valgrind).
-    struct PackedContact {
-      std::uint64_t key;
-      float depth;
-      std::uint32_t index;
-    };
-    std::vector<PackedContact> packed(contacts.size());
+    // The six bins packed into one integer, and each bin's contact chosen in one pass through an
+    // open-addressing table of bins (a power of two, at least twice the contacts, so probes stay short)
+    // instead of sorting the contacts by key: on the thesis scene's 1,611 contacts (armadillo-399904, warm
+    // caches) 29 us per call against 48 sorted.
+    std::vector<std::uint64_t> packed(contacts.size());
     for (std::size_t i = 0; i < contacts.size(); ++i) {
       const ReductionInput& c = contacts[i];
       std::uint64_t key = 0;
@@ -88,21 +82,30 @@ std::vector<std::uint32_t> reduceContacts(const std::vector<ReductionInput>& con
       }
       for (int k = 0; k < 3; ++k)
         key = (key << kPackedBits) | std::uint64_t(binOf(0.5f * (c.normal[k] + 1.0f), resolution));
-      packed[i] = {key, c.depth, static_cast<std::uint32_t>(i)};
+      packed[i] = key;
     }
-    std::sort(packed.begin(), packed.end(), [](const PackedContact& l, const PackedContact& r) {
-      if (l.key != r.key) return l.key < r.key;
-      if (l.depth != r.depth) return l.depth < r.depth;
-      return l.index < r.index;
-    });
+    int tableBits = 1;
+    while ((std::size_t{1} << tableBits) < 2 * contacts.size()) ++tableBits;
+    const std::size_t mask = (std::size_t{1} << tableBits) - 1;
+    constexpr std::uint32_t kEmpty = UINT32_MAX;  // not a contact index: there are fewer than 2^32 - 1
+    std::vector<std::uint32_t> holder(mask + 1, kEmpty);
+    for (std::uint32_t i = 0; i < contacts.size(); ++i) {
+      // Fibonacci hashing: the top bits of the key times 2^64 / golden ratio.
+      std::size_t slot = std::size_t((packed[i] * 0x9E3779B97F4A7C15ull) >> (64 - tableBits));
+      while (holder[slot] != kEmpty && packed[holder[slot]] != packed[i]) slot = (slot + 1) & mask;
+      // Contacts come in index order, so a later one takes the bin only when strictly deeper: ties stay
+      // with the lowest index.
+      if (holder[slot] == kEmpty || contacts[i].depth < contacts[holder[slot]].depth) holder[slot] = i;
+    }
     std::vector<std::uint32_t> kept;
-    for (std::size_t i = 0; i < packed.size(); ++i) {
-      if (i == 0 || packed[i].key != packed[i - 1].key) kept.push_back(packed[i].index);
+    for (std::uint32_t index : holder) {
+      if (index != kEmpty) kept.push_back(index);
     }
     std::sort(kept.begin(), kept.end());
     return kept;
   }
 
+  // Six-element keys: sorted by bin, then deepest first, then index, and the first of each bin's run kept.
   std::vector<BinKey> keys(contacts.size());
   for (std::size_t i = 0; i < contacts.size(); ++i) {
     const ReductionInput& c = contacts[i];
