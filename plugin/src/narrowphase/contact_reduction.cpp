@@ -63,10 +63,10 @@ std::vector<std::uint32_t> reduceContacts(const std::vector<ReductionInput>& con
   Eigen::Vector3f inverseExtent;
   for (int k = 0; k < 3; ++k) inverseExtent[k] = extent[k] > 0.0f ? 1.0f / extent[k] : 0.0f;
 
-  // Each bin keeps its deepest contact, ties to the lowest index. The thesis keeps the contact farthest from
-  // the origin of the 6-D cube; we keep the deepest instead, because the solver needs the largest penetration
-  // of a region to push the bodies fully apart and that choice does not depend on where the bounding box
-  // happens to put the origin. Ties go to the lowest index so the result is deterministic.
+  // Each bin keeps its deepest contact. The thesis keeps the contact farthest from the origin of the 6-D
+  // cube; we keep the deepest instead, because the solver needs the largest penetration of a region to push
+  // the bodies fully apart and that choice does not depend on where the bounding box happens to put the
+  // origin. Ties go to the lowest index so the result is deterministic.
   if (resolution <= kPackedMaximumResolution) {
     // The six bins packed into one integer, and each bin's contact chosen in one pass through an
     // open-addressing table of bins (a power of two, at least twice the contacts, so probes stay short)
