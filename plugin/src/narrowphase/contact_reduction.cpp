@@ -90,7 +90,7 @@ std::vector<std::uint32_t> reduceContacts(const std::vector<ReductionInput>& con
     constexpr std::uint32_t kEmpty = UINT32_MAX;  // not a contact index: there are fewer than 2^32 - 1
     std::vector<std::uint32_t> holder(mask + 1, kEmpty);
     for (std::uint32_t i = 0; i < contacts.size(); ++i) {
-      // Fibonacci hashing: the top bits of the key times 2^64 / golden ratio.
+      // Fibonacci hashing: the top tableBits bits of key * (2^64 / golden ratio) pick the first slot.
       std::size_t slot = std::size_t((packed[i] * 0x9E3779B97F4A7C15ull) >> (64 - tableBits));
       while (holder[slot] != kEmpty && packed[holder[slot]] != packed[i]) slot = (slot + 1) & mask;
       // Contacts come in index order, so a later one takes the bin only when strictly deeper: ties stay
