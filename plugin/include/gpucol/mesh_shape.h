@@ -34,11 +34,12 @@ ATTRIBUTE_ALIGNED16(class) MeshShape : public btConcaveShape {
   const std::shared_ptr<const TriangleMesh>& sharedMesh() const { return m_mesh; }
   /// The tree of non-updated AABBs of the mesh.
   const AabbTree& tree() const { return *m_tree; }
-  /// The mesh's triangles as a "triangle soup": the 9 unscaled coordinates of triangle t (its three vertices in
-  /// index order, x y z each) at [9 t, 9 t + 9). Built with the shape, so the mesh pair query reads a triangle in
-  /// one contiguous load instead of an index load followed by three vertex loads; it costs 36 bytes per triangle
-  /// held by each shape (14.4 MB for 400,000 triangles).
-  const std::vector<float>& triangleSoup() const { return m_soup; }
+  /// The mesh's triangles as a "triangle soup": the 9 unscaled coordinates of triangle t (its three vertices
+  /// in index order, x y z each) at [9 t, 9 t + 9). Built with the shape, so the mesh pair query reads a
+  /// triangle in one contiguous load instead of an index load followed by three vertex loads; it costs 36
+  /// bytes per triangle held by each shape (14.4 MB for 400,000 triangles), on huge pages where the system
+  /// gives them.
+  const float* triangleSoup() const { return m_soup.get(); }
 
   /// Per-axis scale applied to the mesh (1,1,1 by default). Each component must be finite and non-zero: anything
   /// else throws MeshError and keeps the previous scaling.
@@ -70,7 +71,7 @@ ATTRIBUTE_ALIGNED16(class) MeshShape : public btConcaveShape {
  private:
   std::shared_ptr<const TriangleMesh> m_mesh;
   std::shared_ptr<const AabbTree> m_tree;
-  std::vector<float> m_soup;
+  std::shared_ptr<const float[]> m_soup;
   btVector3 m_localScaling{1, 1, 1};
 };
 

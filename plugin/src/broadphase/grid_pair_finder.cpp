@@ -18,7 +18,7 @@
 
 #include "broadphase/grid_choice.h"
 #include "broadphase/pair_mapping.h"
-#include "broadphase/scratch_allocator.h"
+#include "memory/large_array_allocator.h"
 
 namespace gpucol {
 namespace {
@@ -292,7 +292,7 @@ inline std::uint32_t slotBitsFor(std::uint32_t count) {
 /// thread timing; nothing downstream does: pairs are keyed by slot and the output is sorted (stage 10), so
 /// the result is the same whatever the threads did.
 template <typename Buckets, typename Place>
-void countingSort(std::size_t items, std::uint64_t cells, ScratchVector<std::uint32_t>& start,
+void countingSort(std::size_t items, std::uint64_t cells, LargeArrayVector<std::uint32_t>& start,
                   Buckets&& buckets, Place&& place) {
   start.resize(cells + 1);
   tbb::parallel_for(
@@ -333,40 +333,40 @@ class CpuPairFinder final : public PairFinder {
   void releaseScratch();
 
   PairFinderStats m_stats;
-  std::vector<std::uint32_t> m_active;       // active slots, ascending
-  std::vector<std::uint32_t> m_binned;       // active slots that go into the grid
-  std::vector<std::uint32_t> m_huge;         // active slots kept out of the grid (stage 3)
-  std::vector<float> m_extent;               // scratch for the median extent
-  ScratchVector<std::uint32_t> m_cellStart;  // dense counting sort: first entry per cell (+1 sentinel)
-  std::vector<std::uint64_t> m_keys;         // sparse path: (cell << 32) | slot
-  ScratchVector<LocalBox> m_box;             // binned boxes ordered by (home cell, slot)
-  std::vector<std::uint64_t> m_homeKeys;     // scratch for that order on a sparse grid
-  std::vector<std::uint32_t> m_homeOrder;    // binned slots by home cell, as of the last home sort
-  std::uint32_t m_homeOrderAge = 0;          // searches since that sort
-  std::vector<std::uint32_t> m_homePos;      // per slot: its index in m_homeOrder (binned slots only)
-  ScratchVector<PackedCells> m_packed;       // dense grid: each box's cells (stage 4 to 5)
-  ScratchVector<std::uint8_t> m_isBinned;    // per slot: binned in this search
+  std::vector<std::uint32_t> m_active;          // active slots, ascending
+  std::vector<std::uint32_t> m_binned;          // active slots that go into the grid
+  std::vector<std::uint32_t> m_huge;            // active slots kept out of the grid (stage 3)
+  std::vector<float> m_extent;                  // scratch for the median extent
+  LargeArrayVector<std::uint32_t> m_cellStart;  // dense counting sort: first entry per cell (+1 sentinel)
+  std::vector<std::uint64_t> m_keys;            // sparse path: (cell << 32) | slot
+  LargeArrayVector<LocalBox> m_box;             // binned boxes ordered by (home cell, slot)
+  std::vector<std::uint64_t> m_homeKeys;        // scratch for that order on a sparse grid
+  std::vector<std::uint32_t> m_homeOrder;       // binned slots by home cell, as of the last home sort
+  std::uint32_t m_homeOrderAge = 0;             // searches since that sort
+  std::vector<std::uint32_t> m_homePos;         // per slot: its index in m_homeOrder (binned slots only)
+  LargeArrayVector<PackedCells> m_packed;       // dense grid: each box's cells (stage 4 to 5)
+  LargeArrayVector<std::uint8_t> m_isBinned;    // per slot: binned in this search
   // Stage 11: the last full grid search (m_cellStart, m_sorted, m_box of a dense grid) kept for later
   // searches while few proxies change.
   bool m_kept = false;        // m_cellStart/m_sorted/m_box/m_keptHuge describe m_keptGrid
   bool m_denseBuilt = false;  // the last grid search filled m_cellStart (dense counting sort)
   Grid m_keptGrid;
   PairFinderOptions m_keptOptions;
-  std::vector<std::uint8_t> m_unchanged;     // per slot: active in the kept search and unchanged since
-  std::vector<std::uint32_t> m_keptHuge;     // huge proxies of the kept search
-  std::vector<std::uint64_t> m_lastPairs;    // this finder's previous result (unless the caller keeps it)
-  bool m_callerKeepsPairs = false;           // the kept grid's pairs are the caller's ProxyArrays::lastPairs
-  std::vector<std::uint32_t> m_moved;        // active slots changed since the kept search
-  std::vector<std::uint64_t> m_movedKeys;    // (cell << 32) | index into m_moved, binned moved proxies
-  std::vector<std::uint64_t> m_sortScratch;  // second buffer of the pair radix sort
-  ScratchVector<std::uint32_t> m_sorted;     // m_box indices by cell (dense grid: with kHomeEntry)
-  ScratchVector<std::uint32_t> m_runCell;    // runs of >= 2 entries: cell index
-  ScratchVector<std::uint32_t> m_runStart;   // first entry in m_sorted
-  ScratchVector<std::uint32_t> m_runLength;
-  ScratchVector<std::uint64_t> m_runPrefix;  // exclusive prefix sum of m(m-1)/2, plus the total at the end
-  std::vector<std::uint32_t> m_blockRuns;    // runs per block of cells, scanned (dense run compaction)
-  std::vector<std::uint32_t> m_offsets;      // sparse path: first key of each box (exclusive prefix sum)
-  std::vector<std::uint64_t> m_bits;         // bit mask output (stage 10)
+  std::vector<std::uint8_t> m_unchanged;      // per slot: active in the kept search and unchanged since
+  std::vector<std::uint32_t> m_keptHuge;      // huge proxies of the kept search
+  std::vector<std::uint64_t> m_lastPairs;     // this finder's previous result (unless the caller keeps it)
+  bool m_callerKeepsPairs = false;            // the kept grid's pairs are the caller's ProxyArrays::lastPairs
+  std::vector<std::uint32_t> m_moved;         // active slots changed since the kept search
+  std::vector<std::uint64_t> m_movedKeys;     // (cell << 32) | index into m_moved, binned moved proxies
+  std::vector<std::uint64_t> m_sortScratch;   // second buffer of the pair radix sort
+  LargeArrayVector<std::uint32_t> m_sorted;   // m_box indices by cell (dense grid: with kHomeEntry)
+  LargeArrayVector<std::uint32_t> m_runCell;  // runs of >= 2 entries: cell index
+  LargeArrayVector<std::uint32_t> m_runStart;  // first entry in m_sorted
+  LargeArrayVector<std::uint32_t> m_runLength;
+  LargeArrayVector<std::uint64_t> m_runPrefix;  // exclusive prefix sum of m(m-1)/2, plus the total at the end
+  std::vector<std::uint32_t> m_blockRuns;       // runs per block of cells, scanned (dense run compaction)
+  std::vector<std::uint32_t> m_offsets;         // sparse path: first key of each box (exclusive prefix sum)
+  std::vector<std::uint64_t> m_bits;            // bit mask output (stage 10)
   std::vector<std::vector<std::uint64_t>> m_chunkPairs;  // output per chunk (kept for its capacity)
   std::size_t m_chunksUsed = 0;                          // chunks of m_chunkPairs filled by this search
 
@@ -500,7 +500,7 @@ void CpuPairFinder::incremental(const ProxyArrays& p, const PairFinderOptions& o
   const std::size_t moved = m_moved.size();
   const std::size_t tasks = (moved + kMovedGrain - 1) / kMovedGrain;
   const std::size_t firstChunk = takeChunks(tasks);
-  ScratchVector<std::uint8_t>& movedHuge = m_isBinned;  // per moved index (free here: no chooseGrid)
+  LargeArrayVector<std::uint8_t>& movedHuge = m_isBinned;  // per moved index (free here: no chooseGrid)
   movedHuge.resize(moved);
   for (std::size_t i = 0; i < moved; ++i) movedHuge[i] = isHuge(p, m_moved[i], g.cell, options.hugeCellLimit);
   tbb::parallel_for(std::size_t(0), tasks, [&](std::size_t t) {

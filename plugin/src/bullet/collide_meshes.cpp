@@ -210,8 +210,8 @@ GPUCOL_AVX2_CLONES void runNearChunk(const MeshShape& shapeA, const MeshShape& s
   // triangleSoup): one contiguous 36-byte read per triangle, prefetched kSoupAhead candidates ahead, where
   // the mesh's index and vertex arrays cost a load of the indices and then, depending on it, three vertex
   // loads.
-  const float* const soupA = shapeA.triangleSoup().data();
-  const float* const soupB = shapeB.triangleSoup().data();
+  const float* const soupA = shapeA.triangleSoup();
+  const float* const soupB = shapeB.triangleSoup();
   float a[9] = {};
   for (std::size_t j = 0; j < count; ++j) {
     const std::size_t i = begin + j;

@@ -8,18 +8,32 @@
 #include "bvh/aabb_tree.h"
 #include "bvh/tree_query.h"
 #include "gpucol/mesh_error.h"
+#include "memory/large_array_allocator.h"
 
 namespace gpucol {
+namespace {
+
+/// The soup of triangleSoup(), in a large-array mapping: the near phase reads a large mesh's triangles at
+/// random, and on huge pages most of those reads stop missing the TLB.
+std::shared_ptr<const float[]> buildTriangleSoup(const TriangleMesh& mesh) {
+  const std::vector<float>& positions = mesh.positions();
+  const std::vector<std::uint32_t>& indices = mesh.indices();
+  const std::size_t size = 3 * indices.size();
+  float* const soup = LargeArrayAllocator<float>().allocate(size);
+  std::shared_ptr<const float[]> held(
+      soup, [size](const float* p) { LargeArrayAllocator<float>().deallocate(const_cast<float*>(p), size); });
+  for (std::size_t k = 0; k < indices.size(); ++k) {
+    for (std::size_t c = 0; c < 3; ++c) soup[3 * k + c] = positions[3 * std::size_t(indices[k]) + c];
+  }
+  return held;
+}
+
+}  // namespace
 
 MeshShape::MeshShape(std::shared_ptr<const TriangleMesh> mesh, const Config& config) : m_mesh(std::move(mesh)) {
   if (!m_mesh) throw MeshError("MeshShape: the mesh pointer is null");
   m_tree = std::make_shared<const AabbTree>(AabbTree::build(*m_mesh, config.trianglesPerLeaf));
-  const std::vector<float>& positions = m_mesh->positions();
-  const std::vector<std::uint32_t>& indices = m_mesh->indices();
-  m_soup.resize(3 * indices.size());
-  for (std::size_t k = 0; k < indices.size(); ++k) {
-    for (std::size_t c = 0; c < 3; ++c) m_soup[3 * k + c] = positions[3 * std::size_t(indices[k]) + c];
-  }
+  m_soup = buildTriangleSoup(*m_mesh);
   // Not CUSTOM_CONCAVE_SHAPE_TYPE: Bullet 3 gives that value to SDF_SHAPE_PROXYTYPE too, and its convex-concave
   // algorithm treats every shape of that type as a btSdfCollisionShape (boxes would fall through a mesh).
   // FAST_CONCAVE_MESH_PROXYTYPE is a concave type that nothing in Bullet special-cases, so Bullet's generic

@@ -131,7 +131,7 @@ constexpr std::uint32_t kParallelBuildGrain = 4096;
 /// at i + 1 and its right child at i + 2 * (split - begin).
 struct NodeRangeBuilder {
   std::vector<BuildItem>& items;
-  std::vector<AabbNode>& nodes;
+  LargeArrayVector<AabbNode>& nodes;
   int meanSplitLimit;
 
   /// Builds the subtree of [begin, end) at `nodeIndex` and returns its deepest level. Recursion happens only for
@@ -213,7 +213,7 @@ AabbTree AabbTree::build(const std::vector<float>& xyz, const std::vector<std::u
   if (perLeaf == 1) {
     // Exactly 2n - 1 nodes, and a subtree over c triangles has 2c - 1, so every node's index is known before its
     // subtree is built and the subtrees can be built in parallel into one array.
-    tree.m_nodes.resize(2 * triangleCount - 1);
+    tree.m_nodes.resize(2 * triangleCount - 1, AabbNode{});  // inner nodes keep count 0
     const NodeRangeBuilder builder{items, tree.m_nodes, meanSplitLimit};
     tree.m_depth = builder.buildParallel(0, static_cast<std::uint32_t>(triangleCount), 0, 1);
     return tree;
@@ -229,7 +229,7 @@ AabbTree AabbTree::build(const std::vector<float>& xyz, const std::vector<std::u
     const BuildTask task = stack.back();
     stack.pop_back();
     const std::uint32_t nodeIndex = static_cast<std::uint32_t>(tree.m_nodes.size());
-    tree.m_nodes.emplace_back();
+    tree.m_nodes.push_back(AabbNode{});  // inner nodes keep count 0
     if (task.isRight) tree.m_nodes[task.parent].first = nodeIndex;
     tree.m_depth = std::max(tree.m_depth, task.depth);
     const std::uint32_t split =

@@ -7,6 +7,7 @@
 #include <vector>
 
 #include "gpucol/triangle_mesh.h"
+#include "memory/large_array_allocator.h"
 
 namespace gpucol {
 
@@ -47,8 +48,9 @@ class AabbTree {
   static AabbTree build(const std::vector<float>& xyz, const std::vector<std::uint32_t>& indices,
                         int trianglesPerLeaf = 1);
 
-  /// All nodes, root at index 0.
-  const std::vector<AabbNode>& nodes() const { return m_nodes; }
+  /// All nodes, root at index 0 (on huge pages where the system gives them: the traversal reads them at
+  /// random).
+  const LargeArrayVector<AabbNode>& nodes() const { return m_nodes; }
   /// One node.
   const AabbNode& node(std::size_t index) const { return m_nodes[index]; }
   /// Number of nodes (2 * leaves - 1).
@@ -83,7 +85,7 @@ class AabbTree {
  private:
   AabbTree() = default;
 
-  std::vector<AabbNode> m_nodes;
+  LargeArrayVector<AabbNode> m_nodes;
   std::vector<AabbLeafEntry> m_leafEntries;
   std::size_t m_triangleCount = 0;
   int m_trianglesPerLeaf = 1;

@@ -16,7 +16,7 @@ void visitTreeTriangles(const AabbTree& tree, BoxWanted&& boxWanted, VisitTriang
   std::vector<std::uint32_t> stack;
   stack.reserve(2 * std::size_t(tree.depth()) + 2);
   stack.push_back(0);
-  const std::vector<AabbNode>& nodes = tree.nodes();
+  const LargeArrayVector<AabbNode>& nodes = tree.nodes();
   while (!stack.empty()) {
     const std::uint32_t index = stack.back();
     stack.pop_back();

@@ -1,17 +1,23 @@
 #pragma once
-// Allocator of the broad phase's per-step scratch arrays, which are released at the end of every search so
-// that only what the next search reuses is held between steps (GridBroadphaseStats::memoryBytes). Two things
-// make a fresh array cost more than a kept one, and this allocator removes both:
-//  - std::vector::resize value-initialises (zeroes) new elements that the search overwrites anyway:
-//    construct() without arguments default-initialises instead (nothing for the plain types used here);
-//  - the kernel hands out fresh memory page by page on first touch: large arrays are mapped on 2 MiB
-//    boundaries with madvise(MADV_HUGEPAGE), so where transparent huge pages are available (Linux,
-//    "madvise" or "always") a 2 MiB page arrives per fault instead of a 4 KiB one.
+// Allocator of large arrays that are written once after allocation and then read at random or released soon:
+//  - the broad phase's per-step scratch arrays, released at the end of every search so that only what the
+//    next search reuses is held between steps (GridBroadphaseStats::memoryBytes);
+//  - a mesh's tree nodes and triangle soup (40 MB for armadillo-399904), which the mesh pair query walks in
+//    an order that jumps across the whole array.
+// Two things make such arrays slow with the ordinary heap, and this allocator removes both:
+//  - std::vector::resize value-initialises (zeroes) new elements that are overwritten anyway: construct()
+//    without arguments default-initialises instead (nothing for the plain types used here);
+//  - the kernel backs memory with 4 KiB pages, so a fresh array faults page by page and random reads of a
+//    large one miss the TLB: large arrays are mapped on 2 MiB boundaries with madvise(MADV_HUGEPAGE), so
+//    where transparent huge pages are available (Linux, "madvise" or "always") they get 2 MiB pages. Heap
+//    memory would not do: glibc serves large blocks from memory freed earlier (a mesh loader's buffers),
+//    already backed by small pages.
 // Small arrays come from the ordinary heap.
 #include <cstddef>
 #include <memory>
 #include <new>
 #include <utility>
+#include <vector>
 
 #if defined(__linux__)
 #include <sys/mman.h>
@@ -20,20 +26,20 @@
 namespace gpucol {
 
 /// Arrays of at least this many bytes are mapped directly (huge pages where the system gives them).
-constexpr std::size_t kScratchMapFrom = std::size_t(4) << 20;
+constexpr std::size_t kLargeArrayMapFrom = std::size_t(4) << 20;
 
 /// std::allocator with default-initialising construct() and huge-page mappings for large arrays.
 template <typename T>
-struct ScratchAllocator {
+struct LargeArrayAllocator {
   using value_type = T;
-  ScratchAllocator() = default;
+  LargeArrayAllocator() = default;
   template <typename U>
-  ScratchAllocator(const ScratchAllocator<U>&) noexcept {}
+  LargeArrayAllocator(const LargeArrayAllocator<U>&) noexcept {}
 
   T* allocate(std::size_t n) {
     const std::size_t bytes = n * sizeof(T);
 #if defined(__linux__) && defined(MADV_HUGEPAGE)
-    if (bytes >= kScratchMapFrom) {
+    if (bytes >= kLargeArrayMapFrom) {
       constexpr std::size_t kHuge = std::size_t(2) << 20;
       // Over-map by one huge page and trim both ends so the array starts on a 2 MiB boundary.
       const std::size_t mapped = (bytes + kHuge - 1) / kHuge * kHuge + kHuge;
@@ -54,7 +60,7 @@ struct ScratchAllocator {
   void deallocate(T* p, std::size_t n) noexcept {
     const std::size_t bytes = n * sizeof(T);
 #if defined(__linux__) && defined(MADV_HUGEPAGE)
-    if (bytes >= kScratchMapFrom) {
+    if (bytes >= kLargeArrayMapFrom) {
       constexpr std::size_t kHuge = std::size_t(2) << 20;
       munmap(p, (bytes + kHuge - 1) / kHuge * kHuge);
       return;
@@ -74,17 +80,17 @@ struct ScratchAllocator {
   }
 
   template <typename U>
-  bool operator==(const ScratchAllocator<U>&) const noexcept {
+  bool operator==(const LargeArrayAllocator<U>&) const noexcept {
     return true;
   }
   template <typename U>
-  bool operator!=(const ScratchAllocator<U>&) const noexcept {
+  bool operator!=(const LargeArrayAllocator<U>&) const noexcept {
     return false;
   }
 };
 
-/// A vector of per-step scratch.
+/// A vector whose large storage is mapped on huge pages and whose resize() does not zero.
 template <typename T>
-using ScratchVector = std::vector<T, ScratchAllocator<T>>;
+using LargeArrayVector = std::vector<T, LargeArrayAllocator<T>>;
 
 }  // namespace gpucol
