@@ -25,6 +25,7 @@
 #include "bvh/tree_traversal.h"
 #include "gpucol/mesh_shape.h"
 #include "narrowphase/contact_reduction.h"
+#include "narrowphase/contact_rows.h"
 #include "narrowphase/triangle_contact.h"
 #include "narrowphase/triangle_intersection.h"
 #include "narrowphase/triangle_plane.h"
@@ -152,6 +153,9 @@ class ChunkTriangles {
 struct ChunkBuffers {
   ChunkTriangles triangles;
   ChunkTriangles crossing;
+  // The contacts of the pairs the pre-tests left (detail::generateContactRows), and their outcomes.
+  std::unique_ptr<float[]> contacts{new float[detail::kContactRowValues * kNearRow]};
+  std::unique_ptr<std::uint32_t[]> outcome{new std::uint32_t[kNearChunk]};
 };
 
 // The frame applied to a chunk's rows in place: A's vertices (values 0..8) times A's scale, B's (9..17)
@@ -267,15 +271,48 @@ GPUCOL_AVX2_CLONES void runNearChunk(const MeshShape& shapeA, const MeshShape& s
     apart[s] =
         static_cast<std::uint8_t>(detail::floatIntervalsApartBranchFree(t.a0, t.a1, t.a2, t.b0, t.b1, t.b2));
   }
+  // The pairs left, gathered again into the first rows (free now), go through the double test and the
+  // contact generation all at once (detail::generateContactRows: no branch per pair); a coplanar pair goes to
+  // the one-pair function.
+  std::uint16_t tested[kNearChunk];
+  std::size_t testedCount = 0;
   for (std::size_t s = 0; s < survivors; ++s) {
     if (apart[s]) continue;
-    const std::size_t j = survivor[s];
-    Eigen::Vector3f a[3], b[3];
-    crossing.load(s, a, b);
-    bool intersects = false;
-    const std::optional<TriangleContact> contact = detail::generateContactAndTest(a, b, intersects);
-    if (!intersects) continue;
-    hits.push_back({begin + j, contact.has_value(), contact ? *contact : TriangleContact{}});
+    tested[testedCount] = survivor[s];
+    for (std::size_t k = 0; k < 18; ++k) rows[k * n + testedCount] = w[k * n + s];
+    ++testedCount;
+  }
+  float* const c = buffers.contacts.get();
+  std::uint32_t* const outcome = buffers.outcome.get();
+  detail::generateContactRows(rows, n, testedCount, c, outcome);
+  for (std::size_t t = 0; t < testedCount; ++t) {
+    const std::size_t j = tested[t];
+    switch (outcome[t] & detail::kRowOutcomeMask) {
+      case detail::kRowApart:
+        break;
+      case detail::kRowIntersectsNoContact:
+        hits.push_back({begin + j, false, TriangleContact{}});
+        break;
+      case detail::kRowContact: {
+        TriangleContact contact;
+        contact.point = Eigen::Vector3f(c[t], c[n + t], c[2 * n + t]);
+        contact.normalOnB = Eigen::Vector3f(c[3 * n + t], c[4 * n + t], c[5 * n + t]);
+        contact.depth = c[6 * n + t];
+        contact.onFaceOfB = (outcome[t] & detail::kRowOnFaceOfB) != 0;
+        contact.sameFacing = (outcome[t] & detail::kRowSameFacing) != 0;
+        contact.deepestPoint = Eigen::Vector3f(c[7 * n + t], c[8 * n + t], c[9 * n + t]);
+        hits.push_back({begin + j, true, contact});
+        break;
+      }
+      default: {
+        Eigen::Vector3f a[3], b[3];
+        triangles.load(t, a, b);
+        bool intersects = false;
+        const std::optional<TriangleContact> contact = detail::generateContactAndTest(a, b, intersects);
+        if (intersects)
+          hits.push_back({begin + j, contact.has_value(), contact ? *contact : TriangleContact{}});
+      }
+    }
   }
 }
 

@@ -9,8 +9,8 @@
 /// (that is FMA's flag, not given), so both clones round alike and give the same bits. Elsewhere the macro is
 /// empty.
 ///
-/// Where it is used: the traversal's loops and the near phase's per-chunk work, which take most of a mesh
-/// pair query's time.
+/// Where it is used: the traversal's loops, the near phase's per-chunk work and its double test over columns
+/// of pairs (narrowphase/contact_rows.cpp), which take most of a mesh pair query's time.
 #if defined(__x86_64__) && defined(__GLIBC__) && defined(__has_attribute)
 #if __has_attribute(target_clones)
 #define GPUCOL_AVX2_CLONES __attribute__((target_clones("avx2", "default")))
