@@ -20,7 +20,9 @@ using test::TriangleF;
 /// Pairs laid out as generateContactRows reads them, with a row stride that is not the count.
 struct Columns {
   explicit Columns(const std::vector<std::pair<TriangleF, TriangleF>>& pairs)
-      : stride(pairs.size() + 7), triangles(18 * stride, 0.0f), contacts(detail::kContactRowValues * stride),
+      : stride(pairs.size() + 7),
+        triangles(18 * stride, 0.0f),
+        contacts(detail::kContactRowValues * stride),
         outcome(pairs.size()) {
     for (std::size_t t = 0; t < pairs.size(); ++t) {
       for (int v = 0; v < 3; ++v) {
@@ -39,7 +41,9 @@ struct Columns {
   std::vector<std::uint32_t> outcome;
 };
 
-bool sameBits(float x, float y) { return std::memcmp(&x, &y, sizeof x) == 0; }
+bool sameBits(float x, float y) {
+  return std::memcmp(&x, &y, sizeof x) == 0;
+}
 
 /// Every vertex of one triangle in the other's plane, by the snapped double distances of the one-pair test.
 bool coplanar(const TriangleF& a, const TriangleF& b) {

@@ -16,10 +16,14 @@ struct Vec {
   double x, y, z;
 };
 
-GPUCOL_FORCE_INLINE Vec operator-(const Vec& a, const Vec& b) { return {a.x - b.x, a.y - b.y, a.z - b.z}; }
+GPUCOL_FORCE_INLINE Vec operator-(const Vec& a, const Vec& b) {
+  return {a.x - b.x, a.y - b.y, a.z - b.z};
+}
 
 /// Eigen's dot product of 3-vectors: (x + y) + z.
-GPUCOL_FORCE_INLINE double dot(const Vec& a, const Vec& b) { return (a.x * b.x + a.y * b.y) + a.z * b.z; }
+GPUCOL_FORCE_INLINE double dot(const Vec& a, const Vec& b) {
+  return (a.x * b.x + a.y * b.y) + a.z * b.z;
+}
 
 /// Eigen's cross product.
 GPUCOL_FORCE_INLINE Vec cross(const Vec& a, const Vec& b) {
@@ -36,11 +40,17 @@ GPUCOL_FORCE_INLINE Vec select(bool c, const Vec& a, const Vec& b) {
 }
 
 /// std::min({x, y, z}) and std::max({x, y, z}): the first of equal values, as the initializer-list forms.
-GPUCOL_FORCE_INLINE double min3(double x, double y, double z) { return std::min(std::min(x, y), z); }
-GPUCOL_FORCE_INLINE double max3(double x, double y, double z) { return std::max(std::max(x, y), z); }
+GPUCOL_FORCE_INLINE double min3(double x, double y, double z) {
+  return std::min(std::min(x, y), z);
+}
+GPUCOL_FORCE_INLINE double max3(double x, double y, double z) {
+  return std::max(std::max(x, y), z);
+}
 
 /// sameStrictSign of triangle_plane.h without a branch.
-GPUCOL_FORCE_INLINE bool sameSign(double x, double y) { return ((x > 0.0) & (y > 0.0)) | ((x < 0.0) & (y < 0.0)); }
+GPUCOL_FORCE_INLINE bool sameSign(double x, double y) {
+  return ((x > 0.0) & (y > 0.0)) | ((x < 0.0) & (y < 0.0));
+}
 
 /// makePlane and signedDistances: the unnormalised normal of triangle (p0, p1, p2), whether it is degenerate,
 /// and the snapped signed distances of q0, q1, q2 to its plane.
@@ -69,8 +79,8 @@ GPUCOL_FORCE_INLINE PlaneDistances planeDistances(const Vec& p0, const Vec& p1, 
 
 /// planeCrossing: the segment where triangle (v0, v1, v2) meets the other plane, from its vertices'
 /// distances d to it; the lone vertex as loneVertex() picks it.
-GPUCOL_FORCE_INLINE void planeCrossing(const Vec& v0, const Vec& v1, const Vec& v2, const double (&d)[3], Vec& s0,
-                                       Vec& s1) {
+GPUCOL_FORCE_INLINE void planeCrossing(const Vec& v0, const Vec& v1, const Vec& v2, const double (&d)[3],
+                                       Vec& s0, Vec& s1) {
   const bool s01 = sameSign(d[0], d[1]), s02 = sameSign(d[0], d[2]);
   const bool firstAlone = sameSign(d[1], d[2]) | (d[0] != 0.0);
   const bool zero = (!s01) & (!s02) & firstAlone;
@@ -106,8 +116,8 @@ GPUCOL_AVX2_CLONES void generateContactRows(const float* triangles, std::size_t 
     const PlaneDistances onB = planeDistances(b0, b1, b2, a0, a1, a2);  // A's distances to B's plane
     const double(&dB)[3] = onA.d;
     const double(&dA)[3] = onB.d;
-    const bool rejected = onA.degenerate | (sameSign(dB[0], dB[1]) & sameSign(dB[0], dB[2])) | onB.degenerate |
-                          (sameSign(dA[0], dA[1]) & sameSign(dA[0], dA[2]));
+    const bool rejected = onA.degenerate | (sameSign(dB[0], dB[1]) & sameSign(dB[0], dB[2])) |
+                          onB.degenerate | (sameSign(dA[0], dA[1]) & sameSign(dA[0], dA[2]));
     const bool coplanar = ((dB[0] == 0.0) & (dB[1] == 0.0) & (dB[2] == 0.0)) |
                           ((dA[0] == 0.0) & (dA[1] == 0.0) & (dA[2] == 0.0));
     // x - x is 0 for a finite x and NaN otherwise. A non-finite coordinate goes to the one-pair function,
@@ -133,7 +143,8 @@ GPUCOL_AVX2_CLONES void generateContactRows(const float* triangles, std::size_t 
     const bool swapA = onAxis(sA1) < onAxis(sA0), swapB = onAxis(sB1) < onAxis(sB0);
     const Vec lowA = select(swapA, sA1, sA0), highA = select(swapA, sA0, sA1);
     const Vec lowB = select(swapB, sB1, sB0), highB = select(swapB, sB0, sB1);
-    const double lowAOn = onAxis(lowA), highAOn = onAxis(highA), lowBOn = onAxis(lowB), highBOn = onAxis(highB);
+    const double lowAOn = onAxis(lowA), highAOn = onAxis(highA), lowBOn = onAxis(lowB),
+                 highBOn = onAxis(highB);
     const bool separated = (lowAOn > highBOn) | (lowBOn > highAOn);
 
     // §5.3.4: the smaller move of a triangle along the other's normal out of its plane.
@@ -146,12 +157,15 @@ GPUCOL_AVX2_CLONES void generateContactRows(const float* triangles, std::size_t 
     // the vector itself when its squared norm is not positive).
     const double lineSquared = dot(line, line);
     const double lineLength = std::sqrt(lineSquared);
-    const Vec u = lineSquared > 0.0 ? Vec{line.x / lineLength, line.y / lineLength, line.z / lineLength} : line;
+    const Vec u =
+        lineSquared > 0.0 ? Vec{line.x / lineLength, line.y / lineLength, line.z / lineLength} : line;
     const double pA1 = dot(u, a1 - a0), pA2 = dot(u, a2 - a0);
     const double pB0 = dot(u, b0 - a0), pB1 = dot(u, b1 - a0), pB2 = dot(u, b2 - a0);
-    const double slide = std::min(max3(0.0, pA1, pA2) - min3(pB0, pB1, pB2), max3(pB0, pB1, pB2) - min3(0.0, pA1, pA2));
+    const double slide =
+        std::min(max3(0.0, pA1, pA2) - min3(pB0, pB1, pB2), max3(pB0, pB1, pB2) - min3(0.0, pA1, pA2));
 
-    // The contact: the middle of the common segment, the winning normal, the moving triangle's deepest vertex.
+    // The contact: the middle of the common segment, the winning normal, the moving triangle's deepest
+    // vertex.
     const Vec low = select(lowAOn >= lowBOn, lowA, lowB);
     const Vec high = select(highAOn <= highBOn, highA, highB);
     const Vec normal = select(aMoves, nB, Vec{-nA.x, -nA.y, -nA.z});
@@ -171,12 +185,13 @@ GPUCOL_AVX2_CLONES void generateContactRows(const float* triangles, std::size_t 
     c[8 * stride] = float(deepestVertex.y);
     c[9 * stride] = float(deepestVertex.z);
 
-    // The outcome as arithmetic on the conditions rather than a chain of selections, which GCC compiles to a
-    // branch per condition.
+    // The outcome as arithmetic on the conditions: GCC's if-conversion does not take a chain of selections
+    // that joins five values.
     const bool onePair = (!finite) | ((!rejected) & coplanar);
     const bool intersects = (!onePair) & (!rejected) & (!separated);
-    const std::uint32_t found = std::uint32_t(onePair) * kRowOnePair +
-                                std::uint32_t(intersects) * (slide < move ? kRowIntersectsNoContact : kRowContact);
+    const std::uint32_t found =
+        std::uint32_t(onePair) * kRowOnePair +
+        std::uint32_t(intersects) * (slide < move ? kRowIntersectsNoContact : kRowContact);
     outcome[t] = found | (aMoves ? kRowOnFaceOfB : 0u) | (dot(nA, nB) > 0.0 ? kRowSameFacing : 0u);
   }
 }

@@ -19,10 +19,10 @@ namespace gpucol::detail {
 
 /// What generateContactRows found for one pair.
 enum ContactRowOutcome : std::uint32_t {
-  kRowApart = 0,             ///< no intersection (or a degenerate triangle)
-  kRowIntersectsNoContact,   ///< intersecting, contact dropped (they slide apart by less than the depth)
-  kRowContact,               ///< intersecting, with the contact in the output rows
-  kRowOnePair,               ///< coplanar (or a non-finite coordinate): call generateContactAndTest
+  kRowApart = 0,            ///< no intersection (or a degenerate triangle)
+  kRowIntersectsNoContact,  ///< intersecting, contact dropped (they slide apart by less than the depth)
+  kRowContact,              ///< intersecting, with the contact in the output rows
+  kRowOnePair,              ///< coplanar (or a non-finite coordinate): call generateContactAndTest
 };
 
 /// Flags of ContactRowOutcome's word, above its two low bits.
