@@ -6,6 +6,7 @@
 #include <limits>
 #include <optional>
 #include <random>
+#include <string>
 #include <vector>
 
 #include "narrowphase/triangle_plane.h"
@@ -106,6 +107,30 @@ TEST(ContactRows, SameAsTheOnePairTestOnEveryFamily) {
   EXPECT_GT(total[detail::kRowApart], 10000);
   EXPECT_GT(total[detail::kRowIntersectsNoContact], 1000);
   EXPECT_GT(total[detail::kRowContact], 10000);
+}
+
+/// The pairs go four to a vector, and a count that is not a multiple of four leaves one to three pairs to a
+/// last, partly filled vector: every count up to 13, with the results of those pairs right and nothing
+/// written past the last pair.
+TEST(ContactRows, EveryCountUpToThirteen) {
+  std::mt19937_64 rng(37);
+  for (std::size_t count = 1; count <= 13; ++count) {
+    std::vector<std::pair<TriangleF, TriangleF>> pairs(count);
+    for (std::size_t t = 0; t < count; ++t) {
+      // Mostly intersecting families, so that the last pairs carry contacts.
+      const auto family = static_cast<PairFamily>((t + count) % static_cast<int>(PairFamily::Count));
+      test::randomPair(family, rng, pairs[t].first, pairs[t].second);
+    }
+    long counts[4] = {0, 0, 0, 0};
+    const std::string what = "count " + std::to_string(count);
+    expectSameAsOnePair(pairs, what.c_str(), counts);
+    const Columns rows(pairs);
+    for (std::size_t k = 0; k < detail::kContactRowValues; ++k) {
+      for (std::size_t t = count; t < rows.stride; ++t) {
+        EXPECT_TRUE(sameBits(rows.contact(k, t), 0.0f)) << what << ": value " << k << " written at " << t;
+      }
+    }
+  }
 }
 
 /// Degenerate triangles, pairs that share a whole edge, and non-finite coordinates, between ordinary pairs

@@ -272,8 +272,8 @@ GPUCOL_AVX2_CLONES void runNearChunk(const MeshShape& shapeA, const MeshShape& s
         static_cast<std::uint8_t>(detail::floatIntervalsApartBranchFree(t.a0, t.a1, t.a2, t.b0, t.b1, t.b2));
   }
   // The pairs left, gathered again into the first rows (free now), go through the double test and the
-  // contact generation as columns (detail::generateContactRows: every step for every pair, the answers chosen
-  // by value); a coplanar pair goes to the one-pair function.
+  // contact generation as columns (detail::generateContactRows: four pairs per vector, the answers chosen by
+  // masks); a coplanar pair goes to the one-pair function.
   std::uint16_t tested[kNearChunk];
   std::size_t testedCount = 0;
   for (std::size_t s = 0; s < survivors; ++s) {

@@ -2,26 +2,80 @@
 
 #include <algorithm>
 #include <cmath>
+#include <cstring>
 
 #include "bvh/avx2_clones.h"
 #include "narrowphase/triangle_plane.h"
 
+// The helpers below take and return 32-byte vectors. They are internal and always inlined, so no call between
+// translation units ever passes one, and the compiler's note that such an argument or return would change the
+// ABI without AVX does not apply.
+#if defined(__GNUC__)
+#pragma GCC diagnostic ignored "-Wpsabi"
+#endif
+
 namespace gpucol::detail {
 namespace {
 
-// The helpers below are generateContactAndTest's steps on plain doubles, with selections by value, never by
-// index.
+// generateContactAndTest's steps on four pairs at once, one per lane of a vector of doubles (GCC/Clang vector
+// extensions: one AVX instruction per step in the AVX2 clone, two SSE ones in the baseline clone). Each lane
+// sees the same IEEE operations in the same order as the one-pair function, so the same bits; choices are
+// made by masks (a lane where a comparison holds has all bits set), never by branches.
+
+constexpr std::size_t kLanes = 4;
+using Doubles = double __attribute__((vector_size(32)));
+using Mask = std::int64_t __attribute__((vector_size(32)));
+using Floats = float __attribute__((vector_size(16)));
+using Words = std::uint32_t __attribute__((vector_size(16)));
+
+GPUCOL_FORCE_INLINE Doubles splat(double v) {
+  return Doubles{v, v, v, v};
+}
+
+/// c ? a : b lane by lane, by bits (so no arithmetic can change a value).
+GPUCOL_FORCE_INLINE Doubles pick(Mask c, Doubles a, Doubles b) {
+  return reinterpret_cast<Doubles>((c & reinterpret_cast<Mask>(a)) | (~c & reinterpret_cast<Mask>(b)));
+}
+
+/// std::fabs: the sign bit cleared.
+GPUCOL_FORCE_INLINE Doubles abs(Doubles v) {
+  const Mask noSign = {INT64_MAX, INT64_MAX, INT64_MAX, INT64_MAX};
+  return reinterpret_cast<Doubles>(reinterpret_cast<Mask>(v) & noSign);
+}
+
+/// std::min and std::max, with their choice where the comparison fails (equal values, NaN): the first.
+GPUCOL_FORCE_INLINE Doubles min(Doubles a, Doubles b) {
+  return pick(b < a, b, a);
+}
+GPUCOL_FORCE_INLINE Doubles max(Doubles a, Doubles b) {
+  return pick(a < b, b, a);
+}
+GPUCOL_FORCE_INLINE Doubles min3(Doubles x, Doubles y, Doubles z) {
+  return min(min(x, y), z);
+}
+GPUCOL_FORCE_INLINE Doubles max3(Doubles x, Doubles y, Doubles z) {
+  return max(max(x, y), z);
+}
+
+/// std::sqrt of each lane (correctly rounded, so the same bits whichever instruction the compiler picks).
+GPUCOL_FORCE_INLINE Doubles sqrt(Doubles v) {
+  return Doubles{std::sqrt(v[0]), std::sqrt(v[1]), std::sqrt(v[2]), std::sqrt(v[3])};
+}
 
 struct Vec {
-  double x, y, z;
+  Doubles x, y, z;
 };
 
 GPUCOL_FORCE_INLINE Vec operator-(const Vec& a, const Vec& b) {
   return {a.x - b.x, a.y - b.y, a.z - b.z};
 }
 
+GPUCOL_FORCE_INLINE Vec divide(const Vec& v, Doubles s) {
+  return {v.x / s, v.y / s, v.z / s};
+}
+
 /// Eigen's dot product of 3-vectors: (x + y) + z.
-GPUCOL_FORCE_INLINE double dot(const Vec& a, const Vec& b) {
+GPUCOL_FORCE_INLINE Doubles dot(const Vec& a, const Vec& b) {
   return (a.x * b.x + a.y * b.y) + a.z * b.z;
 }
 
@@ -31,33 +85,26 @@ GPUCOL_FORCE_INLINE Vec cross(const Vec& a, const Vec& b) {
 }
 
 /// Largest absolute component (Eigen's cwiseAbs().maxCoeff(); a maximum is exact in any order).
-GPUCOL_FORCE_INLINE double maxAbs(const Vec& v) {
-  return std::max(std::max(std::fabs(v.x), std::fabs(v.y)), std::fabs(v.z));
+GPUCOL_FORCE_INLINE Doubles maxAbs(const Vec& v) {
+  return max(max(abs(v.x), abs(v.y)), abs(v.z));
 }
 
-GPUCOL_FORCE_INLINE Vec select(bool c, const Vec& a, const Vec& b) {
-  return {c ? a.x : b.x, c ? a.y : b.y, c ? a.z : b.z};
+GPUCOL_FORCE_INLINE Vec pick(Mask c, const Vec& a, const Vec& b) {
+  return {pick(c, a.x, b.x), pick(c, a.y, b.y), pick(c, a.z, b.z)};
 }
 
-/// std::min({x, y, z}) and std::max({x, y, z}): the first of equal values, as the initializer-list forms.
-GPUCOL_FORCE_INLINE double min3(double x, double y, double z) {
-  return std::min(std::min(x, y), z);
-}
-GPUCOL_FORCE_INLINE double max3(double x, double y, double z) {
-  return std::max(std::max(x, y), z);
-}
-
-/// sameStrictSign of triangle_plane.h without a branch.
-GPUCOL_FORCE_INLINE bool sameSign(double x, double y) {
-  return ((x > 0.0) & (y > 0.0)) | ((x < 0.0) & (y < 0.0));
+/// sameStrictSign of triangle_plane.h.
+GPUCOL_FORCE_INLINE Mask sameSign(Doubles x, Doubles y) {
+  const Doubles zero = splat(0.0);
+  return ((x > zero) & (y > zero)) | ((x < zero) & (y < zero));
 }
 
 /// makePlane and signedDistances: the unnormalised normal of triangle (p0, p1, p2), whether it is degenerate,
 /// and the snapped signed distances of q0, q1, q2 to its plane.
 struct PlaneDistances {
   Vec normal;
-  bool degenerate;
-  double d[3];
+  Mask degenerate;
+  Doubles d[3];
 };
 
 GPUCOL_FORCE_INLINE PlaneDistances planeDistances(const Vec& p0, const Vec& p1, const Vec& p2, const Vec& q0,
@@ -65,134 +112,171 @@ GPUCOL_FORCE_INLINE PlaneDistances planeDistances(const Vec& p0, const Vec& p1, 
   const Vec e1 = p1 - p0, e2 = p2 - p0;
   PlaneDistances r;
   r.normal = cross(e1, e2);
-  const double errorScale = maxAbs(e1) * maxAbs(e2);
-  r.degenerate = !(dot(r.normal, r.normal) > kDegenerateSin2 * dot(e1, e1) * dot(e2, e2));
+  const Doubles errorScale = maxAbs(e1) * maxAbs(e2);
+  r.degenerate = ~(dot(r.normal, r.normal) > splat(kDegenerateSin2) * dot(e1, e1) * dot(e2, e2));
   const Vec r0 = q0 - p0, r1 = q1 - p0, r2 = q2 - p0;
   r.d[0] = dot(r.normal, r0);
   r.d[1] = dot(r.normal, r1);
   r.d[2] = dot(r.normal, r2);
-  const double extent = max3(maxAbs(r0), maxAbs(r1), maxAbs(r2));
-  const double tolerance = kSnapRelative * errorScale * extent;
-  for (double& d : r.d) d = std::fabs(d) <= tolerance ? 0.0 : d;
+  const Doubles extent = max3(maxAbs(r0), maxAbs(r1), maxAbs(r2));
+  const Doubles tolerance = splat(kSnapRelative) * errorScale * extent;
+  for (Doubles& d : r.d) d = pick(abs(d) <= tolerance, splat(0.0), d);
   return r;
 }
 
 /// planeCrossing: the segment where triangle (v0, v1, v2) meets the other plane, from its vertices'
 /// distances d to it; the lone vertex as loneVertex() picks it.
-GPUCOL_FORCE_INLINE void planeCrossing(const Vec& v0, const Vec& v1, const Vec& v2, const double (&d)[3],
+GPUCOL_FORCE_INLINE void planeCrossing(const Vec& v0, const Vec& v1, const Vec& v2, const Doubles (&d)[3],
                                        Vec& s0, Vec& s1) {
-  const bool s01 = sameSign(d[0], d[1]), s02 = sameSign(d[0], d[2]);
-  const bool firstAlone = sameSign(d[1], d[2]) | (d[0] != 0.0);
-  const bool zero = (!s01) & (!s02) & firstAlone;
-  const bool one = (!s01) & (s02 | ((!firstAlone) & (d[1] != 0.0)));
+  const Doubles zeroes = splat(0.0);
+  const Mask s01 = sameSign(d[0], d[1]), s02 = sameSign(d[0], d[2]);
+  const Mask firstAlone = sameSign(d[1], d[2]) | (d[0] != zeroes);
+  const Mask zero = ~s01 & ~s02 & firstAlone;
+  const Mask one = ~s01 & (s02 | (~firstAlone & (d[1] != zeroes)));
   // The lone vertex a and the next two in cyclic order, b and c.
-  const Vec va = select(zero, v0, select(one, v1, v2));
-  const Vec vb = select(zero, v1, select(one, v2, v0));
-  const Vec vc = select(zero, v2, select(one, v0, v1));
-  const double da = zero ? d[0] : (one ? d[1] : d[2]);
-  const double db = zero ? d[1] : (one ? d[2] : d[0]);
-  const double dc = zero ? d[2] : (one ? d[0] : d[1]);
-  const double t0 = da / (da - db), t1 = da / (da - dc);
+  const Vec va = pick(zero, v0, pick(one, v1, v2));
+  const Vec vb = pick(zero, v1, pick(one, v2, v0));
+  const Vec vc = pick(zero, v2, pick(one, v0, v1));
+  const Doubles da = pick(zero, d[0], pick(one, d[1], d[2]));
+  const Doubles db = pick(zero, d[1], pick(one, d[2], d[0]));
+  const Doubles dc = pick(zero, d[2], pick(one, d[0], d[1]));
+  const Doubles t0 = da / (da - db), t1 = da / (da - dc);
   const Vec ab = vb - va, ac = vc - va;
   s0 = {va.x + ab.x * t0, va.y + ab.y * t0, va.z + ab.z * t0};
   s1 = {va.x + ac.x * t1, va.y + ac.y * t1, va.z + ac.z * t1};
+}
+
+/// Four float rows in, four pairs' results out (stride: between rows of both).
+GPUCOL_FORCE_INLINE Doubles loadLanes(const float* p) {
+  Floats v;
+  std::memcpy(&v, p, sizeof v);
+  return __builtin_convertvector(v, Doubles);
+}
+GPUCOL_FORCE_INLINE void storeLanes(float* p, Doubles v) {
+  const Floats f = __builtin_convertvector(v, Floats);
+  std::memcpy(p, &f, sizeof f);
+}
+
+/// The four pairs whose values start at `triangles` (generateContactRows' layout); results at `contacts` and
+/// `outcome`.
+GPUCOL_FORCE_INLINE void fourPairs(const float* triangles, std::size_t stride, float* contacts,
+                                   std::uint32_t* outcome) {
+  const auto vertex = [&](int v) -> Vec {
+    const float* p = triangles + 3 * v * stride;
+    return {loadLanes(p), loadLanes(p + stride), loadLanes(p + 2 * stride)};
+  };
+  const Vec a0 = vertex(0), a1 = vertex(1), a2 = vertex(2);
+  const Vec b0 = vertex(3), b1 = vertex(4), b2 = vertex(5);
+  const Doubles zero = splat(0.0);
+
+  // Möller's early rejections: a degenerate triangle, or one triangle wholly on one side of the other's
+  // plane.
+  const PlaneDistances onA = planeDistances(a0, a1, a2, b0, b1, b2);  // B's distances to A's plane
+  const PlaneDistances onB = planeDistances(b0, b1, b2, a0, a1, a2);  // A's distances to B's plane
+  const Doubles(&dB)[3] = onA.d;
+  const Doubles(&dA)[3] = onB.d;
+  const Mask rejected = onA.degenerate | (sameSign(dB[0], dB[1]) & sameSign(dB[0], dB[2])) | onB.degenerate |
+                        (sameSign(dA[0], dA[1]) & sameSign(dA[0], dA[2]));
+  const Mask coplanar = ((dB[0] == zero) & (dB[1] == zero) & (dB[2] == zero)) |
+                        ((dA[0] == zero) & (dA[1] == zero) & (dA[2] == zero));
+  // x - x is 0 for a finite x and NaN otherwise. A non-finite coordinate goes to the one-pair function,
+  // whose early returns decide which of its NaN comparisons count.
+  const Vec zeros[6] = {a0 - a0, a1 - a1, a2 - a2, b0 - b0, b1 - b1, b2 - b2};
+  Doubles sum = zero;
+  for (const Vec& z : zeros) sum += (z.x + z.y) + z.z;
+  const Mask finite = sum == zero;
+
+  const Doubles lengthA = sqrt(dot(onA.normal, onA.normal));
+  const Doubles lengthB = sqrt(dot(onB.normal, onB.normal));
+  const Vec nA = divide(onA.normal, lengthA);
+  const Vec nB = divide(onB.normal, lengthB);
+
+  // Möller's interval test on the intersection line, on its dominant axis, with the crossings in 3-D.
+  const Vec line = cross(onA.normal, onB.normal);
+  const Doubles fx = abs(line.x), fy = abs(line.y), fz = abs(line.z);
+  const Mask onX = (fx >= fy) & (fx >= fz), onY = ~(fx >= fy) & (fy >= fz);
+  const auto onAxis = [&](const Vec& v) { return pick(onX, v.x, pick(onY, v.y, v.z)); };
+  Vec sA0, sA1, sB0, sB1;
+  planeCrossing(a0, a1, a2, dA, sA0, sA1);
+  planeCrossing(b0, b1, b2, dB, sB0, sB1);
+  const Mask swapA = onAxis(sA1) < onAxis(sA0), swapB = onAxis(sB1) < onAxis(sB0);
+  const Vec lowA = pick(swapA, sA1, sA0), highA = pick(swapA, sA0, sA1);
+  const Vec lowB = pick(swapB, sB1, sB0), highB = pick(swapB, sB0, sB1);
+  const Doubles lowAOn = onAxis(lowA), highAOn = onAxis(highA), lowBOn = onAxis(lowB),
+                highBOn = onAxis(highB);
+  const Mask separated = (lowAOn > highBOn) | (lowBOn > highAOn);
+
+  // §5.3.4: the smaller move of a triangle along the other's normal out of its plane.
+  const Doubles moveA = max(zero, -min3(dA[0], dA[1], dA[2]) / lengthB);
+  const Doubles moveB = max(zero, -min3(dB[0], dB[1], dB[2]) / lengthA);
+  const Mask aMoves = moveA <= moveB;
+  const Doubles move = pick(aMoves, moveA, moveB);
+
+  // §5.3.4: dropped when sliding apart along the line is shorter than the depth (Eigen's normalized():
+  // the vector itself when its squared norm is not positive).
+  const Doubles lineSquared = dot(line, line);
+  const Vec u = pick(lineSquared > zero, divide(line, sqrt(lineSquared)), line);
+  const Doubles pA1 = dot(u, a1 - a0), pA2 = dot(u, a2 - a0);
+  const Doubles pB0 = dot(u, b0 - a0), pB1 = dot(u, b1 - a0), pB2 = dot(u, b2 - a0);
+  const Doubles slide =
+      min(max3(zero, pA1, pA2) - min3(pB0, pB1, pB2), max3(pB0, pB1, pB2) - min3(zero, pA1, pA2));
+
+  // The contact: the middle of the common segment, the winning normal, the moving triangle's deepest
+  // vertex.
+  const Vec low = pick(lowAOn >= lowBOn, lowA, lowB);
+  const Vec high = pick(highAOn <= highBOn, highA, highB);
+  const Vec normal = pick(aMoves, nB, Vec{-nA.x, -nA.y, -nA.z});
+  const Doubles d0 = pick(aMoves, dA[0], dB[0]), d1 = pick(aMoves, dA[1], dB[1]),
+                d2 = pick(aMoves, dA[2], dB[2]);
+  const Mask deepest0 = (d0 <= d1) & (d0 <= d2), deepest1 = ~(d0 <= d1) & (d1 <= d2);
+  const Vec deepestVertex =
+      pick(aMoves, pick(deepest0, a0, pick(deepest1, a1, a2)), pick(deepest0, b0, pick(deepest1, b1, b2)));
+  const Doubles half = splat(0.5);
+  storeLanes(contacts, half * (low.x + high.x));
+  storeLanes(contacts + stride, half * (low.y + high.y));
+  storeLanes(contacts + 2 * stride, half * (low.z + high.z));
+  storeLanes(contacts + 3 * stride, normal.x);
+  storeLanes(contacts + 4 * stride, normal.y);
+  storeLanes(contacts + 5 * stride, normal.z);
+  storeLanes(contacts + 6 * stride, zero - move);
+  storeLanes(contacts + 7 * stride, deepestVertex.x);
+  storeLanes(contacts + 8 * stride, deepestVertex.y);
+  storeLanes(contacts + 9 * stride, deepestVertex.z);
+
+  // The outcome word, from the masks (all bits set where true).
+  const auto bits = [](Mask m, std::uint32_t word) { return m & Mask{word, word, word, word}; };
+  const Mask onePair = ~finite | (~rejected & coplanar);
+  const Mask intersects = ~onePair & ~rejected & ~separated;
+  const Mask found = bits(onePair, kRowOnePair) | bits(intersects & (slide < move), kRowIntersectsNoContact) |
+                     bits(intersects & ~(slide < move), kRowContact) | bits(aMoves, kRowOnFaceOfB) |
+                     bits(dot(nA, nB) > zero, kRowSameFacing);
+  const Words words = __builtin_convertvector(found, Words);
+  std::memcpy(outcome, &words, sizeof words);
 }
 
 }  // namespace
 
 GPUCOL_AVX2_CLONES void generateContactRows(const float* triangles, std::size_t stride, std::size_t count,
                                             float* contacts, std::uint32_t* outcome) {
-  for (std::size_t t = 0; t < count; ++t) {
-    const auto vertex = [&](int v) -> Vec {
-      const float* p = triangles + 3 * v * stride + t;
-      return {double(p[0]), double(p[stride]), double(p[2 * stride])};
-    };
-    const Vec a0 = vertex(0), a1 = vertex(1), a2 = vertex(2);
-    const Vec b0 = vertex(3), b1 = vertex(4), b2 = vertex(5);
-
-    // Möller's early rejections: a degenerate triangle, or one triangle wholly on one side of the other's
-    // plane.
-    const PlaneDistances onA = planeDistances(a0, a1, a2, b0, b1, b2);  // B's distances to A's plane
-    const PlaneDistances onB = planeDistances(b0, b1, b2, a0, a1, a2);  // A's distances to B's plane
-    const double(&dB)[3] = onA.d;
-    const double(&dA)[3] = onB.d;
-    const bool rejected = onA.degenerate | (sameSign(dB[0], dB[1]) & sameSign(dB[0], dB[2])) |
-                          onB.degenerate | (sameSign(dA[0], dA[1]) & sameSign(dA[0], dA[2]));
-    const bool coplanar = ((dB[0] == 0.0) & (dB[1] == 0.0) & (dB[2] == 0.0)) |
-                          ((dA[0] == 0.0) & (dA[1] == 0.0) & (dA[2] == 0.0));
-    // x - x is 0 for a finite x and NaN otherwise. A non-finite coordinate goes to the one-pair function,
-    // whose early returns decide which of its NaN comparisons count.
-    const Vec zeros[6] = {a0 - a0, a1 - a1, a2 - a2, b0 - b0, b1 - b1, b2 - b2};
-    double sum = 0.0;
-    for (const Vec& z : zeros) sum += (z.x + z.y) + z.z;
-    const bool finite = sum == 0.0;
-
-    const double lengthA = std::sqrt(dot(onA.normal, onA.normal));
-    const double lengthB = std::sqrt(dot(onB.normal, onB.normal));
-    const Vec nA = {onA.normal.x / lengthA, onA.normal.y / lengthA, onA.normal.z / lengthA};
-    const Vec nB = {onB.normal.x / lengthB, onB.normal.y / lengthB, onB.normal.z / lengthB};
-
-    // Möller's interval test on the intersection line, on its dominant axis, with the crossings in 3-D.
-    const Vec line = cross(onA.normal, onB.normal);
-    const double fx = std::fabs(line.x), fy = std::fabs(line.y), fz = std::fabs(line.z);
-    const bool onX = (fx >= fy) & (fx >= fz), onY = !(fx >= fy) & (fy >= fz);
-    const auto onAxis = [&](const Vec& v) { return onX ? v.x : (onY ? v.y : v.z); };
-    Vec sA0, sA1, sB0, sB1;
-    planeCrossing(a0, a1, a2, dA, sA0, sA1);
-    planeCrossing(b0, b1, b2, dB, sB0, sB1);
-    const bool swapA = onAxis(sA1) < onAxis(sA0), swapB = onAxis(sB1) < onAxis(sB0);
-    const Vec lowA = select(swapA, sA1, sA0), highA = select(swapA, sA0, sA1);
-    const Vec lowB = select(swapB, sB1, sB0), highB = select(swapB, sB0, sB1);
-    const double lowAOn = onAxis(lowA), highAOn = onAxis(highA), lowBOn = onAxis(lowB),
-                 highBOn = onAxis(highB);
-    const bool separated = (lowAOn > highBOn) | (lowBOn > highAOn);
-
-    // §5.3.4: the smaller move of a triangle along the other's normal out of its plane.
-    const double moveA = std::max(0.0, -min3(dA[0], dA[1], dA[2]) / lengthB);
-    const double moveB = std::max(0.0, -min3(dB[0], dB[1], dB[2]) / lengthA);
-    const bool aMoves = moveA <= moveB;
-    const double move = aMoves ? moveA : moveB;
-
-    // §5.3.4: dropped when sliding apart along the line is shorter than the depth (Eigen's normalized():
-    // the vector itself when its squared norm is not positive).
-    const double lineSquared = dot(line, line);
-    const double lineLength = std::sqrt(lineSquared);
-    const Vec u =
-        lineSquared > 0.0 ? Vec{line.x / lineLength, line.y / lineLength, line.z / lineLength} : line;
-    const double pA1 = dot(u, a1 - a0), pA2 = dot(u, a2 - a0);
-    const double pB0 = dot(u, b0 - a0), pB1 = dot(u, b1 - a0), pB2 = dot(u, b2 - a0);
-    const double slide =
-        std::min(max3(0.0, pA1, pA2) - min3(pB0, pB1, pB2), max3(pB0, pB1, pB2) - min3(0.0, pA1, pA2));
-
-    // The contact: the middle of the common segment, the winning normal, the moving triangle's deepest
-    // vertex.
-    const Vec low = select(lowAOn >= lowBOn, lowA, lowB);
-    const Vec high = select(highAOn <= highBOn, highA, highB);
-    const Vec normal = select(aMoves, nB, Vec{-nA.x, -nA.y, -nA.z});
-    const double d0 = aMoves ? dA[0] : dB[0], d1 = aMoves ? dA[1] : dB[1], d2 = aMoves ? dA[2] : dB[2];
-    const bool deepest0 = (d0 <= d1) & (d0 <= d2), deepest1 = !(d0 <= d1) & (d1 <= d2);
-    const Vec deepestVertex = select(aMoves, select(deepest0, a0, select(deepest1, a1, a2)),
-                                     select(deepest0, b0, select(deepest1, b1, b2)));
-    float* const c = contacts + t;
-    c[0] = float(0.5 * (low.x + high.x));
-    c[stride] = float(0.5 * (low.y + high.y));
-    c[2 * stride] = float(0.5 * (low.z + high.z));
-    c[3 * stride] = float(normal.x);
-    c[4 * stride] = float(normal.y);
-    c[5 * stride] = float(normal.z);
-    c[6 * stride] = float(0.0 - move);
-    c[7 * stride] = float(deepestVertex.x);
-    c[8 * stride] = float(deepestVertex.y);
-    c[9 * stride] = float(deepestVertex.z);
-
-    // The outcome as arithmetic on the conditions: GCC's if-conversion does not take a chain of selections
-    // that joins five values.
-    const bool onePair = (!finite) | ((!rejected) & coplanar);
-    const bool intersects = (!onePair) & (!rejected) & (!separated);
-    const std::uint32_t found =
-        std::uint32_t(onePair) * kRowOnePair +
-        std::uint32_t(intersects) * (slide < move ? kRowIntersectsNoContact : kRowContact);
-    outcome[t] = found | (aMoves ? kRowOnFaceOfB : 0u) | (dot(nA, nB) > 0.0 ? kRowSameFacing : 0u);
+  std::size_t t = 0;
+  for (; t + kLanes <= count; t += kLanes) fourPairs(triangles + t, stride, contacts + t, outcome + t);
+  if (t == count) return;
+  // The last one to three pairs: copied into columns of their own, the free lanes filled with the last pair
+  // (a real pair, so no lane computes on garbage), and only their own results copied back.
+  float tail[18 * kLanes];
+  float tailContacts[kContactRowValues * kLanes];
+  std::uint32_t tailOutcome[kLanes];
+  for (std::size_t k = 0; k < 18; ++k) {
+    for (std::size_t lane = 0; lane < kLanes; ++lane) {
+      tail[k * kLanes + lane] = triangles[k * stride + std::min(t + lane, count - 1)];
+    }
+  }
+  fourPairs(tail, kLanes, tailContacts, tailOutcome);
+  for (std::size_t lane = 0; t + lane < count; ++lane) {
+    for (std::size_t k = 0; k < kContactRowValues; ++k) {
+      contacts[k * stride + t + lane] = tailContacts[k * kLanes + lane];
+    }
+    outcome[t + lane] = tailOutcome[lane];
   }
 }
 

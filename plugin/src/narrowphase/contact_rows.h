@@ -2,11 +2,10 @@
 // generateContactAndTest over many pairs at once, for the near phase's pairs that its float pre-tests could
 // not reject (thesis §5.3.4). One pair at a time, the double test is a chain of dependent divisions and
 // square roots behind early returns and a handful of branches whose outcome is a coin toss (which vertex is
-// alone on its side, which crossing comes first, which triangle moves). Over columns of pairs every step runs
-// for every pair and the answers are chosen by value at the end, so the compiler can turn most choices into
-// selections, and the chains of neighbouring pairs overlap. GCC 12 does not make this loop vector code (some
-// choices stay branches); even so the near phase took 12-17% less time (measurement history), and its AVX2
-// clone (bvh/avx2_clones.h: three-operand instructions, the same bits) a few percent less again.
+// alone on its side, which crossing comes first, which triangle moves). Here every step runs for four pairs at
+// once, one per lane of a vector of doubles, and the answers are chosen by masks: no branch depends on a pair,
+// and one vector division or square root serves four pairs. Written with GCC/Clang vector extensions, since
+// GCC 12 did not vectorise the same steps written per pair (measurement history).
 //
 // Same operations in the same order as generateContactAndTest (Eigen's 3-vector dot products and norms sum
 // (x + y) + z), so every output is the same bits; coplanar pairs, which need the 2-D overlap test, and pairs
