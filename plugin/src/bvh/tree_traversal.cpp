@@ -102,9 +102,9 @@ constexpr std::size_t kFrontPerThread = 32;
 constexpr std::size_t kParallelGrain = 2;
 
 /// Expansions between asking for a pair's nodes and expanding it (Traverser::run). Measured on the thesis
-/// scene, one thread, GImpact run between queries, fastest of 41: without it the middle phase took 0.96-1.02 ms
-/// on armadillo-27674, with 2, 4 and 8 about 0.80-0.85, 0.79-0.83 and 0.81-0.87; with 4, armadillo-399904 went
-/// from 4.09 to 3.25 ms.
+/// scene, one thread, GImpact run between queries, fastest of 41: without it the middle phase took 0.96-1.02
+/// ms on armadillo-27674, with 2, 4 and 8 about 0.80-0.85, 0.79-0.83 and 0.81-0.87; with 4, armadillo-399904
+/// went from 4.09 to 3.25 ms.
 constexpr std::size_t kLookahead = 4;
 
 #if defined(__SSE2__)
@@ -253,7 +253,6 @@ inline bool overlaps(const float* lo, const float* hi, const CarriedBox& b) {
 #endif
 }
 
-
 /// Stack entries a plain depth-first descent below one start pair can need: each expansion pops one pair and
 /// pushes at most four, and descends at least one of the trees by a level, so at most depthA + depthB
 /// expansions lie on one path and the stack never holds more than 3 per expansion on the path, plus the start
@@ -291,8 +290,8 @@ class Traverser {
 
   /// Expands one overlapping pair by one level: children pairs that overlap are written from `top` on (room
   /// for four is needed), leaf pairs go to `out`. Returns the new top.
-  GPUCOL_TRAVERSAL_INLINE NodePair* expand(const NodePair& pair, NodePair* top, std::vector<TrianglePair>& out,
-                                           std::uint64_t& tests) const {
+  GPUCOL_TRAVERSAL_INLINE NodePair* expand(const NodePair& pair, NodePair* top,
+                                           std::vector<TrianglePair>& out, std::uint64_t& tests) const {
     const AabbNode& na = m_nodesA[pair.a];
     const AabbNode& nb = m_nodesB[pair.b];
     const bool leafA = na.isLeaf();
@@ -411,9 +410,9 @@ class Traverser {
   ///
   /// The descent reads nodes in a data-dependent order, and a node popped right after it was pushed had had
   /// no time to arrive: the loads of the two nodes and their far children were the traversal's largest cost.
-  /// So a popped pair first waits in a small ring of kLookahead pairs, its nodes asked for when it enters, and
-  /// is expanded when it leaves, kLookahead expansions later. The order of the expansions changes, not the
-  /// set of pairs tested, and the candidates are sorted at the end.
+  /// So a popped pair first waits in a small ring of kLookahead pairs, its nodes asked for when it enters,
+  /// and is expanded when it leaves, kLookahead expansions later. The order of the expansions changes, not
+  /// the set of pairs tested, and the candidates are sorted at the end.
   GPUCOL_AVX2_CLONES void run(const NodePair& start, std::vector<NodePair>& stack,
                               std::vector<TrianglePair>& out, std::uint64_t& tests) const {
     NodePair ring[kLookahead];
@@ -531,17 +530,23 @@ int indexBits(std::size_t count) {
   return bits;
 }
 
-/// Digit width of the radix sort: 2048 counters per pass stay in L1, and 30-bit keys (two meshes of up to 32K
-/// triangles) take three passes.
-constexpr int kRadixBits = 11;
+/// Widest digit of the radix sort: 8192 counters per pass (32 KB). The key's bits are split into as few
+/// passes as digits of this width allow, and then into digits of even width, as narrow as those passes
+/// permit: 30-bit keys (two meshes of up to 32K triangles) take three passes of 10 bits, 38-bit keys (two of
+/// 400K) three of 13. Thesis scene, one thread, 3 alternating rounds, fastest query: with a fixed width of 11
+/// bits the 38-bit keys took four passes (armadillo-399904 2.92-2.99 ms against 2.83-2.89 with 13), while a
+/// fixed width of 13 slowed the 30-bit keys, which take three passes either way (armadillo-27674 0.734-0.736
+/// ms against 0.746-0.772).
+constexpr int kMaxRadixBits = 13;
 
 /// Below this many pairs a comparison sort is cheaper than clearing the radix counters.
 constexpr std::size_t kRadixMinimum = 256;
 
 /// Sorts pairs by (triangleA, triangleB). Each pair is packed into one integer key, triangleA above the bits
-/// that triangleB needs, so the key order is the pair order; an LSD radix sort on kRadixBits digits then
-/// costs a few linear passes instead of n log n comparisons (the pairs of one query are tens of thousands,
-/// the comparison sort was a sixth of the query). Digits that are the same in every key are skipped.
+/// that triangleB needs, so the key order is the pair order; an LSD radix sort on digits of up to
+/// kMaxRadixBits then costs a few linear passes instead of n log n comparisons (the pairs of one query are
+/// tens of thousands, the comparison sort was a sixth of the query). Digits that are the same in every key
+/// are skipped.
 void sortPairs(std::vector<TrianglePair>& pairs, std::size_t trianglesA, std::size_t trianglesB) {
   const std::size_t n = pairs.size();
   if (n < kRadixMinimum) {
@@ -550,31 +555,32 @@ void sortPairs(std::vector<TrianglePair>& pairs, std::size_t trianglesA, std::si
   }
   const int bitsB = indexBits(trianglesB);
   const int totalBits = indexBits(trianglesA) + bitsB;  // at most 64: both counts fit 32 bits
-  const int passes = (totalBits + kRadixBits - 1) / kRadixBits;
-  constexpr std::size_t kBuckets = std::size_t{1} << kRadixBits;
-  constexpr std::uint64_t kMask = kBuckets - 1;
+  const int passes = std::max(1, (totalBits + kMaxRadixBits - 1) / kMaxRadixBits);
+  const int digitBits = (totalBits + passes - 1) / passes;
+  const std::size_t buckets = std::size_t{1} << digitBits;
+  const std::uint64_t mask = buckets - 1;
 
   // Uninitialised: every key is written before it is read (zero-filling them cost as much as a pass).
   std::unique_ptr<std::uint64_t[]> keyBuffer(new std::uint64_t[n]), scratchBuffer(new std::uint64_t[n]);
   std::uint64_t* keys = keyBuffer.get();
   std::uint64_t* scratch = scratchBuffer.get();
-  std::vector<std::uint32_t> counts(static_cast<std::size_t>(passes) * kBuckets, 0);
+  std::vector<std::uint32_t> counts(static_cast<std::size_t>(passes) * buckets, 0);
   for (std::size_t i = 0; i < n; ++i) {
     const std::uint64_t key = (std::uint64_t{pairs[i].triangleA} << bitsB) | pairs[i].triangleB;
     keys[i] = key;
-    for (int p = 0; p < passes; ++p) ++counts[p * kBuckets + ((key >> (p * kRadixBits)) & kMask)];
+    for (int p = 0; p < passes; ++p) ++counts[p * buckets + ((key >> (p * digitBits)) & mask)];
   }
   for (int p = 0; p < passes; ++p) {
-    std::uint32_t* count = counts.data() + p * kBuckets;
-    const int shift = p * kRadixBits;
-    if (count[(keys[0] >> shift) & kMask] == n) continue;  // one digit value for all: the order stays
+    std::uint32_t* count = counts.data() + p * buckets;
+    const int shift = p * digitBits;
+    if (count[(keys[0] >> shift) & mask] == n) continue;  // one digit value for all: the order stays
     std::uint32_t offset = 0;
-    for (std::size_t d = 0; d < kBuckets; ++d) {
+    for (std::size_t d = 0; d < buckets; ++d) {
       const std::uint32_t c = count[d];
       count[d] = offset;
       offset += c;
     }
-    for (std::size_t i = 0; i < n; ++i) scratch[count[(keys[i] >> shift) & kMask]++] = keys[i];
+    for (std::size_t i = 0; i < n; ++i) scratch[count[(keys[i] >> shift) & mask]++] = keys[i];
     std::swap(keys, scratch);
   }
   const std::uint64_t maskB = bitsB == 0 ? 0 : (~std::uint64_t{0} >> (64 - bitsB));
@@ -598,7 +604,8 @@ void mergeSorted(const std::vector<std::vector<TrianglePair>*>& lists, std::vect
 /// enough and then in parallel. Compiled for AVX2 and baseline x86-64 (bvh/avx2_clones.h), as is
 /// Traverser::run, which it calls.
 GPUCOL_AVX2_CLONES void traverseFromRoot(const AabbTree& a, const AabbTree& b, const Traverser& traverser,
-                                         std::vector<TrianglePair>& out, std::uint64_t& tests, bool parallel) {
+                                         std::vector<TrianglePair>& out, std::uint64_t& tests,
+                                         bool parallel) {
   const NodePair root{0, 0};
   const std::size_t bound = stackBound(a, b);
   if (!parallel) {
