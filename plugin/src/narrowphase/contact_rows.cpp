@@ -7,9 +7,10 @@
 #include "bvh/avx2_clones.h"
 #include "narrowphase/triangle_plane.h"
 
-// The helpers below take and return 32-byte vectors. They are internal and always inlined, so no call between
-// translation units ever passes one, and the compiler's note that such an argument or return would change the
-// ABI without AVX does not apply.
+// The helpers below take and return 32-byte vectors, and all are always inlined (GPUCOL_FORCE_INLINE, also at
+// -O0; no lambdas, which would not be): a helper called rather than inlined would be compiled once, for the
+// baseline target, and the AVX2 clone would pass it its vectors in other registers (a debug build with a lambda
+// crashed so). So no call ever passes one, and the compiler's note about that ABI does not apply.
 #if defined(__GNUC__)
 #pragma GCC diagnostic ignored "-Wpsabi"
 #endif
@@ -157,16 +158,32 @@ GPUCOL_FORCE_INLINE void storeLanes(float* p, Doubles v) {
   std::memcpy(p, &f, sizeof f);
 }
 
+/// A pair's vertex v (0-2 A's, 3-5 B's) from the rows, four pairs from `triangles` on.
+GPUCOL_FORCE_INLINE Vec loadVertex(const float* triangles, std::size_t stride, int v) {
+  const float* p = triangles + 3 * v * stride;
+  return {loadLanes(p), loadLanes(p + stride), loadLanes(p + 2 * stride)};
+}
+
+/// The intersection line's dominant axis, per lane: x where |x| is largest, else y where |y| >= |z|, else z.
+struct DominantAxis {
+  Mask onX, onY;
+  /// The coordinate of v on that axis.
+  GPUCOL_FORCE_INLINE Doubles of(const Vec& v) const { return pick(onX, v.x, pick(onY, v.y, v.z)); }
+};
+
+/// `word` in the lanes where m holds, 0 elsewhere.
+GPUCOL_FORCE_INLINE Mask wordWhere(Mask m, std::uint32_t word) {
+  return m & Mask{word, word, word, word};
+}
+
 /// The four pairs whose values start at `triangles` (generateContactRows' layout); results at `contacts` and
 /// `outcome`.
 GPUCOL_FORCE_INLINE void fourPairs(const float* triangles, std::size_t stride, float* contacts,
                                    std::uint32_t* outcome) {
-  const auto vertex = [&](int v) -> Vec {
-    const float* p = triangles + 3 * v * stride;
-    return {loadLanes(p), loadLanes(p + stride), loadLanes(p + 2 * stride)};
-  };
-  const Vec a0 = vertex(0), a1 = vertex(1), a2 = vertex(2);
-  const Vec b0 = vertex(3), b1 = vertex(4), b2 = vertex(5);
+  const Vec a0 = loadVertex(triangles, stride, 0), a1 = loadVertex(triangles, stride, 1),
+            a2 = loadVertex(triangles, stride, 2);
+  const Vec b0 = loadVertex(triangles, stride, 3), b1 = loadVertex(triangles, stride, 4),
+            b2 = loadVertex(triangles, stride, 5);
   const Doubles zero = splat(0.0);
 
   // Möller's early rejections: a degenerate triangle, or one triangle wholly on one side of the other's
@@ -194,16 +211,15 @@ GPUCOL_FORCE_INLINE void fourPairs(const float* triangles, std::size_t stride, f
   // Möller's interval test on the intersection line, on its dominant axis, with the crossings in 3-D.
   const Vec line = cross(onA.normal, onB.normal);
   const Doubles fx = abs(line.x), fy = abs(line.y), fz = abs(line.z);
-  const Mask onX = (fx >= fy) & (fx >= fz), onY = ~(fx >= fy) & (fy >= fz);
-  const auto onAxis = [&](const Vec& v) { return pick(onX, v.x, pick(onY, v.y, v.z)); };
+  const DominantAxis axis{(fx >= fy) & (fx >= fz), ~(fx >= fy) & (fy >= fz)};
   Vec sA0, sA1, sB0, sB1;
   planeCrossing(a0, a1, a2, dA, sA0, sA1);
   planeCrossing(b0, b1, b2, dB, sB0, sB1);
-  const Mask swapA = onAxis(sA1) < onAxis(sA0), swapB = onAxis(sB1) < onAxis(sB0);
+  const Mask swapA = axis.of(sA1) < axis.of(sA0), swapB = axis.of(sB1) < axis.of(sB0);
   const Vec lowA = pick(swapA, sA1, sA0), highA = pick(swapA, sA0, sA1);
   const Vec lowB = pick(swapB, sB1, sB0), highB = pick(swapB, sB0, sB1);
-  const Doubles lowAOn = onAxis(lowA), highAOn = onAxis(highA), lowBOn = onAxis(lowB),
-                highBOn = onAxis(highB);
+  const Doubles lowAOn = axis.of(lowA), highAOn = axis.of(highA), lowBOn = axis.of(lowB),
+                highBOn = axis.of(highB);
   const Mask separated = (lowAOn > highBOn) | (lowBOn > highAOn);
 
   // §5.3.4: the smaller move of a triangle along the other's normal out of its plane.
@@ -244,12 +260,12 @@ GPUCOL_FORCE_INLINE void fourPairs(const float* triangles, std::size_t stride, f
   storeLanes(contacts + 9 * stride, deepestVertex.z);
 
   // The outcome word, from the masks (all bits set where true).
-  const auto bits = [](Mask m, std::uint32_t word) { return m & Mask{word, word, word, word}; };
   const Mask onePair = ~finite | (~rejected & coplanar);
   const Mask intersects = ~onePair & ~rejected & ~separated;
-  const Mask found = bits(onePair, kRowOnePair) | bits(intersects & (slide < move), kRowIntersectsNoContact) |
-                     bits(intersects & ~(slide < move), kRowContact) | bits(aMoves, kRowOnFaceOfB) |
-                     bits(dot(nA, nB) > zero, kRowSameFacing);
+  const Mask found = wordWhere(onePair, kRowOnePair) |
+                     wordWhere(intersects & (slide < move), kRowIntersectsNoContact) |
+                     wordWhere(intersects & ~(slide < move), kRowContact) | wordWhere(aMoves, kRowOnFaceOfB) |
+                     wordWhere(dot(nA, nB) > zero, kRowSameFacing);
   const Words words = __builtin_convertvector(found, Words);
   std::memcpy(outcome, &words, sizeof words);
 }
