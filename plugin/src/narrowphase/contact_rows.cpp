@@ -147,7 +147,7 @@ GPUCOL_FORCE_INLINE void planeCrossing(const Vec& v0, const Vec& v1, const Vec& 
   s1 = {va.x + ac.x * t1, va.y + ac.y * t1, va.z + ac.z * t1};
 }
 
-/// Four float rows in, four pairs' results out (stride: between rows of both).
+/// One row's values of four neighbouring pairs, read as doubles; and four results written back as floats.
 GPUCOL_FORCE_INLINE Doubles loadLanes(const float* p) {
   Floats v;
   std::memcpy(&v, p, sizeof v);
