@@ -508,9 +508,11 @@ cl::Kernel& OpenClMeshPipeline::depthFirstKernel(int treeDepths, bool fusedNear)
   const auto key = std::make_pair(length, fusedNear);
   auto found = m_depthFirst.find(key);
   if (found != m_depthFirst.end()) return found->second;
-  // A CPU device gets the prefetch hints (see GPUCOL_PREFETCH_NODE in the kernel).
-  std::string options =
-      "-DGPUCOL_DFS_STACK=" + std::to_string(length) + (m_context.isGpu() ? "" : " -DGPUCOL_CPU_PREFETCH");
+  // A CPU device gets the prefetch hints (see GPUCOL_PREFETCH_NODE in the kernel) and skips dead start paths
+  // (GPUCOL_SKIP_DEAD_PATHS: there few work-items take many paths each; on a GPU each path is a work-item of
+  // its own, and the skips would only add atomics).
+  std::string options = "-DGPUCOL_DFS_STACK=" + std::to_string(length) +
+                        (m_context.isGpu() ? "" : " -DGPUCOL_CPU_PREFETCH -DGPUCOL_SKIP_DEAD_PATHS");
   cl::Program program;
   if (fusedNear) {
     // The near phase's functions first, then the traversal that calls them (GPUCOL_FUSED_NEAR in

@@ -235,13 +235,14 @@ __kernel void mesh_front_expand(__global const GpucolMeshPair* pairs, __global c
 }
 
 // The depth-first alternative to the level-by-level descent above: one launch for the whole middle phase.
-// Work-item = (pair, path) as in mesh_front_start: it walks its path `startDepth` levels down (the
-// breadth-first front, with the same rules so that every front entry comes from exactly one path), then
-// descends from its entry depth-first with a private stack, as a CPU thread would (tree_traversal.cpp,
-// Alg. 5.1). Candidates are appended at an atomic counter: keys[n] for n < capacity; the host reads the
-// counter and, when it went past the capacity, grows the buffer and runs the pass again, so nothing is ever
-// dropped. The order of the appended keys varies between runs; the radix sort that follows gives the
-// deterministic order.
+// Work-item = (pair, path) as in mesh_front_start, but with the levels' bits in the opposite order (the
+// roots' choice highest, so that the paths below one node pair are consecutive): it walks its path
+// `startDepth` levels down (the breadth-first front, with the same rules so that every front entry comes from
+// exactly one path), then descends from its entry depth-first with a private stack, as a CPU thread would
+// (tree_traversal.cpp, Alg. 5.1). Candidates are appended at an atomic counter: keys[n] for n < capacity; the
+// host reads the counter and, when it went past the capacity, grows the buffer and runs the pass again, so
+// nothing is ever dropped. The order of the appended keys varies between runs; the radix sort that follows
+// gives the deterministic order.
 //
 // counters[0] = candidates appended, counters[1] = 1 when the counter wrapped past 2^32 - 1 (the host then
 // refuses the batch), counters[2] / counters[3] = low / high word of the box tests. The tests are counted as
@@ -381,6 +382,23 @@ uint mesh_all_axes(int4 ok) {
   return (uint)(ok.x & ok.y & ok.z) & 1u;
 }
 
+// Both frames' maps of one mesh pair, read once per pair rather than once per start path.
+typedef struct PairCarriers {
+  Carrier4 intoA;
+  Carrier4 intoB;
+  Carrier8 intoA8;
+  Carrier8 intoB8;
+} PairCarriers;
+
+PairCarriers mesh_pair_carriers(__global const GpucolMeshPair* p) {
+  PairCarriers k;
+  k.intoA = mesh_carrier4(&p->intoA);
+  k.intoB = mesh_carrier4(&p->intoB);
+  k.intoA8 = mesh_carrier8(&k.intoA);
+  k.intoB8 = mesh_carrier8(&k.intoB);
+  return k;
+}
+
 // Asks for a node to be brought into the cache. On a CPU device the traversal waits on cache misses (the node
 // arena of a 400K-triangle mesh is 25 MB), so the host builds this kernel with GPUCOL_CPU_PREFETCH there:
 // OpenCL's prefetch() is an empty function in PoCL, clang's builtin is a prefetch instruction. A hint only;
@@ -479,8 +497,9 @@ void mesh_depth_first_path(__global const GpucolMeshPair* restrict pairs,
                            __global const GpucolTreeNode* restrict nodes,
                            __global const GpucolLeafEntry* restrict entries, const uint item,
                            const uint startDepth, __global ulong* restrict keys, const uint capacity,
-                           __global uint* restrict counters, const uint bitsA, const uint bitsB, ulong* batch,
-                           uint* batchedOut, uint* testsOut GPUCOL_NEAR_PARAMS) {
+                           __global uint* restrict counters, const uint bitsA, const uint bitsB,
+                           const PairCarriers* carriers, ulong* batch, uint* batchedOut,
+                           uint* testsOut GPUCOL_NEAR_PARAMS) {
   const uint pathsPerPair = 1u << (2u * startDepth);
   const uint pair = item >> (2u * startDepth);
   const uint path = item & (pathsPerPair - 1u);
@@ -489,30 +508,38 @@ void mesh_depth_first_path(__global const GpucolMeshPair* restrict pairs,
   __global const GpucolTreeNode* treeB = nodes + p->nodesB;
   __global const GpucolLeafEntry* entriesA = entries + p->entriesA;
   __global const GpucolLeafEntry* entriesB = entries + p->entriesB;
-  const Carrier4 intoA = mesh_carrier4(&p->intoA);
-  const Carrier4 intoB = mesh_carrier4(&p->intoB);
-  const Carrier8 intoA8 = mesh_carrier8(&intoA);
-  const Carrier8 intoB8 = mesh_carrier8(&intoB);
+  const Carrier4 intoA = carriers->intoA;
+  const Carrier4 intoB = carriers->intoB;
+  const Carrier8 intoA8 = carriers->intoA8;
+  const Carrier8 intoB8 = carriers->intoB8;
   const ulong pairKey = (ulong)pair << (bitsA + bitsB);
   uint tests = *testsOut;
   uint batched = *batchedOut;
 
   // The path down to the start front. The root test repeats the host's (which sends only overlapping pairs),
   // so that this kernel alone decides, as mesh_front_start does.
+  // Level l's two bits are bits 2 (startDepth - 1 - l) and up: the roots' choice is the highest, so the paths
+  // that share a walk down to some level are consecutive. deadBits: where the walk dies now, so do the paths
+  // that differ from this one only in the low deadBits bits.
   uint a = 0u, b = 0u;
   Node4 na = mesh_node4(treeA), nb = mesh_node4(treeB);
   bool found = mesh_boxes_overlap4(&intoA, &intoB, na.lo, na.hi, nb.lo, nb.hi) != 0u;
+  uint deadBits = 2u * startDepth;
   for (uint level = 0u; found && level < startDepth; ++level) {
-    const uint rest = path >> (2u * level);
+    const uint shift = 2u * (startDepth - 1u - level);
+    const uint fromHere = path & ((4u << shift) - 1u);  // the bits of this level and those below
     const bool leafA = na.count != 0u;
     const bool leafB = nb.count != 0u;
     if (leafA && leafB) {
-      found = rest == 0u;
+      // The first path below the leaf pair goes on; the rest of its block dies.
+      found = fromHere == 0u;
+      deadBits = shift + 2u;
       break;
     }
-    if (rest == 0u) tests += (leafA || leafB) ? 2u : 4u;
-    const uint bitA = rest & 1u;
-    const uint bitB = (rest >> 1) & 1u;
+    if (fromHere == 0u) tests += (leafA || leafB) ? 2u : 4u;
+    const uint bitA = (path >> shift) & 1u;
+    const uint bitB = (path >> (shift + 1u)) & 1u;
+    deadBits = shift;
     if (leafA) {
       found = bitA == 0u;
     } else {
@@ -528,6 +555,14 @@ void mesh_depth_first_path(__global const GpucolMeshPair* restrict pairs,
     found = found && mesh_boxes_overlap4(&intoA, &intoB, na.lo, na.hi, nb.lo, nb.hi) != 0u;
   }
   if (!found) {
+#ifdef GPUCOL_SKIP_DEAD_PATHS
+    // The paths of the dead block after this one would walk the same way and die at the same place (without
+    // counting a test: the counting path of a block is its first): the shared counter moves past them, so
+    // nobody takes them. PoCL, armadillo-399904 thesis scene, one thread, 2 rounds of 100 calls, median end to
+    // end: start depth 6 (its default) 4.30-4.64 ms against 4.58-4.84 without, depth 8 4.48-4.61 against
+    // 8.63-8.68.
+    atomic_max(&counters[5], (item | ((1u << deadBits) - 1u)) + 1u);
+#endif
     *testsOut = tests;
     return;
   }
@@ -675,9 +710,16 @@ __kernel void mesh_traverse_depth_first(__global const GpucolMeshPair* restrict 
   const uint paths = pairCount << (2u * startDepth);
   ulong batch[GPUCOL_DFS_BATCH];
   uint batched = 0u, tests = 0u;
+  PairCarriers carriers;
+  uint carried = 0xffffffffu;
   for (uint item = atomic_inc(&counters[5]); item < paths; item = atomic_inc(&counters[5])) {
+    const uint pair = item >> (2u * startDepth);
+    if (pair != carried) {
+      carriers = mesh_pair_carriers(pairs + pair);
+      carried = pair;
+    }
     mesh_depth_first_path(pairs, nodes, entries, item, startDepth, keys, capacity, counters, bitsA, bitsB,
-                          batch, &batched, &tests GPUCOL_NEAR_ARGS);
+                          &carriers, batch, &batched, &tests GPUCOL_NEAR_ARGS);
     if (tests >= 0x80000000u) {  // long before the private count could wrap
       mesh_count_tests(counters, tests);
       tests = 0u;
