@@ -4,9 +4,11 @@
 #include <cstdint>
 #include <map>
 #include <memory>
+#include <vector>
 
 #include "bvh/aabb_tree.h"
 #include "gpucol/triangle_mesh.h"
+#include "memory/large_array_allocator.h"
 #include "opencl/host/opencl_context.h"
 
 namespace gpucol::opencl {
@@ -59,9 +61,14 @@ class MeshDeviceCache {
   const cl::Buffer& entries() const { return m_entryArena.buffer; }
 
  private:
-  /// One growable device arena; `used` bytes hold live data.
+  /// Host memory a CPU device's arena lives in (huge pages where the system gives them).
+  using HostBytes = std::vector<unsigned char, LargeArrayAllocator<unsigned char>>;
+
+  /// One growable device arena; `used` bytes hold live data. On a CPU device a large arena's buffer uses
+  /// `host` as its storage (CL_MEM_USE_HOST_PTR), which must outlive every command on the buffer.
   struct Arena {
     cl::Buffer buffer;
+    std::shared_ptr<HostBytes> host;
     std::size_t capacity = 0;
     std::size_t used = 0;
   };
@@ -87,6 +94,8 @@ class MeshDeviceCache {
   /// byte offset.
   std::size_t append(Arena& arena, const void* data, std::size_t bytes);
   void compact();
+  /// A new, empty arena of `capacity` bytes.
+  Arena makeArena(std::size_t capacity) const;
 
   OpenClContext& m_context;
   Arena m_triangleArena, m_nodeArena, m_entryArena;
