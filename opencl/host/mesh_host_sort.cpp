@@ -11,10 +11,10 @@ namespace gpucol::opencl {
 namespace {
 
 /// Widest digit: 8192 counters (32 KiB) per pass, as the CPU path's candidate sort (tree_traversal.cpp). The
-/// key's bits are split into the fewest passes of at most this width, all counted in one sweep. 400 rounds
-/// of random keys, median: 17,667 keys of 34 bits (an armadillo-99976 pair's) 92-96 us in three passes of 12
-/// bits against 103 in four of 9 with an 11-bit limit; 35,792 of 38 bits (armadillo-399904) 210-214 us
-/// either way (three of 13 against four of 10).
+/// key's bits are split into the fewest passes of at most this width, all counted in one sweep. 400 sorts of
+/// random keys, medians of two runs: 17,667 keys of 34 bits (an armadillo-99976 pair's) 94.5-95.7 us in three
+/// passes of 12 bits against 102.6-103.2 in four of 9 with an 11-bit limit; 35,792 of 38 bits
+/// (armadillo-399904) 213.3-213.6 us in three of 13 against 209.7-212.4 in four of 10.
 constexpr unsigned kMaxDigitBits = 13;
 
 }  // namespace

@@ -448,15 +448,31 @@ GPUCOL_INLINE BoolLanes mesh_prefilter_lanes(__global const GpucolMeshPair* rest
   return apartB | (offB & apartA) | l3_intervals_apart(t[0], t[1], t[2], t[3], t[4], t[5]);
 }
 
+// The record of candidate `candidate`: GPUCOL_HIT_INTERSECTS in the flags when they intersect, and with
+// `contact` its flags and `values` (point x y z, normal x y z, depth, deepest x y z; read only then).
+GpucolNearHit mesh_hit_record(uint candidate, bool intersects, bool contact, bool onFaceOfB, bool sameFacing,
+                              const float values[10]) {
+  GpucolNearHit hit;
+  hit.candidate = candidate;
+  hit.flags = intersects ? GPUCOL_HIT_INTERSECTS : 0u;
+  for (int k = 0; k < 3; ++k) hit.point[k] = hit.normal[k] = hit.deepest[k] = 0.0f;
+  hit.depth = 0.0f;
+  if (intersects && contact) {
+    hit.flags |= GPUCOL_HIT_CONTACT | (onFaceOfB ? GPUCOL_HIT_ON_FACE_OF_B : 0u) |
+                 (sameFacing ? GPUCOL_HIT_SAME_FACING : 0u);
+    for (int k = 0; k < 3; ++k) {
+      hit.point[k] = values[k];
+      hit.normal[k] = values[3 + k];
+      hit.deepest[k] = values[7 + k];
+    }
+    hit.depth = values[6];
+  }
+  return hit;
+}
+
 // The hit record of candidate `candidate` whose triangles are af, bf: GPUCOL_HIT_INTERSECTS in the flags when
 // they intersect, and the contact.
 GpucolNearHit mesh_near_hit(const float af[3][3], const float bf[3][3], uint candidate) {
-  GpucolNearHit hit;
-  hit.candidate = candidate;
-  hit.flags = 0u;
-  for (int k = 0; k < 3; ++k) hit.point[k] = hit.normal[k] = hit.deepest[k] = 0.0f;
-  hit.depth = 0.0f;
-
   V3 a[3], b[3];
   for (int c = 0; c < 3; ++c) {
     for (int k = 0; k < 3; ++k) {
@@ -551,20 +567,16 @@ GpucolNearHit mesh_near_hit(const float af[3][3], const float bf[3][3], uint can
     contact = true;
   } while (false);
 
-  if (intersects) {
-    hit.flags = GPUCOL_HIT_INTERSECTS;
-    if (contact) {
-      hit.flags |= GPUCOL_HIT_CONTACT | (onFaceOfB ? GPUCOL_HIT_ON_FACE_OF_B : 0u) |
-                   (sameFacing ? GPUCOL_HIT_SAME_FACING : 0u);
-      for (int k = 0; k < 3; ++k) {
-        hit.point[k] = (float)point.x[k];
-        hit.normal[k] = (float)normalOnB.x[k];
-        hit.deepest[k] = (float)deepest.x[k];
-      }
-      hit.depth = (float)depth;
+  float values[10];
+  if (intersects && contact) {
+    for (int k = 0; k < 3; ++k) {
+      values[k] = (float)point.x[k];
+      values[3 + k] = (float)normalOnB.x[k];
+      values[7 + k] = (float)deepest.x[k];
     }
+    values[6] = (float)depth;
   }
-  return hit;
+  return mesh_hit_record(candidate, intersects, contact, onFaceOfB, sameFacing, values);
 }
 
 // The double test of four candidates at once, one per lane of double4: generateContactRows of
@@ -813,20 +825,10 @@ void mesh_test_lanes(__global const GpucolMeshPair* restrict pairs, __global con
         hit = mesh_near_hit(af, bf, first + lane);
       } else {
         if (intersects[j] == 0) continue;
-        hit.candidate = first + lane;
-        hit.flags = GPUCOL_HIT_INTERSECTS;
-        for (int k = 0; k < 3; ++k) hit.point[k] = hit.normal[k] = hit.deepest[k] = 0.0f;
-        hit.depth = 0.0f;
-        if (contact[j] != 0) {
-          hit.flags |= GPUCOL_HIT_CONTACT | (onFaceOfB[j] != 0 ? GPUCOL_HIT_ON_FACE_OF_B : 0u) |
-                       (sameFacing[j] != 0 ? GPUCOL_HIT_SAME_FACING : 0u);
-          for (int k = 0; k < 3; ++k) {
-            hit.point[k] = values[k][j];
-            hit.normal[k] = values[3 + k][j];
-            hit.deepest[k] = values[7 + k][j];
-          }
-          hit.depth = values[6][j];
-        }
+        float laneValues[10];
+        for (int k = 0; k < 10; ++k) laneValues[k] = values[k][j];
+        hit = mesh_hit_record(first + lane, true, contact[j] != 0, onFaceOfB[j] != 0, sameFacing[j] != 0,
+                              laneValues);
       }
       if (hit.flags & GPUCOL_HIT_INTERSECTS) hits[atomic_inc(&counters[4])] = hit;
     }
