@@ -70,6 +70,19 @@ struct GridBroadphaseStats {
   double chooseMs = 0, binMs = 0, testMs = 0, hugeMs = 0, sortMs = 0;
 };
 
+/// How rayTest and aabbTest have been answered since the broad phase was made.
+struct GridBroadphaseQueryStats {
+  /// Queries answered by testing every proxy (few proxies, few queries since the boxes changed, or a
+  /// region so large that the index would visit more cells than there are boxes).
+  std::uint64_t scans = 0;
+  /// Queries answered through the query index (the proxies in the cells the query reaches).
+  std::uint64_t indexed = 0;
+  /// Times the query index was built.
+  std::uint64_t indexBuilds = 0;
+  /// Bytes the query index holds now (0 while there is none); not part of GridBroadphaseStats::memoryBytes.
+  std::size_t indexBytes = 0;
+};
+
 /// A btBroadphaseInterface that finds exactly the pairs whose AABBs overlap (touching counts) with a uniform
 /// grid and the pair-index mapping function of Avril et al. 2012, on the CPU (oneTBB) or through OpenCL,
 /// and keeps the pair cache in sync incrementally. Put it where btDbvtBroadphase was.
@@ -95,11 +108,15 @@ class GridBroadphase : public btBroadphaseInterface {
   /// The AABB last given to createProxy or setAabb.
   void getAabb(btBroadphaseProxy* proxy, btVector3& aabbMin, btVector3& aabbMax) const override;
   /// Reports every proxy whose AABB (grown by -aabbMax/-aabbMin, as btDbvtBroadphase does) the ray hits
-  /// within [0, rayCallback.m_lambda_max], with Bullet's btRayAabb2 test.
+  /// within [0, rayCallback.m_lambda_max], with Bullet's btRayAabb2 test, in slot order. Once the queries
+  /// since the boxes last changed have cost about as much as building it, a query index (the boxes filed
+  /// by grid cell) names the candidates; the answer is the same either way. Concurrent queries are safe;
+  /// a query concurrent with setAabb, createProxy or destroyProxy is not (as with Bullet's broad phases).
   void rayTest(const btVector3& rayFrom, const btVector3& rayTo, btBroadphaseRayCallback& rayCallback,
                const btVector3& aabbMin = btVector3(0, 0, 0),
                const btVector3& aabbMax = btVector3(0, 0, 0)) override;
-  /// Reports every proxy whose AABB overlaps [aabbMin, aabbMax] (touching counts).
+  /// Reports every proxy whose AABB overlaps [aabbMin, aabbMax] (touching counts), in slot order; through
+  /// the query index as rayTest.
   void aabbTest(const btVector3& aabbMin, const btVector3& aabbMax,
                 btBroadphaseAabbCallback& callback) override;
   /// Finds the overlapping pairs and adds/removes the difference to the last step in the pair cache.
@@ -119,6 +136,8 @@ class GridBroadphase : public btBroadphaseInterface {
   void setTuning(const GridBroadphaseTuning& tuning);
   /// Statistics of the last calculateOverlappingPairs.
   const GridBroadphaseStats& stats() const;
+  /// How the queries (rayTest, aabbTest) were answered so far.
+  GridBroadphaseQueryStats queryStats() const;
 
  private:
   struct Impl;

@@ -3,6 +3,7 @@
 // Stages 2–3 of the grid search (grid_pair_finder.h): the one grid choice shared by the CPU finder and the
 // OpenCL finder, so both bin boxes into the same grid.
 
+#include <algorithm>
 #include <cstdint>
 #include <vector>
 
@@ -12,21 +13,31 @@ namespace gpucol {
 
 /// The uniform grid of one search: origin, cell edge and cells per axis (their product fits 32 bits).
 struct Grid {
-  float origin[3] = {0, 0, 0};    ///< Lower corner: the min corner of all binned boxes.
-  float cell = 1.0f;              ///< Cell edge length.
-  float invCell = 1.0f;           ///< 1 / cell.
+  float origin[3] = {0, 0, 0};        ///< Lower corner: the min corner of all binned boxes.
+  float cell = 1.0f;                  ///< Cell edge length.
+  float invCell = 1.0f;               ///< 1 / cell.
   std::uint32_t dims[3] = {1, 1, 1};  ///< Cells per axis.
   /// Number of cells.
   std::uint64_t cells() const { return std::uint64_t(dims[0]) * dims[1] * dims[2]; }
 };
+
+/// Cell coordinate of x on one axis: floor((x - origin) * invCell) clamped to [0, dim-1]. Monotone in x
+/// (float subtraction and multiplication by a positive number round monotonically), which is all the
+/// dedupe rule needs: the overlap's min corner lies inside both boxes, so its cell lies in both ranges.
+inline std::uint32_t cellOf(float x, float origin, float invCell, std::uint32_t dim) {
+  const float t = (x - origin) * invCell;
+  if (!(t > 0.0f)) return 0;
+  if (t >= float(dim - 1)) return dim - 1;
+  return std::min(std::uint32_t(t), dim - 1);
+}
 
 /// Chooses the grid for the `active` proxies (not empty): stage 2, the cell edge from the median largest
 /// extent (size rule) or the paper's density (§4.1); stage 3, proxies whose boxes would cover more than
 /// `options.hugeCellLimit` cells go to `huge`, the others to `binned` (both in `active` order); then the
 /// grid spans the binned boxes, its cells doubled until their count fits 32 bits (the pairs found never
 /// depend on the cell size). `extentScratch` is working memory kept by the caller between searches.
-Grid chooseGrid(const ProxyArrays& p, const std::vector<std::uint32_t>& active, const PairFinderOptions& options,
-                std::vector<float>& extentScratch, std::vector<std::uint32_t>& binned,
-                std::vector<std::uint32_t>& huge);
+Grid chooseGrid(const ProxyArrays& p, const std::vector<std::uint32_t>& active,
+                const PairFinderOptions& options, std::vector<float>& extentScratch,
+                std::vector<std::uint32_t>& binned, std::vector<std::uint32_t>& huge);
 
 }  // namespace gpucol

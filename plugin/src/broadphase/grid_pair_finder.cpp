@@ -61,16 +61,6 @@ inline bool passesFilter(const ProxyArrays& p, std::uint32_t a, std::uint32_t b)
          ((p.flags[a] & p.flags[b] & kProxyStatic) == 0);
 }
 
-/// Cell coordinate of x on one axis: floor((x - origin) * invCell) clamped to [0, dim-1]. Monotone in x
-/// (float subtraction and multiplication by a positive number round monotonically), which is all the
-/// dedupe rule needs: the overlap's min corner lies inside both boxes, so its cell lies in both ranges.
-inline std::uint32_t cellOf(float x, float origin, float invCell, std::uint32_t dim) {
-  const float t = (x - origin) * invCell;
-  if (!(t > 0.0f)) return 0;
-  if (t >= float(dim - 1)) return dim - 1;
-  return std::min(std::uint32_t(t), dim - 1);
-}
-
 /// Cell ranges [lo, hi] of one box on the three axes.
 struct CellRange {
   std::uint32_t lo[3];

@@ -17,12 +17,14 @@
 #include <cmath>
 #include <cstdio>
 #include <iostream>
+#include <mutex>
 #include <stdexcept>
 #include <string>
 #include <vector>
 
 #include "broadphase/grid_pair_finder.h"
 #include "broadphase/pair_diff.h"
+#include "broadphase/query_grid.h"
 #include "bullet/measured_backend_choice.h"
 #include "bullet/warn_once.h"
 #include "opencl/host/opencl_started.h"
@@ -44,6 +46,21 @@ constexpr std::uint8_t kLive = 1;       // holds a live proxy
 constexpr std::uint8_t kMoved = 2;      // box, filter or life changed since the last search
 constexpr std::uint8_t kNonFinite = 4;  // box has a NaN or infinite component: hidden from the finder
 constexpr std::uint8_t kFreed = 8;      // destroyed since the last search: its pairs already left the cache
+constexpr std::uint8_t kOffIndex =
+    16;  // box set or slot reused since the query index was built (in offIndex)
+
+/// Queries (rayTest, aabbTest) test every proxy below this many live proxies: the index's cells and the
+/// sort of its candidates cost more than a scan of so few boxes.
+constexpr std::uint32_t kQueryIndexMinProxies = 512;
+/// The query index is built once this many queries since the boxes last changed have each tested every
+/// proxy: building it costs about as much as that many scans, so a scene never pays more than about twice
+/// the cheaper of the two (the ski-rental rule). Measured: gpucol-bench queries.
+constexpr std::uint32_t kScansBeforeIndex = 8;
+/// The index is dropped once more than this share of its boxes moved since it was built (the moved ones are
+/// tested one by one by every query).
+constexpr std::uint32_t kOffIndexShare = 8;  // 1/8
+/// A query's candidates cost about this many proxies of a scan each (gathered, sorted, tested at random).
+constexpr std::uint32_t kScanPerCandidate = 4;
 
 /// A proxy with its slot in the per-slot arrays (the slot fits the base class's tail padding: 56 bytes).
 struct GridProxy : btBroadphaseProxy {
@@ -109,6 +126,18 @@ struct GridBroadphase::Impl {
   // (sorted): the cache holds `current` less `refused`.
   std::vector<std::uint64_t> current;
   std::vector<std::uint64_t> refused;
+
+  // The query index (broadphase/query_grid.h), built by a query when due and dropped when too many boxes
+  // changed; the proxies changed since it was built are tested by every query. indexReady is set with
+  // release order once the index is complete, so concurrent queries read it without the lock.
+  QueryGrid queryGrid;
+  std::vector<std::uint32_t> offIndex;
+  std::uint32_t indexedProxies = 0;
+  std::atomic<bool> indexReady{false};
+  std::atomic<std::uint32_t> scansSinceChange{0};
+  std::atomic<std::uint64_t> queryScans{0}, queryIndexed{0};
+  std::uint64_t indexBuilds = 0;
+  std::mutex indexBuild;
 
   // Scratch of one step, released at its end.
   ViewBuffer view;
@@ -199,6 +228,79 @@ struct GridBroadphase::Impl {
     if (nonFiniteChanged) v.moved = nullptr;
     nonFiniteChanged = false;
     return v;
+  }
+
+  /// A proxy's box was set, or its slot given to a new proxy: the query index no longer knows where it is.
+  void boxChanged(std::uint32_t s) {
+    if (!indexReady.load(std::memory_order_relaxed)) {
+      scansSinceChange.store(0, std::memory_order_relaxed);
+      return;
+    }
+    if (state[s] & kOffIndex) return;
+    state[s] |= kOffIndex;
+    offIndex.push_back(s);
+    if (offIndex.size() > indexedProxies / kOffIndexShare + 16) dropQueryIndex();
+  }
+
+  void dropQueryIndex() {
+    for (std::uint32_t s : offIndex)
+      if (s < slotCount) state[s] = std::uint8_t(state[s] & ~kOffIndex);
+    std::vector<std::uint32_t>().swap(offIndex);
+    queryGrid.clear();
+    indexReady.store(false, std::memory_order_relaxed);
+    scansSinceChange.store(0, std::memory_order_relaxed);
+  }
+
+  /// The query index when a query should use it, building it when it is due; nullptr: test every proxy.
+  const QueryGrid* queryIndex() {
+    if (indexReady.load(std::memory_order_acquire)) return &queryGrid;
+    if (liveCount < kQueryIndexMinProxies) return nullptr;
+    if (scansSinceChange.fetch_add(1, std::memory_order_relaxed) + 1 < kScansBeforeIndex) return nullptr;
+    std::lock_guard<std::mutex> lock(indexBuild);
+    if (!indexReady.load(std::memory_order_relaxed)) buildQueryIndex();
+    return &queryGrid;
+  }
+
+  void buildQueryIndex() {
+    // The boxes of the visible proxies as the index's input (released after the build).
+    std::vector<float> boxes(std::size_t(slotCount) * 6);
+    std::vector<std::uint32_t> slots;
+    slots.reserve(liveCount);
+    ProxyArrays p;
+    p.count = slotCount;
+    float* const axis[6] = {&boxes[0],
+                            &boxes[std::size_t(slotCount)],
+                            &boxes[std::size_t(slotCount) * 2],
+                            &boxes[std::size_t(slotCount) * 3],
+                            &boxes[std::size_t(slotCount) * 4],
+                            &boxes[std::size_t(slotCount) * 5]};
+    p.minX = axis[0], p.minY = axis[1], p.minZ = axis[2], p.maxX = axis[3], p.maxY = axis[4],
+    p.maxZ = axis[5];
+    for (std::uint32_t s = 0; s < slotCount; ++s) {
+      if (!visible(s)) continue;
+      const GridProxy& q = proxy(s);
+      for (int a = 0; a < 3; ++a) axis[a][s] = q.m_aabbMin[a], axis[3 + a][s] = q.m_aabbMax[a];
+      slots.push_back(s);
+    }
+    if (slots.empty())
+      queryGrid.clear();
+    else
+      queryGrid.build(p, slots, tuning.hugeCellLimit);
+    indexedProxies = std::uint32_t(slots.size());
+    ++indexBuilds;
+    indexReady.store(true, std::memory_order_release);
+  }
+
+  /// Candidates beyond which a query tests every proxy instead: sorting a candidate costs about as much as
+  /// testing kScanPerCandidate proxies in a scan.
+  std::size_t maxCandidates() const { return slotCount / kScanPerCandidate; }
+
+  /// Reports `hits` (slots, any order, repeats allowed) to `report` in slot order, once each.
+  template <class Report>
+  void reportInSlotOrder(std::vector<std::uint32_t>& hits, Report&& report) {
+    std::sort(hits.begin(), hits.end());
+    hits.erase(std::unique(hits.begin(), hits.end()), hits.end());
+    for (std::uint32_t s : hits) report(s);
   }
 
   void store(std::uint32_t s, const btVector3& lo, const btVector3& hi) {
@@ -319,8 +421,9 @@ btBroadphaseProxy* GridBroadphase::createProxy(const btVector3& aabbMin, const b
   (void)shapeType;  // Bullet 3 proxies no longer store the shape type
   p.m_uniqueId = ++d.nextUniqueId;
   p.slot = slot;
-  d.state[slot] = kLive | kMoved;
+  d.state[slot] = std::uint8_t(kLive | kMoved | (d.state[slot] & kOffIndex));
   d.store(slot, aabbMin, aabbMax);
+  d.boxChanged(slot);
   d.group[slot] = collisionFilterGroup;
   d.mask[slot] = collisionFilterMask;
   if (Impl::flagsOf(collisionFilterGroup) & kProxyStatic) ++d.staticCount;
@@ -341,7 +444,7 @@ void GridBroadphase::destroyProxy(btBroadphaseProxy* proxy, btDispatcher* dispat
   d.pairCache->removeOverlappingPairsContainingProxy(proxy, dispatcher);
   if (Impl::flagsOf(d.group[slot]) & kProxyStatic) --d.staticCount;
   d.setNonFinite(slot, false);
-  d.state[slot] = kFreed | kMoved;
+  d.state[slot] = std::uint8_t(kFreed | kMoved | (d.state[slot] & kOffIndex));
   d.pendingFree.push_back(slot);
   --d.liveCount;
   d.dirty = true;
@@ -362,6 +465,7 @@ void GridBroadphase::setAabb(btBroadphaseProxy* proxy, const btVector3& aabbMin,
   proxy->m_aabbMax = aabbMax;
   d.state[s] |= kMoved;
   d.store(s, aabbMin, aabbMax);
+  d.boxChanged(s);
   d.dirty = true;
 }
 
@@ -377,30 +481,68 @@ void GridBroadphase::rayTest(const btVector3& rayFrom, const btVector3& /*rayTo*
   // btDbvtBroadphase reads m_lambda_max once, before its traversal, and tests boxes grown by the ray's own
   // box (bounds = [min - aabbMax, max - aabbMin]) with btRayAabb2 from t = 0; so do we, in slot order.
   const btScalar lambdaMax = rayCallback.m_lambda_max;
-  for (std::uint32_t s = 0; s < d.slotCount; ++s) {
-    if (!d.visible(s)) continue;
+  auto hits = [&](std::uint32_t s) {
     GridProxy& p = d.proxy(s);
     const btVector3 bounds[2] = {p.m_aabbMin - aabbMax, p.m_aabbMax - aabbMin};
     btScalar tmin = 0;
-    if (btRayAabb2(rayFrom, rayCallback.m_rayDirectionInverse, rayCallback.m_signs, bounds, tmin, 0,
-                   lambdaMax))
-      rayCallback.process(&p);
+    return btRayAabb2(rayFrom, rayCallback.m_rayDirectionInverse, rayCallback.m_signs, bounds, tmin, 0,
+                      lambdaMax);
+  };
+  if (const QueryGrid* index = d.queryIndex()) {
+    // The sweep's direction is the one btRayAabb2 tests along, 1 / m_rayDirectionInverse; signs that do
+    // not match it make btRayAabb2 test something else, which only a scan reproduces.
+    QuerySweep sweep;
+    bool usable = true;
+    for (int a = 0; a < 3; ++a) {
+      const double inverse = rayCallback.m_rayDirectionInverse[a];
+      usable = usable && rayCallback.m_signs[a] == unsigned(inverse < 0.0);
+      sweep.from[a] = rayFrom[a];
+      sweep.dir[a] = 1.0 / inverse;
+      sweep.castLo[a] = aabbMin[a], sweep.castHi[a] = aabbMax[a];
+    }
+    sweep.tMax = lambdaMax;
+    std::vector<std::uint32_t> candidates;
+    if (usable && index->sweepCandidates(sweep, d.maxCandidates(), candidates)) {
+      d.queryIndexed.fetch_add(1, std::memory_order_relaxed);
+      candidates.insert(candidates.end(), d.offIndex.begin(), d.offIndex.end());
+      d.reportInSlotOrder(candidates, [&](std::uint32_t s) {
+        if (d.visible(s) && hits(s)) rayCallback.process(&d.proxy(s));
+      });
+      return;
+    }
   }
+  d.queryScans.fetch_add(1, std::memory_order_relaxed);
+  for (std::uint32_t s = 0; s < d.slotCount; ++s)
+    if (d.visible(s) && hits(s)) rayCallback.process(&d.proxy(s));
 }
 
 void GridBroadphase::aabbTest(const btVector3& aabbMin, const btVector3& aabbMax,
                               btBroadphaseAabbCallback& callback) {
   Impl& d = *m_impl;
-  for (std::uint32_t s = 0; s < d.slotCount; ++s) {
-    if (!d.visible(s)) continue;
-    GridProxy& p = d.proxy(s);
+  auto overlaps = [&](std::uint32_t s) {
+    const GridProxy& p = d.proxy(s);
     const btVector3& lo = p.m_aabbMin;
     const btVector3& hi = p.m_aabbMax;
     // Touching counts, as in btDbvtAabbMm's Intersect.
-    if (lo.x() <= aabbMax.x() && hi.x() >= aabbMin.x() && lo.y() <= aabbMax.y() && hi.y() >= aabbMin.y() &&
-        lo.z() <= aabbMax.z() && hi.z() >= aabbMin.z())
-      callback.process(&p);
+    return lo.x() <= aabbMax.x() && hi.x() >= aabbMin.x() && lo.y() <= aabbMax.y() && hi.y() >= aabbMin.y() &&
+           lo.z() <= aabbMax.z() && hi.z() >= aabbMin.z();
+  };
+  if (const QueryGrid* index = d.queryIndex()) {
+    const float lo[3] = {aabbMin.x(), aabbMin.y(), aabbMin.z()};
+    const float hi[3] = {aabbMax.x(), aabbMax.y(), aabbMax.z()};
+    std::vector<std::uint32_t> candidates;
+    if (index->boxCandidates(lo, hi, d.maxCandidates(), candidates)) {
+      d.queryIndexed.fetch_add(1, std::memory_order_relaxed);
+      candidates.insert(candidates.end(), d.offIndex.begin(), d.offIndex.end());
+      d.reportInSlotOrder(candidates, [&](std::uint32_t s) {
+        if (d.visible(s) && overlaps(s)) callback.process(&d.proxy(s));
+      });
+      return;
+    }
   }
+  d.queryScans.fetch_add(1, std::memory_order_relaxed);
+  for (std::uint32_t s = 0; s < d.slotCount; ++s)
+    if (d.visible(s) && overlaps(s)) callback.process(&d.proxy(s));
 }
 
 void GridBroadphase::calculateOverlappingPairs(btDispatcher* dispatcher) {
@@ -578,6 +720,7 @@ void GridBroadphase::resetPool(btDispatcher* /*dispatcher*/) {
   d.staticCount = 0;
   d.lastFinder = nullptr;
   d.freeSlots.clear(), d.pendingFree.clear(), d.current.clear(), d.refused.clear();
+  d.dropQueryIndex();
   d.nextUniqueId = 0;
   d.dirty = true;
 }
@@ -600,6 +743,18 @@ void GridBroadphase::setTuning(const GridBroadphaseTuning& tuning) {
 
 const GridBroadphaseStats& GridBroadphase::stats() const {
   return m_impl->stats;
+}
+
+GridBroadphaseQueryStats GridBroadphase::queryStats() const {
+  const Impl& d = *m_impl;
+  GridBroadphaseQueryStats q;
+  q.scans = d.queryScans.load(std::memory_order_relaxed);
+  q.indexed = d.queryIndexed.load(std::memory_order_relaxed);
+  q.indexBuilds = d.indexBuilds;
+  q.indexBytes = d.indexReady.load(std::memory_order_acquire)
+                     ? d.queryGrid.memoryBytes() + d.offIndex.capacity() * sizeof(std::uint32_t)
+                     : 0;
+  return q;
 }
 
 }  // namespace gpucol

@@ -1,0 +1,256 @@
+#include "broadphase/query_grid.h"
+
+#include <algorithm>
+#include <cmath>
+#include <limits>
+
+namespace gpucol {
+namespace {
+
+/// The index's cells are at most this many per filed box (plus kCellsSlack): the cell array stays dense and
+/// small, a coarser grid only costs query time.
+constexpr std::uint64_t kCellsPerBox = 2;
+constexpr std::uint64_t kCellsSlack = 1024;
+
+/// Relative allowance for the float rounding of the caller's exact sweep test (Bullet's btRayAabb2 rounds
+/// each of its three or four float operations by at most 2^-24 of the magnitudes involved): about eight
+/// times what they can add up to.
+constexpr double kSweepSlack = 2e-6;
+
+/// x as a float no greater (Down) or no less (Up) than x, clamped to the finite floats; cellOf clamps too.
+float floatDown(double x) {
+  x = std::clamp(x, -double(std::numeric_limits<float>::max()), double(std::numeric_limits<float>::max()));
+  float f = float(x);
+  if (double(f) > x) f = std::nextafter(f, -std::numeric_limits<float>::infinity());
+  return f;
+}
+float floatUp(double x) {
+  x = std::clamp(x, -double(std::numeric_limits<float>::max()), double(std::numeric_limits<float>::max()));
+  float f = float(x);
+  if (double(f) < x) f = std::nextafter(f, std::numeric_limits<float>::infinity());
+  return f;
+}
+
+/// Cell ranges per axis: [lo, hi] for x, y and z.
+struct CellBox {
+  std::uint32_t lo[3];
+  std::uint32_t hi[3];
+};
+
+}  // namespace
+
+void QueryGrid::build(const ProxyArrays& p, const std::vector<std::uint32_t>& slots,
+                      std::uint32_t hugeCellLimit) {
+  clear();
+  m_built = true;
+  PairFinderOptions options;
+  options.hugeCellLimit = hugeCellLimit;
+  std::vector<float> extents;
+  std::vector<std::uint32_t> binned;
+  m_grid = chooseGrid(p, slots, options, extents, binned, m_huge);
+  if (binned.empty()) {
+    m_cellStart.assign(2, 0);
+    for (int a = 0; a < 3; ++a) m_hi[a] = m_grid.origin[a];
+    return;
+  }
+  const float* const hiOf[3] = {p.maxX, p.maxY, p.maxZ};
+  for (int a = 0; a < 3; ++a) {
+    m_hi[a] = hiOf[a][binned[0]];
+    for (std::uint32_t s : binned) m_hi[a] = std::max(m_hi[a], hiOf[a][s]);
+  }
+  // The search's cell size, coarsened until the cell array is dense (cells at most twice the boxes).
+  const std::uint64_t maxCells = kCellsPerBox * binned.size() + kCellsSlack;
+  while (m_grid.cells() > maxCells) {
+    m_grid.cell *= 2.0f;
+    m_grid.invCell = 1.0f / m_grid.cell;
+    for (int a = 0; a < 3; ++a)
+      m_grid.dims[a] =
+          std::uint32_t(std::floor((double(m_hi[a]) - double(m_grid.origin[a])) / double(m_grid.cell)) + 1.0);
+  }
+  const float* const loOf[3] = {p.minX, p.minY, p.minZ};
+  auto rangeOf = [&](std::uint32_t s) {
+    CellBox r;
+    for (int a = 0; a < 3; ++a) {
+      r.lo[a] = cellOf(loOf[a][s], m_grid.origin[a], m_grid.invCell, m_grid.dims[a]);
+      r.hi[a] = cellOf(hiOf[a][s], m_grid.origin[a], m_grid.invCell, m_grid.dims[a]);
+    }
+    return r;
+  };
+  auto forCells = [&](const CellBox& r, auto&& f) {
+    for (std::uint32_t z = r.lo[2]; z <= r.hi[2]; ++z)
+      for (std::uint32_t y = r.lo[1]; y <= r.hi[1]; ++y) {
+        const std::uint64_t row = std::uint64_t(m_grid.dims[0]) * (y + std::uint64_t(m_grid.dims[1]) * z);
+        for (std::uint32_t x = r.lo[0]; x <= r.hi[0]; ++x) f(row + x);
+      }
+  };
+  // Counting sort by cell (count, then allocate: nothing to overflow): m_cellStart[c] counts, becomes the
+  // start by an exclusive prefix sum, serves as the write cursor (ending as the next cell's start), and
+  // is shifted back.
+  const std::uint64_t cells = m_grid.cells();
+  m_cellStart.assign(cells + 1, 0);
+  std::uint64_t entries = 0;
+  for (std::uint32_t s : binned) forCells(rangeOf(s), [&](std::uint64_t c) { ++m_cellStart[c], ++entries; });
+  if (entries > std::numeric_limits<std::uint32_t>::max()) {
+    // More entries than 32-bit starts can number: leave the index empty so the caller tests every box.
+    clear();
+    return;
+  }
+  std::uint32_t sum = 0;
+  for (std::uint64_t c = 0; c < cells; ++c) {
+    const std::uint32_t count = m_cellStart[c];
+    m_cellStart[c] = sum;
+    sum += count;
+  }
+  m_entries.resize(entries);
+  for (std::uint32_t s : binned)
+    forCells(rangeOf(s), [&](std::uint64_t c) { m_entries[m_cellStart[c]++] = s; });
+  for (std::uint64_t c = cells; c > 0; --c) m_cellStart[c] = m_cellStart[c - 1];
+  m_cellStart[0] = 0;
+}
+
+void QueryGrid::clear() {
+  m_built = false;
+  m_grid = Grid{};
+  std::vector<std::uint32_t>().swap(m_cellStart);
+  std::vector<std::uint32_t>().swap(m_entries);
+  std::vector<std::uint32_t>().swap(m_huge);
+}
+
+std::size_t QueryGrid::memoryBytes() const {
+  return (m_cellStart.capacity() + m_entries.capacity() + m_huge.capacity()) * sizeof(std::uint32_t);
+}
+
+std::size_t QueryGrid::rowEntries(std::uint32_t x0, std::uint32_t x1, std::uint32_t y,
+                                  std::uint32_t z) const {
+  const std::uint64_t row = std::uint64_t(m_grid.dims[0]) * (y + std::uint64_t(m_grid.dims[1]) * z);
+  return m_cellStart[row + x1 + 1] - m_cellStart[row + x0];
+}
+
+void QueryGrid::appendRow(std::uint32_t x0, std::uint32_t x1, std::uint32_t y, std::uint32_t z,
+                          std::vector<std::uint32_t>& out) const {
+  const std::uint64_t row = std::uint64_t(m_grid.dims[0]) * (y + std::uint64_t(m_grid.dims[1]) * z);
+  out.insert(out.end(), m_entries.begin() + std::ptrdiff_t(m_cellStart[row + x0]),
+             m_entries.begin() + std::ptrdiff_t(m_cellStart[row + x1 + 1]));
+}
+
+bool QueryGrid::boxCandidates(const float lo[3], const float hi[3], std::size_t maxCandidates,
+                              std::vector<std::uint32_t>& out) const {
+  // A box that overlaps the region contains the point max(its min, the region's min) on each axis, which
+  // lies in the region too; cellOf is monotone, so that point's cell is visited and the box is filed there.
+  // (An inverted region, min > max, is overlapped only by boxes spanning [max, min]: the same cells.)
+  CellBox r;
+  for (int a = 0; a < 3; ++a) {
+    const float rlo = std::min(lo[a], hi[a]), rhi = std::max(lo[a], hi[a]);
+    if (!(rlo <= rhi)) return false;  // NaN
+    r.lo[a] = cellOf(rlo, m_grid.origin[a], m_grid.invCell, m_grid.dims[a]);
+    r.hi[a] = cellOf(rhi, m_grid.origin[a], m_grid.invCell, m_grid.dims[a]);
+    if (rhi < m_grid.origin[a] || rlo > m_hi[a])
+      r.lo[a] = 1, r.hi[a] = 0;  // every filed box lies in [origin, m_hi]
+  }
+  double cells = 1;
+  for (int a = 0; a < 3; ++a) cells *= r.hi[a] >= r.lo[a] ? double(r.hi[a] - r.lo[a] + 1) : 0.0;
+  if (cells > double(m_entries.size()) + double(kCellsSlack)) return false;
+  std::size_t count = m_huge.size();
+  if (!m_entries.empty() && cells > 0)
+    for (std::uint32_t z = r.lo[2]; z <= r.hi[2]; ++z)
+      for (std::uint32_t y = r.lo[1]; y <= r.hi[1]; ++y) count += rowEntries(r.lo[0], r.hi[0], y, z);
+  if (count > maxCandidates) return false;
+  out.insert(out.end(), m_huge.begin(), m_huge.end());
+  if (m_entries.empty() || cells == 0) return true;
+  for (std::uint32_t z = r.lo[2]; z <= r.hi[2]; ++z)
+    for (std::uint32_t y = r.lo[1]; y <= r.hi[1]; ++y) appendRow(r.lo[0], r.hi[0], y, z, out);
+  return true;
+}
+
+bool QueryGrid::sweepCandidates(const QuerySweep& sweep, std::size_t maxCandidates,
+                                std::vector<std::uint32_t>& out) const {
+  const std::size_t before = out.size();
+  // The region at point q is [q + lowOff, q + highOff] per axis: the cast box, widened by the rounding
+  // allowance. Points q(t) for t between 0 and tMax (either sign: btRayAabb2 with a negative lambda still
+  // reports boxes holding the segment from q(tMax) to q(0)).
+  double lowOff[3], highOff[3];
+  double t0 = std::min(0.0, sweep.tMax), t1 = std::max(0.0, sweep.tMax);
+  if (!std::isfinite(t0) || !std::isfinite(t1)) return false;
+  for (int a = 0; a < 3; ++a) {
+    const double from = sweep.from[a], dir = sweep.dir[a];
+    if (!std::isfinite(from) || !std::isfinite(dir) || !std::isfinite(sweep.castLo[a]) ||
+        !std::isfinite(sweep.castHi[a]))
+      return false;
+    const double gridMagnitude = std::max(std::fabs(double(m_grid.origin[a])), std::fabs(double(m_hi[a])));
+    const double pad =
+        kSweepSlack * (std::fabs(from) + std::fabs(dir) * std::max(-t0, t1) + std::fabs(sweep.castLo[a]) +
+                       std::fabs(sweep.castHi[a]) + gridMagnitude) +
+        std::numeric_limits<float>::min();
+    lowOff[a] = std::min(sweep.castLo[a], sweep.castHi[a]) - pad;
+    highOff[a] = std::max(sweep.castLo[a], sweep.castHi[a]) + pad;
+  }
+  out.insert(out.end(), m_huge.begin(), m_huge.end());
+  if (m_entries.empty()) return true;
+  // Clip t to where the region can meet a filed box, all of which lie in [origin, m_hi].
+  for (int a = 0; a < 3; ++a) {
+    const double enter = double(m_grid.origin[a]) - highOff[a] - sweep.from[a];  // q - from must reach this
+    const double leave = double(m_hi[a]) - lowOff[a] - sweep.from[a];
+    const double dir = sweep.dir[a];
+    if (dir == 0.0) {
+      if (enter > 0.0 || leave < 0.0) return true;
+      continue;
+    }
+    double ta = enter / dir, tb = leave / dir;
+    if (ta > tb) std::swap(ta, tb);
+    t0 = std::max(t0, ta), t1 = std::min(t1, tb);
+  }
+  if (t0 > t1) return true;
+  // Pieces one cell long along the axis the sweep crosses fastest; each visits the cells of its own region
+  // that the previous piece's did not (both ends of a piece's cell range move one way along each axis, so
+  // a cell left behind is never reached again). The caller removes repeats of boxes filed in several cells.
+  double span = 0;
+  for (int a = 0; a < 3; ++a)
+    span = std::max(span, std::fabs(sweep.dir[a]) * (t1 - t0) * double(m_grid.invCell));
+  const double budget = double(m_entries.size()) + double(kCellsSlack);
+  if (!(span < budget)) {
+    out.resize(before);
+    return false;
+  }
+  const std::uint32_t pieces = std::uint32_t(std::ceil(span)) + 1;
+  std::uint64_t visited = 0;
+  CellBox prev{};
+  for (std::uint32_t i = 0; i < pieces; ++i) {
+    const double ta = t0 + (t1 - t0) * double(i) / double(pieces);
+    const double tb = i + 1 == pieces ? t1 : t0 + (t1 - t0) * double(i + 1) / double(pieces);
+    CellBox r;
+    for (int a = 0; a < 3; ++a) {
+      const double qa = sweep.from[a] + ta * sweep.dir[a], qb = sweep.from[a] + tb * sweep.dir[a];
+      r.lo[a] =
+          cellOf(floatDown(std::min(qa, qb) + lowOff[a]), m_grid.origin[a], m_grid.invCell, m_grid.dims[a]);
+      r.hi[a] =
+          cellOf(floatUp(std::max(qa, qb) + highOff[a]), m_grid.origin[a], m_grid.invCell, m_grid.dims[a]);
+    }
+    for (std::uint32_t z = r.lo[2]; z <= r.hi[2]; ++z)
+      for (std::uint32_t y = r.lo[1]; y <= r.hi[1]; ++y) {
+        const bool seen = i > 0 && z >= prev.lo[2] && z <= prev.hi[2] && y >= prev.lo[1] && y <= prev.hi[1];
+        if (!seen) {
+          appendRow(r.lo[0], r.hi[0], y, z, out);
+          visited += r.hi[0] - r.lo[0] + 1;
+        } else {
+          if (r.lo[0] < prev.lo[0]) {
+            const std::uint32_t x1 = std::min(r.hi[0], prev.lo[0] - 1);
+            appendRow(r.lo[0], x1, y, z, out);
+            visited += x1 - r.lo[0] + 1;
+          }
+          if (r.hi[0] > prev.hi[0]) {
+            const std::uint32_t x0 = std::max(r.lo[0], prev.hi[0] + 1);
+            appendRow(x0, r.hi[0], y, z, out);
+            visited += r.hi[0] - x0 + 1;
+          }
+        }
+        if (double(visited) > budget || out.size() - before > maxCandidates) {
+          out.resize(before);
+          return false;
+        }
+      }
+    prev = r;
+  }
+  return true;
+}
+
+}  // namespace gpucol

@@ -1,0 +1,64 @@
+#pragma once
+// The index behind the broad phase's queries (rayTest and aabbTest): the boxes filed in a dense uniform grid,
+// each in every cell it overlaps, as the pair search bins them (grid_pair_finder.h, stage 4; cell size and
+// huge boxes by the same choice, grid_choice.h, paper §4.1). A query then visits the cells its region
+// reaches instead of every proxy. The index only names candidates, a superset of the answer (with
+// repeats): the caller runs its exact test on each, so the answer is exactly what testing every box gives.
+#include <cstddef>
+#include <cstdint>
+#include <vector>
+
+#include "broadphase/grid_choice.h"
+#include "broadphase/grid_pair_finder.h"
+
+namespace gpucol {
+
+/// A region swept by a box along a segment: every point q = from + t·dir, t in [0, tMax], carries the box
+/// [q + castLo, q + castHi] (a ray when both are zero). Bullet's broad-phase ray test in world units.
+struct QuerySweep {
+  double from[3] = {0, 0, 0};
+  double dir[3] = {0, 0, 0};
+  double tMax = 0;
+  double castLo[3] = {0, 0, 0};
+  double castHi[3] = {0, 0, 0};
+};
+
+/// Boxes filed by cell for queries; built on demand, dropped when the boxes change (GridBroadphase decides).
+class QueryGrid {
+ public:
+  /// Files the boxes of `slots` of `p` (not empty); boxes covering more than `hugeCellLimit` cells go to a
+  /// list every query names.
+  void build(const ProxyArrays& p, const std::vector<std::uint32_t>& slots, std::uint32_t hugeCellLimit);
+  /// Drops the index and its memory.
+  void clear();
+  /// True from build until clear.
+  bool built() const { return m_built; }
+  /// Appends every filed slot whose box may overlap [lo, hi] (touching counts); repeats are possible.
+  /// Returns false, leaving `out` as it was, when that would be more than `maxCandidates` slots or more
+  /// cells than there are filed boxes (testing every box is then cheaper), or the region has a NaN.
+  bool boxCandidates(const float lo[3], const float hi[3], std::size_t maxCandidates,
+                     std::vector<std::uint32_t>& out) const;
+  /// Appends every filed slot whose box the sweep may touch, allowing for the float rounding of the
+  /// caller's exact test; repeats are possible. Returns false, leaving `out` as it was, when that would be
+  /// more than `maxCandidates` slots or more cells than there are filed boxes, or the sweep is not finite.
+  bool sweepCandidates(const QuerySweep& sweep, std::size_t maxCandidates,
+                       std::vector<std::uint32_t>& out) const;
+  /// Bytes held (capacities).
+  std::size_t memoryBytes() const;
+
+ private:
+  /// Entries in the cells x in [x0, x1] of row (y, z).
+  std::size_t rowEntries(std::uint32_t x0, std::uint32_t x1, std::uint32_t y, std::uint32_t z) const;
+  /// Appends the entries of the cells x in [x0, x1] of row (y, z).
+  void appendRow(std::uint32_t x0, std::uint32_t x1, std::uint32_t y, std::uint32_t z,
+                 std::vector<std::uint32_t>& out) const;
+
+  Grid m_grid;
+  float m_hi[3] = {0, 0, 0};               // max corner of the filed boxes (the grid spans [origin, m_hi])
+  std::vector<std::uint32_t> m_cellStart;  // first entry per cell, plus the total at the end
+  std::vector<std::uint32_t> m_entries;    // slots by cell
+  std::vector<std::uint32_t> m_huge;       // slots named by every query
+  bool m_built = false;
+};
+
+}  // namespace gpucol

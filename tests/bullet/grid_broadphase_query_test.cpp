@@ -1,0 +1,267 @@
+// GridBroadphase's rayTest and aabbTest through the query index against the same tests run on every box
+// (btRayAabb2 on the grown bounds, the touching-counts overlap): varied scenes, rays with and without a cast
+// box, along the axes, from inside boxes, with long and negative lambdas; boxes moving, appearing and
+// vanishing between queries (few: the index keeps them aside; many: it is dropped and built again).
+#include <btBulletDynamicsCommon.h>
+#include <gtest/gtest.h>
+
+#include <algorithm>
+#include <cmath>
+#include <cstdint>
+#include <random>
+#include <set>
+#include <string>
+#include <vector>
+
+#include "gpucol/grid_broadphase.h"
+
+namespace {
+
+struct QueryBox {
+  btVector3 lo, hi;
+  btBroadphaseProxy* proxy = nullptr;
+};
+
+/// Collects the client ids a query reports, in report order.
+struct Reported : btBroadphaseRayCallback {
+  std::vector<int> ids;
+  bool process(const btBroadphaseProxy* proxy) override {
+    ids.push_back(int(reinterpret_cast<std::intptr_t>(proxy->m_clientObject)));
+    return true;
+  }
+  void setRay(const btVector3& from, const btVector3& to) {
+    // As btSingleRayCallback does in btCollisionWorld.cpp.
+    const btVector3 dir = (to - from).normalized();
+    m_rayDirectionInverse =
+        btVector3(dir[0] == 0 ? BT_LARGE_FLOAT : 1 / dir[0], dir[1] == 0 ? BT_LARGE_FLOAT : 1 / dir[1],
+                  dir[2] == 0 ? BT_LARGE_FLOAT : 1 / dir[2]);
+    for (int a = 0; a < 3; ++a) m_signs[a] = m_rayDirectionInverse[a] < 0.0;
+    m_lambda_max = dir.dot(to - from);
+  }
+};
+
+enum class Scene { Uniform, Clustered, Mixed, Flat, Identical, Far, Negative };
+
+const char* nameOf(Scene s) {
+  switch (s) {
+    case Scene::Uniform:
+      return "uniform";
+    case Scene::Clustered:
+      return "clustered";
+    case Scene::Mixed:
+      return "mixed";
+    case Scene::Flat:
+      return "flat";
+    case Scene::Identical:
+      return "identical";
+    case Scene::Far:
+      return "far";
+    case Scene::Negative:
+      return "negative";
+  }
+  return "?";
+}
+
+/// A random box of the scene's kind.
+void randomBox(Scene scene, std::mt19937& rng, QueryBox& b) {
+  std::uniform_real_distribution<float> unit(0.0f, 1.0f);
+  const float side = 60.0f;
+  btVector3 c(side * (unit(rng) - 0.5f), side * (unit(rng) - 0.5f), side * (unit(rng) - 0.5f));
+  btVector3 h(0.2f + unit(rng), 0.2f + unit(rng), 0.2f + unit(rng));
+  switch (scene) {
+    case Scene::Uniform:
+      break;
+    case Scene::Clustered: {
+      const int cluster = int(unit(rng) * 8);
+      c = btVector3(float(cluster * 7 % 5) * 12.0f, float(cluster % 3) * 15.0f, float(cluster % 2) * 20.0f) +
+          btVector3(unit(rng), unit(rng), unit(rng)) * 4.0f;
+      h *= 0.3f;
+      break;
+    }
+    case Scene::Mixed:
+      h = btVector3(0.1f, 0.1f, 0.1f) + btVector3(unit(rng), unit(rng), unit(rng)) * 1.9f;
+      if (unit(rng) < 0.004f) h = btVector3(40.0f, 40.0f * unit(rng), 2.0f);  // huge: kept out of the cells
+      if (unit(rng) < 0.02f) h.setX(15.0f);                                   // long, still filed
+      break;
+    case Scene::Flat:
+      c.setZ(0.0f), h.setZ(0.0f);
+      break;
+    case Scene::Identical:
+      if (unit(rng) < 0.3f) c = btVector3(1, 2, 3), h = btVector3(0.5f, 0.5f, 0.5f);
+      break;
+    case Scene::Far:
+      c += btVector3(1e6f, -1e6f, 1e6f);
+      break;
+    case Scene::Negative:
+      c = c * 0.5f - btVector3(950.0f, 950.0f, 950.0f);
+      break;
+  }
+  b.lo = c - h;
+  b.hi = c + h;
+}
+
+/// The ids the scan reports: every live box whose grown bounds the ray hits (btRayAabb2, as the broad
+/// phase calls it), and every live box overlapping a query box.
+std::vector<int> scanRay(const std::vector<QueryBox>& boxes, const btVector3& from, const Reported& ray,
+                         const btVector3& castLo, const btVector3& castHi) {
+  std::vector<int> ids;
+  for (std::size_t i = 0; i < boxes.size(); ++i) {
+    if (!boxes[i].proxy) continue;
+    const btVector3 bounds[2] = {boxes[i].lo - castHi, boxes[i].hi - castLo};
+    btScalar tmin = 0;
+    if (btRayAabb2(from, ray.m_rayDirectionInverse, ray.m_signs, bounds, tmin, 0, ray.m_lambda_max))
+      ids.push_back(int(i));
+  }
+  return ids;
+}
+
+std::vector<int> scanBox(const std::vector<QueryBox>& boxes, const btVector3& lo, const btVector3& hi) {
+  std::vector<int> ids;
+  for (std::size_t i = 0; i < boxes.size(); ++i) {
+    const QueryBox& b = boxes[i];
+    if (b.proxy && b.lo.x() <= hi.x() && b.hi.x() >= lo.x() && b.lo.y() <= hi.y() && b.hi.y() >= lo.y() &&
+        b.lo.z() <= hi.z() && b.hi.z() >= lo.z())
+      ids.push_back(int(i));
+  }
+  return ids;
+}
+
+/// Sorted copy with a check that nothing was reported twice.
+std::vector<int> sortedOnce(std::vector<int> ids) {
+  std::sort(ids.begin(), ids.end());
+  EXPECT_TRUE(std::adjacent_find(ids.begin(), ids.end()) == ids.end()) << "a proxy reported twice";
+  return ids;
+}
+
+/// Runs `count` random ray and box queries on `grid` and checks each against the scan; returns the hits.
+std::size_t checkQueries(gpucol::GridBroadphase& grid, const std::vector<QueryBox>& boxes, std::mt19937& rng,
+                         int count, const std::string& where) {
+  btVector3 lo = boxes[0].lo, hi = boxes[0].hi;
+  for (const QueryBox& b : boxes) lo.setMin(b.lo), hi.setMax(b.hi);
+  const btVector3 size = hi - lo;
+  std::uniform_real_distribution<float> unit(0.0f, 1.0f);
+  auto inScene = [&] {
+    return lo - 0.1f * size + btVector3(unit(rng), unit(rng), unit(rng)) * (1.2f * size);
+  };
+  std::size_t hits = 0;
+  for (int q = 0; q < count; ++q) {
+    btVector3 from = inScene(), to = inScene();
+    if (q % 7 == 0) to = from + btVector3(0, 0, size.z() * (unit(rng) - 0.5f));  // along an axis
+    if (q % 11 == 0) from = boxes[std::size_t(q) % boxes.size()].lo;             // from a box's corner
+    btVector3 castLo(0, 0, 0), castHi(0, 0, 0);
+    if (q % 3 == 1) {
+      castLo = -btVector3(unit(rng), unit(rng), unit(rng)) * 2.0f;
+      castHi = btVector3(unit(rng), unit(rng), unit(rng)) * 2.0f;
+    }
+    Reported ray;
+    ray.setRay(from, to);
+    if (q % 13 == 0) ray.m_lambda_max = -ray.m_lambda_max * unit(rng);  // a negative lambda
+    if (q % 17 == 0) ray.m_lambda_max = 1e7f;                           // through everything
+    const Reported fresh = ray;
+    grid.rayTest(from, to, ray, castLo, castHi);
+    const std::vector<int> expectRay = scanRay(boxes, from, fresh, castLo, castHi);
+    if (sortedOnce(ray.ids) != expectRay) {
+      ADD_FAILURE() << where << ", ray " << q << ": " << ray.ids.size() << " reported, " << expectRay.size()
+                    << " expected";
+      return hits;
+    }
+    hits += expectRay.size();
+
+    const btVector3 c = inScene();
+    const btVector3 h = btVector3(unit(rng), unit(rng), unit(rng)) * (q % 19 == 0 ? size.length() : 3.0f);
+    btVector3 qlo = c - h, qhi = c + h;
+    if (q % 23 == 0) std::swap(qlo, qhi);  // inverted: overlapped by boxes spanning [qhi, qlo]
+    Reported box;
+    grid.aabbTest(qlo, qhi, box);
+    const std::vector<int> expectBox = scanBox(boxes, qlo, qhi);
+    if (sortedOnce(box.ids) != expectBox) {
+      ADD_FAILURE() << where << ", box " << q << ": " << box.ids.size() << " reported, " << expectBox.size()
+                    << " expected";
+      return hits;
+    }
+    hits += expectBox.size();
+  }
+  return hits;
+}
+
+TEST(GridBroadphaseQueries, IndexedQueriesReportWhatTheScanReports) {
+  for (Scene scene : {Scene::Uniform, Scene::Clustered, Scene::Mixed, Scene::Flat, Scene::Identical,
+                      Scene::Far, Scene::Negative}) {
+    SCOPED_TRACE(nameOf(scene));
+    std::mt19937 rng(41 + int(scene));
+    gpucol::GridBroadphase grid;
+    std::vector<QueryBox> boxes(3000);
+    auto create = [&](std::size_t i) {
+      randomBox(scene, rng, boxes[i]);
+      boxes[i].proxy = grid.createProxy(boxes[i].lo, boxes[i].hi, BOX_SHAPE_PROXYTYPE,
+                                        reinterpret_cast<void*>(std::intptr_t(i)), 1, -1, nullptr);
+    };
+    auto move = [&](std::size_t i) {
+      randomBox(scene, rng, boxes[i]);
+      grid.setAabb(boxes[i].proxy, boxes[i].lo, boxes[i].hi, nullptr);
+    };
+    for (std::size_t i = 0; i < boxes.size(); ++i) create(i);
+    grid.calculateOverlappingPairs(nullptr);
+    std::size_t hits = checkQueries(grid, boxes, rng, 300, "fresh");
+    const gpucol::GridBroadphaseQueryStats first = grid.queryStats();
+    EXPECT_EQ(first.indexBuilds, 1u);
+    EXPECT_GT(first.indexed, 500u) << "the index should answer most queries";
+    EXPECT_GT(first.indexBytes, 0u);
+
+    // A few boxes move: the index keeps them aside and stays.
+    for (std::size_t i = 0; i < boxes.size(); i += 97) move(i);
+    hits += checkQueries(grid, boxes, rng, 150, "few moved");
+    // Some vanish and new ones take their slots (after a search, as in a world).
+    for (std::size_t i = 5; i < boxes.size(); i += 211) {
+      grid.destroyProxy(boxes[i].proxy, nullptr);
+      boxes[i].proxy = nullptr;
+    }
+    hits += checkQueries(grid, boxes, rng, 100, "few destroyed");
+    grid.calculateOverlappingPairs(nullptr);
+    for (std::size_t i = 5; i < boxes.size(); i += 211) create(i);
+    hits += checkQueries(grid, boxes, rng, 100, "slots reused");
+    EXPECT_EQ(grid.queryStats().indexBuilds, 1u) << "few changes should keep the index";
+
+    // Most boxes move: the index is dropped, queries scan, then it is built again.
+    for (std::size_t i = 0; i < boxes.size(); i += 2) move(i);
+    grid.calculateOverlappingPairs(nullptr);
+    hits += checkQueries(grid, boxes, rng, 150, "most moved");
+    const gpucol::GridBroadphaseQueryStats last = grid.queryStats();
+    EXPECT_EQ(last.indexBuilds, 2u);
+    EXPECT_GE(last.scans, first.scans + 7) << "queries after many moves should scan before the rebuild";
+    EXPECT_GT(hits, 2000u) << "queries should hit something";
+  }
+}
+
+TEST(GridBroadphaseQueries, FewProxiesOrFewQueriesScan) {
+  gpucol::GridBroadphase grid;
+  std::mt19937 rng(3);
+  std::vector<QueryBox> boxes(200);
+  for (std::size_t i = 0; i < boxes.size(); ++i) {
+    randomBox(Scene::Uniform, rng, boxes[i]);
+    boxes[i].proxy = grid.createProxy(boxes[i].lo, boxes[i].hi, BOX_SHAPE_PROXYTYPE,
+                                      reinterpret_cast<void*>(std::intptr_t(i)), 1, -1, nullptr);
+  }
+  checkQueries(grid, boxes, rng, 50, "200 proxies");
+  EXPECT_EQ(grid.queryStats().indexBuilds, 0u) << "no index below its proxy threshold";
+  EXPECT_EQ(grid.queryStats().indexBytes, 0u);
+
+  // Above the threshold, a world that moves every box between every two queries never builds one.
+  boxes.resize(2000);
+  for (std::size_t i = 200; i < boxes.size(); ++i) {
+    randomBox(Scene::Uniform, rng, boxes[i]);
+    boxes[i].proxy = grid.createProxy(boxes[i].lo, boxes[i].hi, BOX_SHAPE_PROXYTYPE,
+                                      reinterpret_cast<void*>(std::intptr_t(i)), 1, -1, nullptr);
+  }
+  for (int step = 0; step < 20; ++step) {
+    for (QueryBox& b : boxes) {
+      b.lo += btVector3(0.01f, 0, 0), b.hi += btVector3(0.01f, 0, 0);
+      grid.setAabb(b.proxy, b.lo, b.hi, nullptr);
+    }
+    grid.calculateOverlappingPairs(nullptr);
+    checkQueries(grid, boxes, rng, 2, "moving world");
+  }
+  EXPECT_EQ(grid.queryStats().indexBuilds, 0u) << "two queries per change should never pay for an index";
+}
+
+}  // namespace
