@@ -21,6 +21,8 @@ struct GridBroadphaseTuning {
   bool newtonSqrt = false;
   /// A box covering more cells than this is tested against all instead of being put in the grid.
   std::uint32_t hugeCellLimit = 64;
+  /// Let rayTest and aabbTest build and use the query index; false: every query tests every proxy.
+  bool queryIndex = true;
 };
 
 /// What the last calculateOverlappingPairs did.
