@@ -91,7 +91,7 @@ void QueryGrid::build(const ProxyArrays& p, const std::vector<std::uint32_t>& sl
   std::uint64_t entries = 0;
   for (std::uint32_t s : binned) forCells(rangeOf(s), [&](std::uint64_t c) { ++m_cellStart[c], ++entries; });
   if (entries > std::numeric_limits<std::uint32_t>::max()) {
-    // More entries than 32-bit starts can number: leave the index empty so the caller tests every box.
+    // More entries than 32-bit starts can number: no index (built() is false), so every query scans.
     clear();
     return;
   }
@@ -135,6 +135,7 @@ void QueryGrid::appendRow(std::uint32_t x0, std::uint32_t x1, std::uint32_t y, s
 
 bool QueryGrid::boxCandidates(const float lo[3], const float hi[3], std::size_t maxCandidates,
                               std::vector<std::uint32_t>& out) const {
+  if (!m_built) return false;
   // A box that overlaps the region contains the point max(its min, the region's min) on each axis, which
   // lies in the region too; cellOf is monotone, so that point's cell is visited and the box is filed there.
   // (An inverted region, min > max, is overlapped only by boxes spanning [max, min]: the same cells.)
@@ -164,6 +165,7 @@ bool QueryGrid::boxCandidates(const float lo[3], const float hi[3], std::size_t 
 
 bool QueryGrid::sweepCandidates(const QuerySweep& sweep, std::size_t maxCandidates,
                                 std::vector<std::uint32_t>& out) const {
+  if (!m_built) return false;
   const std::size_t before = out.size();
   // The region at point q is [q + lowOff, q + highOff] per axis: the cast box, widened by the rounding
   // allowance. Points q(t) for t between 0 and tMax (either sign: btRayAabb2 with a negative lambda still

@@ -31,7 +31,8 @@ class QueryGrid {
   void build(const ProxyArrays& p, const std::vector<std::uint32_t>& slots, std::uint32_t hugeCellLimit);
   /// Drops the index and its memory.
   void clear();
-  /// True from build until clear.
+  /// True from build until clear (false after a build whose entries would not fit 32-bit starts: then
+  /// every query returns false).
   bool built() const { return m_built; }
   /// Appends every filed slot whose box may overlap [lo, hi] (touching counts); repeats are possible.
   /// Returns false, leaving `out` as it was, when that would be more than `maxCandidates` slots or more

@@ -46,8 +46,7 @@ constexpr std::uint8_t kLive = 1;       // holds a live proxy
 constexpr std::uint8_t kMoved = 2;      // box, filter or life changed since the last search
 constexpr std::uint8_t kNonFinite = 4;  // box has a NaN or infinite component: hidden from the finder
 constexpr std::uint8_t kFreed = 8;      // destroyed since the last search: its pairs already left the cache
-constexpr std::uint8_t kOffIndex =
-    16;  // box set or slot reused since the query index was built (in offIndex)
+constexpr std::uint8_t kOffIndex = 16;  // set or reused since the query index was built (in offIndex)
 
 /// Queries (rayTest, aabbTest) test every proxy below this many live proxies: the index's cells and the
 /// sort of its candidates cost more than a scan of so few boxes.
