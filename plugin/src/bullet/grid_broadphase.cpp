@@ -295,12 +295,24 @@ struct GridBroadphase::Impl {
   /// testing kScanPerCandidate proxies in a scan.
   std::size_t maxCandidates() const { return slotCount / kScanPerCandidate; }
 
-  /// Reports `hits` (slots, any order, repeats allowed) to `report` in slot order, once each.
-  template <class Report>
-  void reportInSlotOrder(std::vector<std::uint32_t>& hits, Report&& report) {
-    std::sort(hits.begin(), hits.end());
-    hits.erase(std::unique(hits.begin(), hits.end()), hits.end());
-    for (std::uint32_t s : hits) report(s);
+  /// A query through the index: `candidates` (any order, repeats allowed) and the proxies kept aside are
+  /// tested with `test`, and the visible ones that pass go to `process`, in slot order, once each.
+  template <class Test, class Process>
+  void answerFromIndex(std::vector<std::uint32_t>& candidates, Test&& test, Process&& process) {
+    queryIndexed.fetch_add(1, std::memory_order_relaxed);
+    candidates.insert(candidates.end(), offIndex.begin(), offIndex.end());
+    std::sort(candidates.begin(), candidates.end());
+    candidates.erase(std::unique(candidates.begin(), candidates.end()), candidates.end());
+    for (std::uint32_t s : candidates)
+      if (visible(s) && test(s)) process(&proxy(s));
+  }
+
+  /// A query without the index: every visible proxy is tested, in slot order.
+  template <class Test, class Process>
+  void answerByScan(Test&& test, Process&& process) {
+    queryScans.fetch_add(1, std::memory_order_relaxed);
+    for (std::uint32_t s = 0; s < slotCount; ++s)
+      if (visible(s) && test(s)) process(&proxy(s));
   }
 
   void store(std::uint32_t s, const btVector3& lo, const btVector3& hi) {
@@ -488,6 +500,7 @@ void GridBroadphase::rayTest(const btVector3& rayFrom, const btVector3& /*rayTo*
     return btRayAabb2(rayFrom, rayCallback.m_rayDirectionInverse, rayCallback.m_signs, bounds, tmin, 0,
                       lambdaMax);
   };
+  auto process = [&](btBroadphaseProxy* p) { rayCallback.process(p); };
   if (const QueryGrid* index = d.queryIndex()) {
     // The sweep's direction is the one btRayAabb2 tests along, 1 / m_rayDirectionInverse; signs that do
     // not match it make btRayAabb2 test something else, which only a scan reproduces.
@@ -502,18 +515,10 @@ void GridBroadphase::rayTest(const btVector3& rayFrom, const btVector3& /*rayTo*
     }
     sweep.tMax = lambdaMax;
     std::vector<std::uint32_t> candidates;
-    if (usable && index->sweepCandidates(sweep, d.maxCandidates(), candidates)) {
-      d.queryIndexed.fetch_add(1, std::memory_order_relaxed);
-      candidates.insert(candidates.end(), d.offIndex.begin(), d.offIndex.end());
-      d.reportInSlotOrder(candidates, [&](std::uint32_t s) {
-        if (d.visible(s) && hits(s)) rayCallback.process(&d.proxy(s));
-      });
-      return;
-    }
+    if (usable && index->sweepCandidates(sweep, d.maxCandidates(), candidates))
+      return d.answerFromIndex(candidates, hits, process);
   }
-  d.queryScans.fetch_add(1, std::memory_order_relaxed);
-  for (std::uint32_t s = 0; s < d.slotCount; ++s)
-    if (d.visible(s) && hits(s)) rayCallback.process(&d.proxy(s));
+  d.answerByScan(hits, process);
 }
 
 void GridBroadphase::aabbTest(const btVector3& aabbMin, const btVector3& aabbMax,
@@ -527,22 +532,15 @@ void GridBroadphase::aabbTest(const btVector3& aabbMin, const btVector3& aabbMax
     return lo.x() <= aabbMax.x() && hi.x() >= aabbMin.x() && lo.y() <= aabbMax.y() && hi.y() >= aabbMin.y() &&
            lo.z() <= aabbMax.z() && hi.z() >= aabbMin.z();
   };
+  auto process = [&](btBroadphaseProxy* p) { callback.process(p); };
   if (const QueryGrid* index = d.queryIndex()) {
     const float lo[3] = {aabbMin.x(), aabbMin.y(), aabbMin.z()};
     const float hi[3] = {aabbMax.x(), aabbMax.y(), aabbMax.z()};
     std::vector<std::uint32_t> candidates;
-    if (index->boxCandidates(lo, hi, d.maxCandidates(), candidates)) {
-      d.queryIndexed.fetch_add(1, std::memory_order_relaxed);
-      candidates.insert(candidates.end(), d.offIndex.begin(), d.offIndex.end());
-      d.reportInSlotOrder(candidates, [&](std::uint32_t s) {
-        if (d.visible(s) && overlaps(s)) callback.process(&d.proxy(s));
-      });
-      return;
-    }
+    if (index->boxCandidates(lo, hi, d.maxCandidates(), candidates))
+      return d.answerFromIndex(candidates, overlaps, process);
   }
-  d.queryScans.fetch_add(1, std::memory_order_relaxed);
-  for (std::uint32_t s = 0; s < d.slotCount; ++s)
-    if (d.visible(s) && overlaps(s)) callback.process(&d.proxy(s));
+  d.answerByScan(overlaps, process);
 }
 
 void GridBroadphase::calculateOverlappingPairs(btDispatcher* dispatcher) {
