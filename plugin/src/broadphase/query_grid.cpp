@@ -79,7 +79,7 @@ void QueryGrid::build(const ProxyArrays& p, const std::vector<std::uint32_t>& sl
   auto forCells = [&](const CellBox& r, auto&& f) {
     for (std::uint32_t z = r.lo[2]; z <= r.hi[2]; ++z)
       for (std::uint32_t y = r.lo[1]; y <= r.hi[1]; ++y) {
-        const std::uint64_t row = std::uint64_t(m_grid.dims[0]) * (y + std::uint64_t(m_grid.dims[1]) * z);
+        const std::uint64_t row = rowStart(y, z);
         for (std::uint32_t x = r.lo[0]; x <= r.hi[0]; ++x) f(row + x);
       }
   };
@@ -120,15 +120,19 @@ std::size_t QueryGrid::memoryBytes() const {
   return (m_cellStart.capacity() + m_entries.capacity() + m_huge.capacity()) * sizeof(std::uint32_t);
 }
 
+std::uint64_t QueryGrid::rowStart(std::uint32_t y, std::uint32_t z) const {
+  return std::uint64_t(m_grid.dims[0]) * (y + std::uint64_t(m_grid.dims[1]) * z);
+}
+
 std::size_t QueryGrid::rowEntries(std::uint32_t x0, std::uint32_t x1, std::uint32_t y,
                                   std::uint32_t z) const {
-  const std::uint64_t row = std::uint64_t(m_grid.dims[0]) * (y + std::uint64_t(m_grid.dims[1]) * z);
+  const std::uint64_t row = rowStart(y, z);
   return m_cellStart[row + x1 + 1] - m_cellStart[row + x0];
 }
 
 void QueryGrid::appendRow(std::uint32_t x0, std::uint32_t x1, std::uint32_t y, std::uint32_t z,
                           std::vector<std::uint32_t>& out) const {
-  const std::uint64_t row = std::uint64_t(m_grid.dims[0]) * (y + std::uint64_t(m_grid.dims[1]) * z);
+  const std::uint64_t row = rowStart(y, z);
   out.insert(out.end(), m_entries.begin() + std::ptrdiff_t(m_cellStart[row + x0]),
              m_entries.begin() + std::ptrdiff_t(m_cellStart[row + x1 + 1]));
 }

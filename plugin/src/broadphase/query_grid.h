@@ -48,6 +48,8 @@ class QueryGrid {
   std::size_t memoryBytes() const;
 
  private:
+  /// Index of the cell (0, y, z): the first cell of row (y, z).
+  std::uint64_t rowStart(std::uint32_t y, std::uint32_t z) const;
   /// Entries in the cells x in [x0, x1] of row (y, z).
   std::size_t rowEntries(std::uint32_t x0, std::uint32_t x1, std::uint32_t y, std::uint32_t z) const;
   /// Appends the entries of the cells x in [x0, x1] of row (y, z).

@@ -233,7 +233,9 @@ struct GridBroadphase::Impl {
   /// A proxy's box was set, or its slot given to a new proxy: the query index no longer knows where it is.
   void boxChanged(std::uint32_t s) {
     if (!indexReady.load(std::memory_order_relaxed)) {
-      scansSinceChange.store(0, std::memory_order_relaxed);
+      // Read first: setAabb runs for every moved proxy of a step, and a store on each would dirty the line.
+      if (scansSinceChange.load(std::memory_order_relaxed) != 0)
+        scansSinceChange.store(0, std::memory_order_relaxed);
       return;
     }
     if (state[s] & kOffIndex) return;
