@@ -344,8 +344,9 @@ void runAll(const Options& o) {
   const std::vector<std::string> runs = parseNames(o.runs);
   auto wanted = [&](const char* name) { return std::find(runs.begin(), runs.end(), name) != runs.end(); };
   for (const std::string& name : runs)
-    if (name != "cpu" && name != "opencl" && name != "dbvt" && name != "sap" && name != "b3")
-      throw std::runtime_error("unknown broad phase " + name + " (cpu, opencl, dbvt, sap, b3)");
+    if (name != "cpu" && name != "cpu-whole" && name != "opencl" && name != "dbvt" && name != "sap" &&
+        name != "b3")
+      throw std::runtime_error("unknown broad phase " + name + " (cpu, cpu-whole, opencl, dbvt, sap, b3)");
 
   // Ours on OpenCL and Bullet3's peer run on the same device: the one gpucol's OpenCL layer chooses.
   Config base;
@@ -400,19 +401,21 @@ void runAll(const Options& o) {
       tuning.densityCellSize = o.cellRule == "density";
       tuning.bitMaskOutput = o.output == "bitmask";
       tuning.newtonSqrt = o.sqrtMode == "newton";
-      for (const Backend backend : {Backend::Cpu, Backend::OpenCL}) {
-        const bool cpu = backend == Backend::Cpu;
-        const std::string label = cpu ? "gpucol-cpu" : "gpucol-opencl";
-        if (!wanted(cpu ? "cpu" : "opencl")) continue;
+      for (const char* variant : {"cpu", "cpu-whole", "opencl"}) {
+        const bool cpu = std::string(variant) != "opencl";
+        const std::string label = std::string("gpucol-") + variant;
+        if (!wanted(variant)) continue;
         if (!cpu && !openClWhy.empty()) {
           results.push_back(notRun(label, openClWhy));
           continue;
         }
         Config config = base;
-        config.broadphaseBackend = backend;
+        config.broadphaseBackend = cpu ? Backend::Cpu : Backend::OpenCL;
         grids.push_back(std::make_unique<GridBroadphase>(config));
         GridBroadphase* grid = grids.back().get();
-        grid->setTuning(tuning);
+        GridBroadphaseTuning variantTuning = tuning;
+        variantTuning.slabSearch = std::string(variant) != "cpu-whole";
+        grid->setTuning(variantTuning);
         stepStats.emplace_back();
         std::vector<GridBroadphaseStats>* stats = &stepStats.back();
         add(std::make_unique<BulletStepper>(
@@ -458,7 +461,8 @@ void runAll(const Options& o) {
       for (std::size_t i = 0; i < steppers.size(); ++i) results[slot[i]] = steppers[i]->finish();
       for (std::size_t g = 0; g < grids.size(); ++g) {
         Result& r = results[slot[g]];
-        if (o.stages && r.broadphase == "gpucol-cpu") printStages(sceneName, n, r.broadphase, stepStats[g]);
+        if (o.stages && r.broadphase != "gpucol-opencl")
+          printStages(sceneName, n, r.broadphase, stepStats[g]);
         if (r.broadphase == "gpucol-opencl" && !grids[g]->stats().usedOpenCl)
           r.note = "ran on the CPU: OpenCL path fell back";
       }
@@ -515,9 +519,11 @@ const CommandRegistration kRegistration([](CLI::App& app) {
                   "comma-separated scenes: uniform (cloud), column (falling, the paper's), "
                   "mixed (sizes, a few huge boxes), sleeping (cloud, 1% moving)")
       ->capture_default_str();
-  cmd->add_option("--run", options->runs,
-                  "comma-separated broad phases: cpu, opencl (gpucol), dbvt (btDbvtBroadphase), sap "
-                  "(bt32BitAxisSweep3), b3 (b3GpuGridBroadphase)")
+  cmd->add_option(
+         "--run", options->runs,
+         "comma-separated broad phases: cpu, opencl (gpucol), cpu-whole (gpucol CPU, grid never cut in "
+         "slabs), dbvt (btDbvtBroadphase), sap "
+         "(bt32BitAxisSweep3), b3 (b3GpuGridBroadphase)")
       ->capture_default_str();
   cmd->add_option("--steps", options->steps, "timed steps per case (median reported)")
       ->check(CLI::PositiveNumber)

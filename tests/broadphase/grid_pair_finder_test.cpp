@@ -44,7 +44,8 @@ Scene uniformCloud(int n, float side, float halfSize, std::uint32_t seed) {
   return s;
 }
 
-/// Checks the finder against brute force with every combination of options, grid forced and not.
+/// Checks the finder against brute force with every combination of options, grid forced and not, the grid
+/// searched whole and in slabs (of 64 boxes, so that small scenes have many).
 void expectMatchesBruteForce(const Scene& scene, const std::string& what, std::uint64_t minPairs = 1) {
   const gpucol::ProxyArrays view = scene.view();
   const std::vector<std::uint64_t> reference = gpucol::findPairsBruteForce(view);
@@ -53,19 +54,26 @@ void expectMatchesBruteForce(const Scene& scene, const std::string& what, std::u
   for (std::uint32_t below : {0u, 1000000u})
     for (auto rule : {gpucol::CellSizeRule::Size, gpucol::CellSizeRule::Density})
       for (auto output : {gpucol::PairOutput::Compacted, gpucol::PairOutput::BitMask})
-        for (auto sqrtMode : {gpucol::MappingSqrt::Double, gpucol::MappingSqrt::Newton}) {
-          gpucol::PairFinderOptions o;
-          o.bruteForceBelow = below;
-          o.cellSizeRule = rule;
-          o.output = output;
-          o.mappingSqrt = sqrtMode;
-          std::vector<std::uint64_t> pairs;
-          finder->findPairs(view, o, pairs);
-          ASSERT_EQ(pairs, reference)
-              << what << " below=" << below << " rule=" << int(rule) << " output=" << int(output)
-              << " sqrt=" << int(sqrtMode) << " grid=" << finder->stats().usedGrid;
-          EXPECT_EQ(finder->stats().usedGrid, below == 0) << what;
-        }
+        for (auto sqrtMode : {gpucol::MappingSqrt::Double, gpucol::MappingSqrt::Newton})
+          for (auto tiling : {gpucol::SlabTiling::Off, gpucol::SlabTiling::Always}) {
+            gpucol::PairFinderOptions o;
+            o.bruteForceBelow = below;
+            o.cellSizeRule = rule;
+            o.output = output;
+            o.mappingSqrt = sqrtMode;
+            o.slabTiling = tiling;
+            o.slabBoxes = 64;
+            std::vector<std::uint64_t> pairs;
+            finder->findPairs(view, o, pairs);
+            ASSERT_EQ(pairs, reference)
+                << what << " below=" << below << " rule=" << int(rule) << " output=" << int(output)
+                << " sqrt=" << int(sqrtMode) << " tiling=" << int(tiling)
+                << " grid=" << finder->stats().usedGrid << " slabs=" << finder->stats().slabs;
+            EXPECT_EQ(finder->stats().usedGrid, below == 0) << what;
+            if (tiling == gpucol::SlabTiling::Off || output == gpucol::PairOutput::BitMask) {
+              EXPECT_EQ(finder->stats().slabs, 0u) << what;
+            }
+          }
 }
 
 TEST(GridPairFinder, UniformCloud) {
@@ -314,6 +322,42 @@ TEST(GridPairFinder, SparseGridPath) {
           0.5f * (t.minZ[i] + t.maxZ[i]) + 5000.0f, 0.5f * (t.maxX[i] - t.minX[i]),
           0.5f * (t.maxY[i] - t.minY[i]), 0.5f * (t.maxZ[i] - t.minZ[i]));
   expectMatchesBruteForce(s, "sparse");
+}
+
+/// SlabTiling::Auto: a first search keeps its grid for stage 11 (searched whole); a search where most proxies
+/// moved is cut into slabs, with the same pairs and the same (cell, box) entries; a search where few moved
+/// uses the kept grid again. Huge boxes cross many slabs, some through their cells, some one by one.
+TEST(GridPairFinder, SlabSearchWhenMostProxiesMove) {
+  Scene s = uniformCloud(12000, 22.0f, 0.6f, 13);
+  s.add(0, -23, 0, 30, 1, 30);  // a ground box crossing every slab: tested one by one
+  s.add(0, 0, 0, 5, 5, 5);      // a box of a few hundred cells: tested through its cells
+  s.add(10, 5, -8, 1, 25, 1);   // a pillar along the slab axis
+  std::vector<std::uint8_t> moved(s.flags.size(), 1);
+  auto finder = gpucol::makeCpuPairFinder();
+  gpucol::PairFinderOptions o;
+  o.bruteForceBelow = 0;
+  std::vector<std::uint64_t> pairs;
+  gpucol::ProxyArrays view = s.view();
+  finder->findPairs(view, o, pairs);
+  EXPECT_EQ(finder->stats().slabs, 0u) << "a first search keeps its grid";
+  const std::uint64_t wholeKeys = finder->stats().keys;
+  ASSERT_EQ(pairs, gpucol::findPairsBruteForce(view));
+
+  view.moved = moved.data();
+  finder->findPairs(view, o, pairs);
+  EXPECT_GE(finder->stats().slabs, 8u);
+  EXPECT_GE(finder->stats().hugeProxies, 3u);
+  EXPECT_EQ(finder->stats().keys, wholeKeys) << "each (cell, box) entry lies in one slab";
+  ASSERT_EQ(pairs, gpucol::findPairsBruteForce(view));
+
+  std::fill(moved.begin(), moved.end(), std::uint8_t(0));
+  for (std::size_t i = 0; i < moved.size(); i += 50) {
+    s.minY[i] += 0.2f, s.maxY[i] += 0.2f;
+    moved[i] = 1;
+  }
+  finder->findPairs(view, o, pairs);
+  EXPECT_EQ(finder->stats().slabs, 0u) << "few moved: the grid of this search is kept";
+  ASSERT_EQ(pairs, gpucol::findPairsBruteForce(view));
 }
 
 TEST(GridPairFinder, DeterministicWhateverTheThreadCount) {

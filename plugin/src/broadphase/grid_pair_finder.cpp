@@ -17,7 +17,9 @@
 #include <utility>
 
 #include "broadphase/grid_choice.h"
+#include "broadphase/local_box.h"
 #include "broadphase/pair_mapping.h"
+#include "broadphase/slab_search.h"
 #include "memory/large_array_allocator.h"
 
 namespace gpucol {
@@ -38,13 +40,9 @@ constexpr std::size_t kSortChunks = 16;
 /// box's home cell (the cell of its min corner), which the huge boxes' tests read without loading the box.
 constexpr std::uint32_t kHomeEntry = 1u << 31;
 constexpr std::uint32_t kEntryBox = kHomeEntry - 1;
-/// Runs of kLocalRunMin to kLocalRunMax boxes are tested four candidates at a time (testRuns).
-constexpr std::uint32_t kLocalRunMin = 8;
-constexpr std::uint32_t kLocalRunMax = 64;
-/// Four floats, and the four lanes of a comparison of two (-1 true, 0 false): GCC/Clang vector extensions,
-/// which compile to SSE on x86-64 and to scalar code where there is no vector unit.
-using Float4 = float __attribute__((vector_size(16)));
-using Int4 = std::int32_t __attribute__((vector_size(16)));
+/// SlabTiling::Auto cuts a grid into slabs only when at least this many come out, so both cores have work
+/// while the slowest slab finishes.
+constexpr std::uint32_t kMinSlabs = 8;
 /// Chunks per search at most, so per-chunk bookkeeping stays small next to the work.
 constexpr std::uint64_t kMaxChunks = 256;
 
@@ -59,73 +57,6 @@ inline bool passesFilter(const ProxyArrays& p, std::uint32_t a, std::uint32_t b)
   // static–static pairs never exist.
   return (p.group[a] & p.mask[b]) != 0 && (p.group[b] & p.mask[a]) != 0 &&
          ((p.flags[a] & p.flags[b] & kProxyStatic) == 0);
-}
-
-/// Cell ranges [lo, hi] of one box on the three axes.
-struct CellRange {
-  std::uint32_t lo[3];
-  std::uint32_t hi[3];
-  std::uint64_t count() const {
-    return std::uint64_t(hi[0] - lo[0] + 1) * (hi[1] - lo[1] + 1) * (hi[2] - lo[2] + 1);
-  }
-};
-
-/// A binned box copied next to its grid neighbours (ordered by the cell of its min corner), with its filter,
-/// so the candidate tests read nearby memory instead of nine scattered SoA arrays per proxy (perf showed the
-/// filter's loads by slot, cache misses, taking about 45% of the candidate tests at 1M boxes).
-struct LocalBox {
-  float lo[3];
-  float hi[3];
-  std::uint32_t slot;
-  std::int32_t group;
-  std::int32_t mask;
-  std::uint32_t flags;
-};
-
-/// passesFilter on local copies.
-inline bool passesFilter(const LocalBox& a, const LocalBox& b) {
-  return (a.group & b.mask) != 0 && (b.group & a.mask) != 0 && ((a.flags & b.flags & kProxyStatic) == 0);
-}
-
-inline CellRange cellRange(const LocalBox& b, const Grid& g) {
-  CellRange r;
-  for (int a = 0; a < 3; ++a) {
-    r.lo[a] = cellOf(b.lo[a], g.origin[a], g.invCell, g.dims[a]);
-    r.hi[a] = cellOf(b.hi[a], g.origin[a], g.invCell, g.dims[a]);
-  }
-  return r;
-}
-
-/// Stage 3's test: a box that covers more than `limit` cells of edge `cell` (estimated from its extents).
-inline bool isHuge(const ProxyArrays& p, std::uint32_t s, float cell, std::uint32_t limit) {
-  const double inv = 1.0 / double(cell);
-  const double covered = (double(p.maxX[s] - p.minX[s]) * inv + 1.0) *
-                         (double(p.maxY[s] - p.minY[s]) * inv + 1.0) *
-                         (double(p.maxZ[s] - p.minZ[s]) * inv + 1.0);
-  return covered > double(limit);
-}
-
-inline LocalBox boxOf(const ProxyArrays& p, std::uint32_t s) {
-  return LocalBox{{p.minX[s], p.minY[s], p.minZ[s]},
-                  {p.maxX[s], p.maxY[s], p.maxZ[s]},
-                  s,
-                  p.group[s],
-                  p.mask[s],
-                  p.flags[s]};
-}
-
-/// Touching-counts overlap of two local boxes, without short-circuit branches (see testRuns).
-inline bool boxesOverlap(const LocalBox& a, const LocalBox& b) {
-  return int(a.lo[0] <= b.hi[0]) & int(b.lo[0] <= a.hi[0]) & int(a.lo[1] <= b.hi[1]) &
-         int(b.lo[1] <= a.hi[1]) & int(a.lo[2] <= b.hi[2]) & int(b.lo[2] <= a.hi[2]);
-}
-
-/// Stage 9: the cell that holds the min corner of the overlap of a and b.
-inline std::uint32_t overlapCell(const LocalBox& a, const LocalBox& b, const Grid& g) {
-  const std::uint32_t cx = cellOf(std::max(a.lo[0], b.lo[0]), g.origin[0], g.invCell, g.dims[0]);
-  const std::uint32_t cy = cellOf(std::max(a.lo[1], b.lo[1]), g.origin[1], g.invCell, g.dims[1]);
-  const std::uint32_t cz = cellOf(std::max(a.lo[2], b.lo[2]), g.origin[2], g.invCell, g.dims[2]);
-  return std::uint32_t((std::uint64_t(cz) * g.dims[1] + cy) * g.dims[0] + cx);
 }
 
 inline std::uint32_t homeCell(const ProxyArrays& p, std::uint32_t s, const Grid& g) {
@@ -267,6 +198,11 @@ void sortPairs(std::vector<std::uint64_t>& keys, std::vector<std::uint64_t>& scr
   });
 }
 
+/// A grid of at most this many cells for `binned` boxes is dense: sorted by a counting sort over its cells.
+inline std::uint64_t denseCellLimit(std::size_t binned) {
+  return 8 * std::uint64_t(binned) + 1024;
+}
+
 /// Bits needed for slots below `count` (at least 1).
 inline std::uint32_t slotBitsFor(std::uint32_t count) {
   std::uint32_t bits = 1;
@@ -311,7 +247,9 @@ class CpuPairFinder final : public PairFinder {
 
  private:
   void bruteForce(const ProxyArrays& p, const PairFinderOptions& options, std::vector<std::uint64_t>& pairs);
-  void grid(const ProxyArrays& p, const PairFinderOptions& options, std::vector<std::uint64_t>& pairs);
+  void grid(const ProxyArrays& p, const PairFinderOptions& options, bool keepGrid,
+            std::vector<std::uint64_t>& pairs);
+  bool searchSlabs(const ProxyArrays& p, const PairFinderOptions& options, bool keepGrid, const Grid& g);
   void binSorted(const ProxyArrays& p, const Grid& g);
   void testRuns(const PairFinderOptions& options, const Grid& g);
   void testHuge(const ProxyArrays& p, const Grid& g);
@@ -358,6 +296,7 @@ class CpuPairFinder final : public PairFinder {
   std::vector<std::uint32_t> m_offsets;         // sparse path: first key of each box (exclusive prefix sum)
   std::vector<std::uint64_t> m_bits;            // bit mask output (stage 10)
   std::vector<std::vector<std::uint64_t>> m_chunkPairs;  // output per chunk (kept for its capacity)
+  SlabSearch m_slabs;                                    // the slab search's plan and working memory
   std::size_t m_chunksUsed = 0;                          // chunks of m_chunkPairs filled by this search
 
   /// Reserves `count` more output chunks and returns the index of the first.
@@ -397,12 +336,13 @@ void CpuPairFinder::findPairs(const ProxyArrays& proxies, const PairFinderOption
   } else if (keepGrid(proxies, options)) {
     incremental(proxies, options, pairs);
   } else {
-    grid(proxies, options, pairs);
     // Stage 11: keep this grid (dense grids only: their cells are looked up directly) after a first search
     // (nothing is known about motion yet: a world starts at rest) or when few proxies changed since the
     // last one (a scene coming to rest). Where most move, the next search is a full one anyway, and keeping
     // the grid would only hold its memory between steps.
-    m_kept = m_denseBuilt && (proxies.moved == nullptr || fewMoved(proxies));
+    const bool keep = proxies.moved == nullptr || fewMoved(proxies);
+    grid(proxies, options, keep, pairs);
+    m_kept = m_denseBuilt && keep;
     if (m_kept) {
       m_keptOptions = options;
       m_unchanged.assign(proxies.count, 0);
@@ -442,6 +382,7 @@ void CpuPairFinder::releaseScratch() {
   release(m_movedKeys), release(m_sortScratch), release(m_runCell), release(m_runStart);
   release(m_runLength), release(m_runPrefix), release(m_blockRuns), release(m_offsets), release(m_bits);
   release(m_chunkPairs);
+  m_slabs.release();
   if (!m_kept) release(m_cellStart), release(m_sorted), release(m_unchanged), release(m_keptHuge);
 }
 
@@ -600,7 +541,7 @@ void CpuPairFinder::bruteForce(const ProxyArrays& p, const PairFinderOptions& op
 void CpuPairFinder::binSorted(const ProxyArrays& p, const Grid& g) {
   const std::size_t n = m_binned.size();
   const std::uint64_t cells = g.cells();
-  const bool dense = cells <= 8 * std::uint64_t(n) + 1024;
+  const bool dense = cells <= denseCellLimit(n);
   // Locality: order the binned boxes by the cell of their min corner, and copy them into one
   // array in that order; cell neighbours are then memory neighbours for the candidate tests (stage 8).
   m_box.resize(n);
@@ -798,39 +739,13 @@ void CpuPairFinder::testRuns(const PairFinderOptions& options, const Grid& g) {
     return (std::uint64_t(cz) * g.dims[1] + cy) * g.dims[0] + cx == m_runCell[run] && passesFilter(a, b);
   };
 
-  // Stages 8-9 for a whole run of kLocalRunMin to kLocalRunMax boxes (dense piles such as the falling column
-  // have runs of about 20): a structure-of-arrays copy of its boxes, padded with boxes that overlap nothing,
-  // and each row tested four candidates at a time in vector code; accept() then checks the few hits.
+  // Stages 8-9 for a whole run of kLocalRunMin to kLocalRunMax boxes, four candidates at a time.
   auto testWholeRun = [&](std::size_t run, std::vector<std::uint64_t>& out) {
-    const std::uint32_t m = m_runLength[run];
     const std::uint32_t* local = m_sorted.data() + m_runStart[run];
-    alignas(16) float lo[3][kLocalRunMax + 4], hi[3][kLocalRunMax + 4];
-    const LocalBox* box[kLocalRunMax];
-    for (std::uint32_t e = 0; e < m; ++e) {
-      const LocalBox& b = m_box[local[e] & kEntryBox];
-      for (int a = 0; a < 3; ++a) lo[a][e] = b.lo[a], hi[a][e] = b.hi[a];
-      box[e] = &b;
-    }
-    for (std::uint32_t e = m; e < m + 4; ++e)
-      for (int a = 0; a < 3; ++a)
-        lo[a][e] = std::numeric_limits<float>::infinity(), hi[a][e] = -std::numeric_limits<float>::infinity();
-    auto load = [](const float* p) {
-      Float4 v;
-      std::memcpy(&v, p, sizeof v);
-      return v;
-    };
-    for (std::uint32_t i = 0; i + 1 < m; ++i) {
-      const Float4 alx = Float4{} + lo[0][i], aly = Float4{} + lo[1][i], alz = Float4{} + lo[2][i];
-      const Float4 ahx = Float4{} + hi[0][i], ahy = Float4{} + hi[1][i], ahz = Float4{} + hi[2][i];
-      for (std::uint32_t j = i + 1; j < m; j += 4) {
-        const Int4 hit = (alx <= load(&hi[0][j])) & (load(&lo[0][j]) <= ahx) & (aly <= load(&hi[1][j])) &
-                         (load(&lo[1][j]) <= ahy) & (alz <= load(&hi[2][j])) & (load(&lo[2][j]) <= ahz);
-        if ((hit[0] | hit[1] | hit[2] | hit[3]) == 0) continue;
-        for (std::uint32_t l = 0; l < 4 && j + l < m; ++l)
-          if (hit[l] && accept(run, *box[i], *box[j + l]))
-            out.push_back(makePairKey(box[i]->slot, box[j + l]->slot));
-      }
-    }
+    auto boxAt = [&](std::uint32_t e) -> const LocalBox& { return m_box[local[e] & kEntryBox]; };
+    forEachOverlapInRun(m_runLength[run], boxAt, [&](std::uint32_t i, std::uint32_t j) {
+      if (accept(run, boxAt(i), boxAt(j))) out.push_back(makePairKey(boxAt(i).slot, boxAt(j).slot));
+    });
   };
 
   tbb::parallel_for(std::uint64_t(0), chunks, [&](std::uint64_t c) {
@@ -962,7 +877,7 @@ void CpuPairFinder::gather(std::vector<std::uint64_t>& pairs) {
   });
 }
 
-void CpuPairFinder::grid(const ProxyArrays& p, const PairFinderOptions& options,
+void CpuPairFinder::grid(const ProxyArrays& p, const PairFinderOptions& options, bool keepGrid,
                          std::vector<std::uint64_t>& pairs) {
   m_stats.usedGrid = true;
   m_denseBuilt = false;
@@ -975,18 +890,46 @@ void CpuPairFinder::grid(const ProxyArrays& p, const PairFinderOptions& options,
   m_stats.cellSize = g.cell;
   for (int a = 0; a < 3; ++a) m_stats.dims[a] = g.dims[a];
   m_stats.chooseMs = clock.lap();
-  if (!m_binned.empty()) {
-    binSorted(p, g);
-    m_stats.binMs = clock.lap();
-    testRuns(options, g);
-    m_stats.testMs = clock.lap();
+  if (!searchSlabs(p, options, keepGrid, g)) {
+    if (!m_binned.empty()) {
+      binSorted(p, g);
+      m_stats.binMs = clock.lap();
+      testRuns(options, g);
+      m_stats.testMs = clock.lap();
+    }
+    testHuge(p, g);
+    m_stats.hugeMs = clock.lap();
+  } else {
+    clock.lap();  // the slab search timed its own parts
   }
-  testHuge(p, g);
-  m_stats.hugeMs = clock.lap();
   gather(pairs);
   // Stage 10: one order whatever the chunking, threads or device.
   sortPairs(pairs, m_sortScratch, slotBitsFor(p.count));
   m_stats.sortMs = clock.lap();
+}
+
+bool CpuPairFinder::searchSlabs(const ProxyArrays& p, const PairFinderOptions& options, bool keepGrid,
+                                const Grid& g) {
+  // The whole-grid search serves what slabs cannot: the bit mask (indexed by global candidate numbers), a
+  // grid kept for stage 11, and sparse grids (a slab of a sparse grid would have mostly empty cells).
+  if (options.slabTiling == SlabTiling::Off || options.output != PairOutput::Compacted || m_binned.empty() ||
+      g.cells() > denseCellLimit(m_binned.size()))
+    return false;
+  const bool always = options.slabTiling == SlabTiling::Always;
+  if (keepGrid && !always) return false;
+  StageClock clock;
+  if (!m_slabs.plan(p, m_binned, g, options.slabBoxes, always ? 1 : kMinSlabs)) return false;
+  m_stats.binMs = clock.lap();
+  const std::size_t first = takeChunks(m_slabs.outputs(m_huge.size()));
+  const SlabSearchCounts counts = m_slabs.search(p, m_huge, g, m_chunkPairs, first);
+  m_stats.testMs = clock.lap();
+  m_stats.slabs = std::uint32_t(m_slabs.slabs());
+  m_stats.keys = counts.keys;
+  m_stats.candidates += counts.candidates;
+  // The home order serves the whole-grid search's locality only; a slab search does not keep it up to date.
+  std::vector<std::uint32_t>().swap(m_homeOrder);
+  std::vector<std::uint32_t>().swap(m_homePos);
+  return true;
 }
 
 std::size_t CpuPairFinder::scratchBytes() const {
@@ -1002,7 +945,7 @@ std::size_t CpuPairFinder::scratchBytes() const {
   bytes += m_runPrefix.capacity() * 8 + m_bits.capacity() * 8 + m_blockRuns.capacity() * 4 +
            m_offsets.capacity() * 4;
   for (const auto& c : m_chunkPairs) bytes += c.capacity() * 8;
-  return bytes;
+  return bytes + m_slabs.bytes();
 }
 
 PairFinderFactory& openClFactory() {

@@ -98,6 +98,12 @@ enum class PairOutput { BitMask, Compacted };
 /// Square root used for the mapping function's first guess (paper §3.3); results are identical.
 enum class MappingSqrt { Double, Newton };
 
+/// Whether the CPU finder searches a dense grid slab by slab (slab_search.h); results are identical.
+/// Auto: full searches whose grid is not kept for stage 11 (most proxies moved), with compacted output, when
+/// the grid cuts into at least kMinSlabs slabs. Always: every full search of a dense grid with compacted
+/// output (tests). Off: never (benchmarks compare).
+enum class SlabTiling { Auto, Always, Off };
+
 /// Knobs of one pair search.
 struct PairFinderOptions {
   /// Below this many active proxies all pairs are tested without a grid (Config::bruteForceBelow).
@@ -110,6 +116,10 @@ struct PairFinderOptions {
   MappingSqrt mappingSqrt = MappingSqrt::Double;
   /// A box covering more cells than this is tested against all instead of being binned.
   std::uint32_t hugeCellLimit = 64;
+  /// CPU finder: slab tiling of full searches.
+  SlabTiling slabTiling = SlabTiling::Auto;
+  /// CPU finder: boxes per slab aimed at (0: automatic, slab_search.cpp).
+  std::uint32_t slabBoxes = 0;
 };
 
 /// What one search did (for benchmarks, tests and printStats).
@@ -131,6 +141,8 @@ struct PairFinderStats {
   /// Bytes of the finder's memory at the end of the search, before it released its scratch (0: not known;
   /// then scratchBytes is all there was).
   std::size_t peakScratchBytes = 0;
+  /// Slabs of a slab search (slab_search.h); 0 when the grid was searched whole.
+  std::uint32_t slabs = 0;
   /// True when the search kept the last grid and binned only moved proxies (stage 11).
   bool incremental = false;
   /// Active proxies neither re-binned nor tested among themselves in this search (stage 11).
@@ -139,7 +151,8 @@ struct PairFinderStats {
   std::uint32_t rebinnedProxies = 0;
   /// Wall-clock milliseconds of the stages of a full grid search (CPU finder; 0 elsewhere): stages 2-3
   /// (cell size, huge split), 4-6 (binning, sort by cell, runs), 7-9 (candidate tests),
-  /// 3 (huge boxes against the rest) and 10 (gather and sort of the pair keys).
+  /// 3 (huge boxes against the rest) and 10 (gather and sort of the pair keys). A slab search bins and tests
+  /// each slab in one go: binMs is then its planning (slab lists), testMs the slabs, huge boxes included.
   double chooseMs = 0, binMs = 0, testMs = 0, hugeMs = 0, sortMs = 0;
 };
 

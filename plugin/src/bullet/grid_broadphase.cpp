@@ -379,6 +379,7 @@ struct GridBroadphase::Impl {
     o.output = tuning.bitMaskOutput ? PairOutput::BitMask : PairOutput::Compacted;
     o.mappingSqrt = tuning.newtonSqrt ? MappingSqrt::Newton : MappingSqrt::Double;
     o.hugeCellLimit = tuning.hugeCellLimit;
+    o.slabTiling = tuning.slabSearch ? SlabTiling::Auto : SlabTiling::Off;
     return o;
   }
 

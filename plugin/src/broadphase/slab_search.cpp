@@ -1,0 +1,317 @@
+// The slab search (slab_search.h); stage numbers refer to grid_pair_finder.h.
+#include "broadphase/slab_search.h"
+
+#include <tbb/blocked_range.h>
+#include <tbb/parallel_for.h>
+#include <tbb/partitioner.h>
+
+#include <algorithm>
+#include <stdexcept>
+#include <string>
+#include <utility>
+
+namespace gpucol {
+namespace {
+
+/// Slabs a scene is cut into when every slab holds its share (more slabs: less working memory per thread
+/// and better balance, more boxes listed twice where they cross a slab boundary).
+constexpr std::uint64_t kSlabsAimed = 32;
+/// Boxes per slab at least (smaller slabs cost more in per-slab setup than they save).
+constexpr std::uint64_t kMinSlabBoxes = 256;
+/// A slab is also closed once it has this many cells per box aimed at, so a sparse stretch of the grid
+/// does not make one slab's cell array large.
+constexpr std::uint64_t kCellsPerSlabBox = 8;
+/// Binned boxes per task of the planning passes.
+constexpr std::size_t kPlanGrain = 4096;
+/// Tasks of the planning passes at most (each has a count per slab).
+constexpr std::size_t kPlanChunks = 64;
+/// An entry is a box index and, in its top three bits, on which axes the cell is the box's first (the cell
+/// of its min corner on that axis). Stage 9 needs no box for that: cellOf is monotone, so the cell of the
+/// overlap's min corner is, on each axis, the later of the two boxes' first cells, and since both boxes are
+/// in the cell, the pair belongs to the cell exactly when on every axis one of them starts there.
+constexpr int kStartShift = 29;
+constexpr std::uint32_t kAllAxes = 7;
+constexpr std::uint32_t kSlabBox = (1u << kStartShift) - 1;
+/// Stage 9 on two entries (or an entry and a huge box's bits) of one cell.
+inline bool ownedByCell(std::uint32_t a, std::uint32_t b) {
+  return ((a | b) >> kStartShift) == kAllAxes;
+}
+
+inline const float* loAxis(const ProxyArrays& p, int a) {
+  return a == 0 ? p.minX : a == 1 ? p.minY : p.minZ;
+}
+inline const float* hiAxis(const ProxyArrays& p, int a) {
+  return a == 0 ? p.maxX : a == 1 ? p.maxY : p.maxZ;
+}
+
+/// f(cell index, x, y, z) for every cell of `r` in a grid of `dims` cells, x fastest.
+template <typename F>
+inline void forEachCellOf(const CellRange& r, const std::uint32_t dims[3], F&& f) {
+  for (std::uint32_t z = r.lo[2]; z <= r.hi[2]; ++z)
+    for (std::uint32_t y = r.lo[1]; y <= r.hi[1]; ++y) {
+      const std::uint32_t row = (z * dims[1] + y) * dims[0];
+      for (std::uint32_t x = r.lo[0]; x <= r.hi[0]; ++x) f(row + x, x, y, z);
+    }
+}
+
+}  // namespace
+
+bool SlabSearch::plan(const ProxyArrays& p, const std::vector<std::uint32_t>& binned, const Grid& g,
+                      std::uint32_t slabBoxes, std::uint32_t minSlabs) {
+  m_firstLayer.clear();
+  const std::size_t n = binned.size();
+  m_axis = 0;
+  for (int a = 1; a < 3; ++a)
+    if (g.dims[a] > g.dims[m_axis]) m_axis = a;
+  const std::uint32_t layers = g.dims[m_axis];
+  const float* lo = loAxis(p, m_axis);
+  const float* hi = hiAxis(p, m_axis);
+  auto layerOf = [&](float x) { return cellOf(x, g.origin[m_axis], g.invCell, layers); };
+  const std::size_t chunks =
+      std::min(kPlanChunks, std::max<std::size_t>(1, (n + kPlanGrain - 1) / kPlanGrain));
+  const std::size_t chunk = (n + chunks - 1) / chunks;
+  auto forChunks = [&](auto&& f) {
+    tbb::parallel_for(std::size_t(0), chunks, [&](std::size_t c) {
+      const std::size_t begin = c * chunk, end = std::min(n, begin + chunk);
+      if (begin < end) f(c, begin, end);
+    });
+  };
+
+  // Boxes by the layer of their min corner (a count per chunk and layer: atomic increments of a few dozen
+  // shared counters were slower than the whole search's binning; the chunks are fewer when layers are many,
+  // so the counts stay within 4 bytes per box), then slabs cut from the bottom layer up.
+  const std::size_t layerChunks = std::min(chunks, std::max<std::size_t>(1, n / layers));
+  const std::size_t layerChunk = (n + layerChunks - 1) / layerChunks;
+  m_chunkCount.assign(layerChunks * layers, 0);
+  tbb::parallel_for(std::size_t(0), layerChunks, [&](std::size_t c) {
+    std::size_t* count = m_chunkCount.data() + c * layers;
+    for (std::size_t i = c * layerChunk, end = std::min(n, i + layerChunk); i < end; ++i)
+      ++count[layerOf(lo[binned[i]])];
+  });
+  m_layerSlab.resize(layers);
+  tbb::parallel_for(std::uint32_t(0), layers, [&](std::uint32_t l) {
+    std::size_t sum = 0;
+    for (std::size_t c = 0; c < layerChunks; ++c) sum += m_chunkCount[c * layers + l];
+    m_layerSlab[l] = std::uint32_t(sum);
+  });
+  const std::uint64_t aim = slabBoxes ? slabBoxes : std::max<std::uint64_t>(kMinSlabBoxes, n / kSlabsAimed);
+  const std::uint64_t layerCells = g.cells() / layers;
+  m_firstLayer.push_back(0);
+  std::uint64_t boxes = 0, cells = 0;
+  for (std::uint32_t l = 0; l < layers; ++l) {
+    boxes += m_layerSlab[l];
+    cells += layerCells;
+    m_layerSlab[l] = std::uint32_t(m_firstLayer.size() - 1);
+    if ((boxes >= aim || cells >= kCellsPerSlabBox * aim) && l + 1 < layers) {
+      m_firstLayer.push_back(l + 1);
+      boxes = cells = 0;
+    }
+  }
+  m_firstLayer.push_back(layers);
+  const std::size_t slabCount = slabs();
+  if (slabCount < minSlabs) {
+    m_firstLayer.clear();
+    return false;
+  }
+
+  // Slab lists: each chunk counts its boxes per slab, then writes them at offsets that put slab k's boxes
+  // in ascending slot order (slab-major, chunk-minor), whatever the threads did.
+  m_chunkCount.assign(chunks * slabCount, 0);
+  forChunks([&](std::size_t c, std::size_t begin, std::size_t end) {
+    std::size_t* count = m_chunkCount.data() + c * slabCount;
+    for (std::size_t i = begin; i < end; ++i) {
+      const std::uint32_t s = binned[i];
+      for (std::uint32_t k = m_layerSlab[layerOf(lo[s])], last = m_layerSlab[layerOf(hi[s])]; k <= last; ++k)
+        ++count[k];
+    }
+  });
+  m_memberStart.assign(slabCount + 1, 0);
+  std::size_t sum = 0;
+  for (std::size_t k = 0; k < slabCount; ++k) {
+    m_memberStart[k] = sum;
+    for (std::size_t c = 0; c < chunks; ++c) sum += std::exchange(m_chunkCount[c * slabCount + k], sum);
+  }
+  m_memberStart[slabCount] = sum;
+  m_members.resize(sum);
+  forChunks([&](std::size_t c, std::size_t begin, std::size_t end) {
+    std::size_t* next = m_chunkCount.data() + c * slabCount;
+    for (std::size_t i = begin; i < end; ++i) {
+      const std::uint32_t s = binned[i];
+      for (std::uint32_t k = m_layerSlab[layerOf(lo[s])], last = m_layerSlab[layerOf(hi[s])]; k <= last; ++k)
+        m_members[next[k]++] = s;
+    }
+  });
+  return true;
+}
+
+SlabSearchCounts SlabSearch::search(const ProxyArrays& p, const std::vector<std::uint32_t>& huge,
+                                    const Grid& g, std::vector<std::vector<std::uint64_t>>& out,
+                                    std::size_t first) {
+  const std::size_t slabCount = slabs();
+  std::vector<SlabSearchCounts> counts(slabCount + huge.size());
+  // Slabs differ in cost (a pile at the bottom of a column): one slab per task, taken as threads free up.
+  tbb::parallel_for(
+      tbb::blocked_range<std::size_t>(0, slabCount, 1),
+      [&](const tbb::blocked_range<std::size_t>& r) {
+        for (std::size_t k = r.begin(); k != r.end(); ++k)
+          counts[k] = searchSlab(k, p, huge, g, out[first + k]);
+      },
+      tbb::simple_partitioner());
+  // Stage 3: huge boxes among themselves, each pair from the earlier one in `huge`.
+  tbb::parallel_for(std::size_t(0), huge.size(), [&](std::size_t i) {
+    const LocalBox a = boxOf(p, huge[i]);
+    auto& list = out[first + slabCount + i];
+    list.clear();
+    for (std::size_t j = i + 1; j < huge.size(); ++j) {
+      const LocalBox b = boxOf(p, huge[j]);
+      if (boxesOverlap(a, b) && passesFilter(a, b)) list.push_back(makePairKey(a.slot, b.slot));
+    }
+    counts[slabCount + i].candidates = huge.size() - i - 1;
+  });
+  SlabSearchCounts total;
+  for (const SlabSearchCounts& c : counts) total.keys += c.keys, total.candidates += c.candidates;
+  return total;
+}
+
+SlabSearchCounts SlabSearch::searchSlab(std::size_t slab, const ProxyArrays& p,
+                                        const std::vector<std::uint32_t>& huge, const Grid& g,
+                                        std::vector<std::uint64_t>& out) {
+  out.clear();
+  SlabSearchCounts counts;
+  const std::size_t begin = m_memberStart[slab], m = m_memberStart[slab + 1] - begin;
+  if (m == 0) return counts;
+  if (m > kSlabBox)
+    throw std::runtime_error("gpucol::GridBroadphase: " + std::to_string(m) +
+                             " boxes in one slab exceed the 2^29 - 1 limit of one slab");
+  const int A = m_axis;
+  const std::uint32_t a0 = m_firstLayer[slab], a1 = m_firstLayer[slab + 1];
+  // The slab's own grid: the global grid's cells with layers a0..a1-1 along the slab axis.
+  std::uint32_t dims[3] = {g.dims[0], g.dims[1], g.dims[2]};
+  dims[A] = a1 - a0;
+  const std::uint32_t cells = dims[0] * dims[1] * dims[2];  // at most the global grid's count (32 bits)
+  auto toSlab = [&](CellRange r) {
+    r.lo[A] = std::max(r.lo[A], a0) - a0;
+    r.hi[A] = std::min(r.hi[A], a1 - 1) - a0;
+    return r;
+  };
+  Scratch& t = m_scratch.local();
+  t.box.resize(m);
+  t.range.resize(m);
+  std::uint64_t keys = 0;
+  for (std::size_t j = 0; j < m; ++j) {
+    t.box[j] = boxOf(p, m_members[begin + j]);
+    t.range[j] = cellRange(t.box[j], g);
+    keys += toSlab(t.range[j]).count();
+  }
+  if (keys > std::numeric_limits<std::uint32_t>::max())
+    throw std::runtime_error("gpucol::GridBroadphase: " + std::to_string(keys) +
+                             " (cell, proxy) entries exceed the 2^32 entry limit of one grid");
+  counts.keys = keys;
+  // A range's first cells in slab coordinates; on the slab axis none when the box starts below the slab.
+  auto firstCells = [&](const CellRange& whole, std::uint32_t first[3]) {
+    for (int i = 0; i < 3; ++i) first[i] = whole.lo[i];
+    first[A] = whole.lo[A] >= a0 ? whole.lo[A] - a0 : std::numeric_limits<std::uint32_t>::max();
+  };
+  auto startBits = [](const std::uint32_t first[3], std::uint32_t x, std::uint32_t y, std::uint32_t z) {
+    return (std::uint32_t(x == first[0]) | std::uint32_t(y == first[1]) << 1 |
+            std::uint32_t(z == first[2]) << 2)
+           << kStartShift;
+  };
+
+  // Stages 4-5: a counting sort of the slab's entries by cell. Counts go up, an inclusive scan turns them
+  // into cell ends, and placing counts them back down to each cell's start.
+  t.cellStart.assign(std::size_t(cells) + 1, 0);
+  std::uint32_t* start = t.cellStart.data();
+  for (std::size_t j = 0; j < m; ++j)
+    forEachCellOf(toSlab(t.range[j]), dims,
+                  [&](std::uint32_t c, std::uint32_t, std::uint32_t, std::uint32_t) { ++start[c]; });
+  for (std::uint32_t c = 1; c <= cells; ++c) start[c] += start[c - 1];
+  t.entries.resize(keys);
+  for (std::size_t j = 0; j < m; ++j) {
+    std::uint32_t first[3];
+    firstCells(t.range[j], first);
+    forEachCellOf(toSlab(t.range[j]), dims,
+                  [&](std::uint32_t c, std::uint32_t x, std::uint32_t y, std::uint32_t z) {
+                    t.entries[--start[c]] = std::uint32_t(j) | startBits(first, x, y, z);
+                  });
+  }
+
+  // Stages 8-9 per cell of two or more boxes: the cell's ownership from the entries alone, then the overlap
+  // and the filter.
+  auto emit = [&](const LocalBox& a, const LocalBox& b) {
+    if (boxesOverlap(a, b) && passesFilter(a, b)) out.push_back(makePairKey(a.slot, b.slot));
+  };
+  for (std::uint32_t c = 0; c < cells; ++c) {
+    const std::uint32_t e0 = start[c], runLength = start[c + 1] - e0;
+    if (runLength < 2) continue;
+    counts.candidates += std::uint64_t(runLength) * (runLength - 1) / 2;
+    const std::uint32_t* run = t.entries.data() + e0;
+    auto boxAt = [&](std::uint32_t i) -> const LocalBox& { return t.box[run[i] & kSlabBox]; };
+    if (runLength >= kLocalRunMin && runLength <= kLocalRunMax) {
+      forEachOverlapInRun(runLength, boxAt, [&](std::uint32_t i, std::uint32_t j) {
+        if (ownedByCell(run[i], run[j]) && passesFilter(boxAt(i), boxAt(j)))
+          out.push_back(makePairKey(boxAt(i).slot, boxAt(j).slot));
+      });
+      continue;
+    }
+    for (std::uint32_t i = 0; i + 1 < runLength; ++i)
+      for (std::uint32_t j = i + 1; j < runLength; ++j)
+        if (ownedByCell(run[i], run[j])) emit(boxAt(i), boxAt(j));
+  }
+
+  // Stage 3: huge boxes against this slab's boxes, through the cells the huge box covers when they are few
+  // enough, else one by one; either way a pair is this slab's when the overlap's min corner lies in it. In a
+  // cell strictly inside the huge box's range every box listed overlaps it, and the overlap's min corner is
+  // in that cell exactly when the box starts there on every axis (the whole-grid search's rule).
+  const double keysPerCell = double(keys) / double(cells);
+  for (std::uint32_t h : huge) {
+    const LocalBox a = boxOf(p, h);
+    const CellRange whole = cellRange(a, g);
+    if (whole.hi[A] < a0 || whole.lo[A] >= a1) continue;
+    const CellRange r = toSlab(whole);
+    if (double(r.count()) * (1.0 + keysPerCell) < double(m)) {
+      std::uint32_t first[3], last[3] = {whole.hi[0], whole.hi[1], whole.hi[2]};
+      firstCells(whole, first);
+      last[A] -= a0;  // not below the slab: the range reaches it
+      forEachCellOf(r, dims, [&](std::uint32_t c, std::uint32_t x, std::uint32_t y, std::uint32_t z) {
+        const std::uint32_t hugeBits = startBits(first, x, y, z);
+        const bool inner = hugeBits == 0 && x != last[0] && y != last[1] && z != last[2];
+        counts.candidates += start[c + 1] - start[c];
+        for (std::uint32_t e = start[c]; e < start[c + 1]; ++e) {
+          const std::uint32_t entry = t.entries[e];
+          if (!ownedByCell(hugeBits, entry)) continue;
+          const LocalBox& b = t.box[entry & kSlabBox];
+          if (inner ? passesFilter(a, b) : boxesOverlap(a, b) && passesFilter(a, b))
+            out.push_back(makePairKey(a.slot, b.slot));
+        }
+      });
+    } else {
+      counts.candidates += m;
+      for (std::size_t j = 0; j < m; ++j) {
+        const LocalBox& b = t.box[j];
+        const std::uint32_t layer = cellOf(std::max(a.lo[A], b.lo[A]), g.origin[A], g.invCell, g.dims[A]);
+        if (layer >= a0 && layer < a1 && boxesOverlap(a, b) && passesFilter(a, b))
+          out.push_back(makePairKey(a.slot, b.slot));
+      }
+    }
+  }
+  return counts;
+}
+
+std::size_t SlabSearch::bytes() const {
+  std::size_t bytes = (m_firstLayer.capacity() + m_layerSlab.capacity() + m_members.capacity()) * 4 +
+                      (m_memberStart.capacity() + m_chunkCount.capacity()) * sizeof(std::size_t);
+  for (const Scratch& t : m_scratch)
+    bytes += t.box.capacity() * sizeof(LocalBox) + t.range.capacity() * sizeof(CellRange) +
+             (t.cellStart.capacity() + t.entries.capacity()) * 4;
+  return bytes;
+}
+
+void SlabSearch::release() {
+  auto release = [](auto& v) { std::decay_t<decltype(v)>().swap(v); };
+  release(m_firstLayer), release(m_layerSlab), release(m_memberStart), release(m_members);
+  release(m_chunkCount);
+  m_scratch.clear();
+}
+
+}  // namespace gpucol

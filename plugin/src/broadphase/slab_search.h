@@ -1,0 +1,80 @@
+#pragma once
+// The CPU finder's full search of a dense grid, one slab at a time (stages 3-9 of grid_pair_finder.h).
+//
+// The grid is cut across its longest axis into slabs of whole cell layers holding about the same number of
+// boxes. Each box is listed in every slab its cell range reaches; one thread bins a slab's boxes into the
+// slab's cells (a counting sort of its own, with no atomics) and tests each cell's boxes pairwise with
+// stage 9's rule. Each pair is then reported by one slab: the one that holds the cell of the overlap's min
+// corner, which lies in both boxes' ranges.
+//
+// Why slabs: a slab's box copies, cells and entries fit in a core's cache, and they are the only
+// per-box working memory besides the slab lists. The whole-grid search holds about 100 bytes per box of
+// such memory for the whole scene, more than the boxes themselves (README, "Broad phase").
+//
+// The whole-grid search numbers every candidate and finds its pair through the mapping function (paper
+// §3.2), which is what spreads cells over GPU threads. A slab's thread walks its cells' candidates in
+// order, so it needs no numbering. The bit-mask output (§3.4) is indexed by that numbering, so it always
+// uses the whole-grid search, and so does a search whose grid is kept for stage 11.
+#include <tbb/enumerable_thread_specific.h>
+
+#include <cstddef>
+#include <cstdint>
+#include <vector>
+
+#include "broadphase/grid_choice.h"
+#include "broadphase/grid_pair_finder.h"
+#include "broadphase/local_box.h"
+
+namespace gpucol {
+
+/// Counts of one slab search (PairFinderStats).
+struct SlabSearchCounts {
+  /// (cell, box) entries over all slabs: each is in one slab, so this is the whole grid's count.
+  std::uint64_t keys = 0;
+  /// Candidate pairs tested: pairs of boxes sharing a cell, and huge boxes against binned ones.
+  std::uint64_t candidates = 0;
+};
+
+/// Plans and runs slab searches; keeps its working memory between them until release().
+class SlabSearch {
+ public:
+  /// Cuts grid `g` of the `binned` slots into slabs of about `slabBoxes` boxes each (0: the scene's count
+  /// over kSlabsAimed, and at least kMinSlabBoxes), and lists each binned slot in every slab it reaches.
+  /// Returns false, with nothing planned, when fewer than `minSlabs` slabs come out.
+  bool plan(const ProxyArrays& p, const std::vector<std::uint32_t>& binned, const Grid& g,
+            std::uint32_t slabBoxes, std::uint32_t minSlabs);
+  /// Slabs of the last plan.
+  std::size_t slabs() const { return m_firstLayer.empty() ? 0 : m_firstLayer.size() - 1; }
+  /// Output lists search() fills: one per slab, one per huge box.
+  std::size_t outputs(std::size_t hugeCount) const { return slabs() + hugeCount; }
+  /// Finds the planned boxes' pairs and those of the `huge` slots with each other and with binned boxes, into
+  /// out[first], ..., out[first + outputs(huge.size()) - 1] (unsorted keys, each pair once).
+  SlabSearchCounts search(const ProxyArrays& p, const std::vector<std::uint32_t>& huge, const Grid& g,
+                          std::vector<std::vector<std::uint64_t>>& out, std::size_t first);
+  /// Bytes of working memory held (capacities).
+  std::size_t bytes() const;
+  /// Frees all working memory.
+  void release();
+
+ private:
+  /// One thread's working memory for the slab it is searching.
+  struct Scratch {
+    std::vector<LocalBox> box;             // the slab's boxes, in slab-list order
+    std::vector<CellRange> range;          // their cells in slab coordinates
+    std::vector<std::uint32_t> cellStart;  // first entry per slab cell (+1 sentinel)
+    std::vector<std::uint32_t> entries;    // box indices by cell, kSlabHome on a box's home cell
+  };
+
+  SlabSearchCounts searchSlab(std::size_t slab, const ProxyArrays& p, const std::vector<std::uint32_t>& huge,
+                              const Grid& g, std::vector<std::uint64_t>& out);
+
+  int m_axis = 0;                           // the axis the slabs cut (the one with most cells)
+  std::vector<std::uint32_t> m_firstLayer;  // per slab: its first layer along m_axis (+ the end)
+  std::vector<std::uint32_t> m_layerSlab;   // per layer: its slab
+  std::vector<std::size_t> m_memberStart;   // per slab: first index in m_members (+ the end)
+  std::vector<std::uint32_t> m_members;     // slots by slab, ascending within a slab
+  std::vector<std::size_t> m_chunkCount;    // counting scratch: per (chunk, slab)
+  tbb::enumerable_thread_specific<Scratch> m_scratch;
+};
+
+}  // namespace gpucol
