@@ -259,6 +259,9 @@ class CpuPairFinder final : public PairFinder {
   std::size_t scratchBytes() const;
   bool fewMoved(const ProxyArrays& p) const;
   void releaseScratch();
+  /// Raises the high-water mark of this search's memory to what is allocated now (called where a phase has
+  /// all its memory, before it frees some).
+  void notePeak() { m_peakBytes = std::max(m_peakBytes, scratchBytes()); }
 
   PairFinderStats m_stats;
   std::vector<std::uint32_t> m_active;          // active slots, ascending
@@ -297,6 +300,7 @@ class CpuPairFinder final : public PairFinder {
   std::vector<std::uint64_t> m_bits;            // bit mask output (stage 10)
   std::vector<std::vector<std::uint64_t>> m_chunkPairs;  // output per chunk (kept for its capacity)
   SlabSearch m_slabs;                                    // the slab search's plan and working memory
+  std::size_t m_peakBytes = 0;                           // high-water mark of this search (notePeak)
   std::size_t m_chunksUsed = 0;                          // chunks of m_chunkPairs filled by this search
 
   /// Reserves `count` more output chunks and returns the index of the first.
@@ -312,6 +316,7 @@ void CpuPairFinder::findPairs(const ProxyArrays& proxies, const PairFinderOption
                               std::vector<std::uint64_t>& pairs) {
   m_stats = PairFinderStats{};
   m_chunksUsed = 0;
+  m_peakBytes = 0;
   if (proxies.lastPairs == &pairs) {
     // The caller's copy would be overwritten below: search as if it had given none.
     ProxyArrays own = proxies;
@@ -358,7 +363,8 @@ void CpuPairFinder::findPairs(const ProxyArrays& proxies, const PairFinderOption
   else
     std::vector<std::uint64_t>().swap(m_lastPairs);
   m_stats.rebinnedProxies = std::uint32_t(m_active.size()) - m_stats.restingProxies;
-  m_stats.peakScratchBytes = scratchBytes();
+  notePeak();
+  m_stats.peakScratchBytes = m_peakBytes;
   releaseScratch();
   m_stats.scratchBytes = scratchBytes();
 }
@@ -883,14 +889,16 @@ void CpuPairFinder::grid(const ProxyArrays& p, const PairFinderOptions& options,
   m_denseBuilt = false;
   StageClock clock;
   const Grid g = chooseGrid(p, m_active, options, m_extent, m_binned, m_huge);
+  notePeak();
+  std::vector<float>().swap(m_extent);  // chooseGrid's scratch
   m_stats.hugeProxies = std::uint32_t(m_huge.size());
-  m_isBinned.assign(p.count, 0);
-  for (std::uint32_t s : m_binned) m_isBinned[s] = 1;
   m_keptGrid = g;
   m_stats.cellSize = g.cell;
   for (int a = 0; a < 3; ++a) m_stats.dims[a] = g.dims[a];
   m_stats.chooseMs = clock.lap();
   if (!searchSlabs(p, options, keepGrid, g)) {
+    m_isBinned.assign(p.count, 0);
+    for (std::uint32_t s : m_binned) m_isBinned[s] = 1;
     if (!m_binned.empty()) {
       binSorted(p, g);
       m_stats.binMs = clock.lap();
@@ -903,6 +911,9 @@ void CpuPairFinder::grid(const ProxyArrays& p, const PairFinderOptions& options,
     clock.lap();  // the slab search timed its own parts
   }
   gather(pairs);
+  notePeak();
+  std::vector<std::vector<std::uint64_t>>().swap(m_chunkPairs);  // gathered into `pairs`
+  m_chunksUsed = 0;
   // Stage 10: one order whatever the chunking, threads or device.
   sortPairs(pairs, m_sortScratch, slotBitsFor(p.count));
   m_stats.sortMs = clock.lap();
@@ -926,6 +937,8 @@ bool CpuPairFinder::searchSlabs(const ProxyArrays& p, const PairFinderOptions& o
   m_stats.slabs = std::uint32_t(m_slabs.slabs());
   m_stats.keys = counts.keys;
   m_stats.candidates += counts.candidates;
+  notePeak();
+  m_slabs.release();  // only the per-slab pair lists are left to gather
   // The home order serves the whole-grid search's locality only; a slab search does not keep it up to date.
   std::vector<std::uint32_t>().swap(m_homeOrder);
   std::vector<std::uint32_t>().swap(m_homePos);

@@ -589,8 +589,9 @@ void GridBroadphase::calculateOverlappingPairs(btDispatcher* dispatcher) {
   st.rebinnedProxies = fs.rebinnedProxies;
   st.cellSize = fs.cellSize;
   st.overlappingPairs = d.found.size();
-  // The peak: everything held after the step (this step's pair list included), plus the view, the finder's
-  // scratch at the end of its search (nothing is released before then) and the last step's pair list.
+  // The peak: everything held after the step (this step's pair list included) and the last step's pair list,
+  // plus the larger of the search's extra (the view and the finder's high-water mark above what it keeps)
+  // and the diff's lists of changes.
   const std::size_t stepBytes = d.view.slots * ViewBuffer::kBytesPerSlot +
                                 std::max(fs.peakScratchBytes, fs.scratchBytes) - fs.scratchBytes;
   d.view.release();
@@ -602,8 +603,8 @@ void GridBroadphase::calculateOverlappingPairs(btDispatcher* dispatcher) {
   d.pendingFree.clear();
   d.dirty = false;
   st.memoryBytes = d.heldBytes();
-  st.peakBytes = st.memoryBytes + stepBytes +
-                 (d.found.capacity() + d.addedKeys.capacity() + d.removedKeys.capacity()) * 8;
+  st.peakBytes = st.memoryBytes + d.found.capacity() * 8 +
+                 std::max(stepBytes, (d.addedKeys.capacity() + d.removedKeys.capacity()) * 8);
   for (auto* v : {&d.found, &d.addedKeys, &d.removedKeys}) std::vector<std::uint64_t>().swap(*v);
   st.cacheMs =
       std::chrono::duration<double, std::milli>(std::chrono::steady_clock::now() - cacheStart).count();
