@@ -23,8 +23,8 @@ struct GridBroadphaseTuning {
   std::uint32_t hugeCellLimit = 64;
   /// Let rayTest and aabbTest build and use the query index; false: every query tests every proxy.
   bool queryIndex = true;
-  /// CPU path: search the grid slab by slab when most proxies moved (less memory at the peak of a step);
-  /// false: always as a whole (the pairs are the same).
+  /// CPU path: search the grid slab by slab when most proxies moved, up to 2^18 proxies (less memory at the
+  /// peak of a step); false: always as a whole (the pairs are the same).
   bool slabSearch = true;
 };
 
