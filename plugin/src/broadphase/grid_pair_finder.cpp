@@ -303,7 +303,7 @@ class CpuPairFinder final : public PairFinder {
   std::vector<std::uint32_t> m_blockRuns;       // runs per block of cells, scanned (dense run compaction)
   std::vector<std::uint32_t> m_offsets;         // sparse path: first key of each box (exclusive prefix sum)
   std::vector<std::uint64_t> m_bits;            // bit mask output (stage 10)
-  std::vector<std::vector<std::uint64_t>> m_chunkPairs;  // output per chunk (kept for its capacity)
+  std::vector<std::vector<std::uint64_t>> m_chunkPairs;  // output per chunk (freed once gathered)
   SlabSearch m_slabs;                                    // the slab search's plan and working memory
   std::size_t m_peakBytes = 0;                           // high-water mark of this search (notePeak)
   std::size_t m_chunksUsed = 0;                          // chunks of m_chunkPairs filled by this search
