@@ -73,11 +73,7 @@ inline std::uint32_t homeCell(const ProxyArrays& p, std::uint32_t s, const Grid&
 
 template <typename F>
 inline void forEachCell(const CellRange& r, const Grid& g, F&& f) {
-  for (std::uint32_t z = r.lo[2]; z <= r.hi[2]; ++z)
-    for (std::uint32_t y = r.lo[1]; y <= r.hi[1]; ++y) {
-      const std::uint64_t row = (std::uint64_t(z) * g.dims[1] + y) * g.dims[0];
-      for (std::uint32_t x = r.lo[0]; x <= r.hi[0]; ++x) f(std::uint32_t(row + x));
-    }
+  forEachCellOf(r, g.dims, [&](std::uint32_t c, std::uint32_t, std::uint32_t, std::uint32_t) { f(c); });
 }
 
 /// A box's cells on a dense grid in 8 bytes: the number of its first cell and its extra cells per axis (hi -
@@ -836,11 +832,7 @@ void CpuPairFinder::testHuge(const ProxyArrays& p, const Grid& g) {
     const LocalBox a = boxOf(p, sh);
     auto& out = m_chunkPairs[firstChunk + hi];
     out.clear();
-    for (std::size_t other = hi + 1; other < h; ++other) {
-      const std::uint32_t s = m_huge[other];
-      if (boxesOverlap(a, boxOf(p, s)) && passesFilter(p, sh, s)) out.push_back(makePairKey(sh, s));
-    }
-    tested[hi] = h - hi - 1;
+    tested[hi] = hugeAgainstLaterHuge(p, m_huge, hi, out);
     const CellRange range = cellRange(a, g);
     if (m_denseBuilt && double(range.count()) * (1.0 + keysPerCell) < double(m_binned.size())) {
       // A cell strictly inside the huge box's cell range on every axis (range.lo < x < range.hi, and so on)

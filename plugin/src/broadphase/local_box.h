@@ -5,6 +5,7 @@
 #include <cstdint>
 #include <cstring>
 #include <limits>
+#include <vector>
 
 #include "broadphase/grid_choice.h"
 #include "broadphase/grid_pair_finder.h"
@@ -84,6 +85,29 @@ inline std::uint32_t overlapCell(const LocalBox& a, const LocalBox& b, const Gri
   const std::uint32_t cy = cellOf(std::max(a.lo[1], b.lo[1]), g.origin[1], g.invCell, g.dims[1]);
   const std::uint32_t cz = cellOf(std::max(a.lo[2], b.lo[2]), g.origin[2], g.invCell, g.dims[2]);
   return std::uint32_t((std::uint64_t(cz) * g.dims[1] + cy) * g.dims[0] + cx);
+}
+
+/// f(cell index, x, y, z) for every cell of `r` in a grid of `dims` cells (whose count fits 32 bits), x
+/// fastest.
+template <typename F>
+inline void forEachCellOf(const CellRange& r, const std::uint32_t dims[3], F&& f) {
+  for (std::uint32_t z = r.lo[2]; z <= r.hi[2]; ++z)
+    for (std::uint32_t y = r.lo[1]; y <= r.hi[1]; ++y) {
+      const std::uint32_t row = (z * dims[1] + y) * dims[0];
+      for (std::uint32_t x = r.lo[0]; x <= r.hi[0]; ++x) f(row + x, x, y, z);
+    }
+}
+
+/// Stage 3 among the huge boxes: huge[i] against each later one (so each pair is tested once), into `out`.
+/// Returns the candidates tested.
+inline std::uint64_t hugeAgainstLaterHuge(const ProxyArrays& p, const std::vector<std::uint32_t>& huge,
+                                          std::size_t i, std::vector<std::uint64_t>& out) {
+  const LocalBox a = boxOf(p, huge[i]);
+  for (std::size_t j = i + 1; j < huge.size(); ++j) {
+    const LocalBox b = boxOf(p, huge[j]);
+    if (boxesOverlap(a, b) && passesFilter(a, b)) out.push_back(makePairKey(a.slot, b.slot));
+  }
+  return huge.size() - i - 1;
 }
 
 /// Stage 8 for a whole run of kLocalRunMin to kLocalRunMax boxes (dense piles such as the falling column have

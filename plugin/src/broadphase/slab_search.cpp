@@ -44,16 +44,6 @@ inline const float* hiAxis(const ProxyArrays& p, int a) {
   return a == 0 ? p.maxX : a == 1 ? p.maxY : p.maxZ;
 }
 
-/// f(cell index, x, y, z) for every cell of `r` in a grid of `dims` cells, x fastest.
-template <typename F>
-inline void forEachCellOf(const CellRange& r, const std::uint32_t dims[3], F&& f) {
-  for (std::uint32_t z = r.lo[2]; z <= r.hi[2]; ++z)
-    for (std::uint32_t y = r.lo[1]; y <= r.hi[1]; ++y) {
-      const std::uint32_t row = (z * dims[1] + y) * dims[0];
-      for (std::uint32_t x = r.lo[0]; x <= r.hi[0]; ++x) f(row + x, x, y, z);
-    }
-}
-
 }  // namespace
 
 bool SlabSearch::plan(const ProxyArrays& p, const std::vector<std::uint32_t>& binned, const Grid& g,
@@ -67,6 +57,11 @@ bool SlabSearch::plan(const ProxyArrays& p, const std::vector<std::uint32_t>& bi
   const float* lo = loAxis(p, m_axis);
   const float* hi = hiAxis(p, m_axis);
   auto layerOf = [&](float x) { return cellOf(x, g.origin[m_axis], g.invCell, layers); };
+  // f(slab) for every slab the box of slot s reaches (after the slabs are cut).
+  auto forSlabsOf = [&](std::uint32_t s, auto&& f) {
+    for (std::uint32_t k = m_layerSlab[layerOf(lo[s])], last = m_layerSlab[layerOf(hi[s])]; k <= last; ++k)
+      f(k);
+  };
   const std::size_t chunks =
       std::min(kPlanChunks, std::max<std::size_t>(1, (n + kPlanGrain - 1) / kPlanGrain));
   const std::size_t chunk = (n + chunks - 1) / chunks;
@@ -79,7 +74,7 @@ bool SlabSearch::plan(const ProxyArrays& p, const std::vector<std::uint32_t>& bi
 
   // Boxes by the layer of their min corner (a count per chunk and layer: atomic increments of a few dozen
   // shared counters were slower than the whole search's binning; the chunks are fewer when layers are many,
-  // so the counts stay within 4 bytes per box), then slabs cut from the bottom layer up.
+  // so the counts stay within 8 bytes per box), then slabs cut from the bottom layer up.
   const std::size_t layerChunks = std::min(chunks, std::max<std::size_t>(1, n / layers));
   const std::size_t layerChunk = (n + layerChunks - 1) / layerChunks;
   m_chunkCount.assign(layerChunks * layers, 0);
@@ -119,11 +114,7 @@ bool SlabSearch::plan(const ProxyArrays& p, const std::vector<std::uint32_t>& bi
   m_chunkCount.assign(chunks * slabCount, 0);
   forChunks([&](std::size_t c, std::size_t begin, std::size_t end) {
     std::size_t* count = m_chunkCount.data() + c * slabCount;
-    for (std::size_t i = begin; i < end; ++i) {
-      const std::uint32_t s = binned[i];
-      for (std::uint32_t k = m_layerSlab[layerOf(lo[s])], last = m_layerSlab[layerOf(hi[s])]; k <= last; ++k)
-        ++count[k];
-    }
+    for (std::size_t i = begin; i < end; ++i) forSlabsOf(binned[i], [&](std::uint32_t k) { ++count[k]; });
   });
   m_memberStart.assign(slabCount + 1, 0);
   std::size_t sum = 0;
@@ -135,11 +126,8 @@ bool SlabSearch::plan(const ProxyArrays& p, const std::vector<std::uint32_t>& bi
   m_members.resize(sum);
   forChunks([&](std::size_t c, std::size_t begin, std::size_t end) {
     std::size_t* next = m_chunkCount.data() + c * slabCount;
-    for (std::size_t i = begin; i < end; ++i) {
-      const std::uint32_t s = binned[i];
-      for (std::uint32_t k = m_layerSlab[layerOf(lo[s])], last = m_layerSlab[layerOf(hi[s])]; k <= last; ++k)
-        m_members[next[k]++] = s;
-    }
+    for (std::size_t i = begin; i < end; ++i)
+      forSlabsOf(binned[i], [&](std::uint32_t k) { m_members[next[k]++] = binned[i]; });
   });
   return true;
 }
@@ -159,14 +147,9 @@ SlabSearchCounts SlabSearch::search(const ProxyArrays& p, const std::vector<std:
       tbb::simple_partitioner());
   // Stage 3: huge boxes among themselves, each pair from the earlier one in `huge`.
   tbb::parallel_for(std::size_t(0), huge.size(), [&](std::size_t i) {
-    const LocalBox a = boxOf(p, huge[i]);
     auto& list = out[first + slabCount + i];
     list.clear();
-    for (std::size_t j = i + 1; j < huge.size(); ++j) {
-      const LocalBox b = boxOf(p, huge[j]);
-      if (boxesOverlap(a, b) && passesFilter(a, b)) list.push_back(makePairKey(a.slot, b.slot));
-    }
-    counts[slabCount + i].candidates = huge.size() - i - 1;
+    counts[slabCount + i].candidates = hugeAgainstLaterHuge(p, huge, i, list);
   });
   SlabSearchCounts total;
   for (const SlabSearchCounts& c : counts) total.keys += c.keys, total.candidates += c.candidates;
