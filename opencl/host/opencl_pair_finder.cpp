@@ -35,16 +35,6 @@ namespace {
 /// built (measured on PoCL, see the README's broad phase section); beyond it a full search is about as fast.
 constexpr double kIncrementalFraction = 0.125;
 
-/// Stage 3's test on the host, as the CPU finder makes it: a box that covers more than `limit` cells of edge
-/// `cell` (estimated from its extents) is tested against all instead of being binned.
-bool isHuge(const ProxyArrays& p, std::uint32_t s, float cell, std::uint32_t limit) {
-  const double inv = 1.0 / double(cell);
-  const double covered = (double(p.maxX[s] - p.minX[s]) * inv + 1.0) *
-                         (double(p.maxY[s] - p.minY[s]) * inv + 1.0) *
-                         (double(p.maxZ[s] - p.minZ[s]) * inv + 1.0);
-  return covered > double(limit);
-}
-
 /// Stages 4-6 of one list of binned proxies on the device: their (cell, slot) entries sorted by cell, the
 /// runs of equal cells, and the runs' scanned candidate counts. A full search fills one and keeps it for
 /// stage 11; the proxies moved since then get their own.
@@ -337,6 +327,10 @@ void OpenClPairFinder::readPairs(cl_uint slotBits, std::vector<std::uint64_t>& p
 
 void OpenClPairFinder::findPairs(const ProxyArrays& p, const PairFinderOptions& options,
                                  std::vector<std::uint64_t>& pairs) {
+  if (p.count > 0 && !(p.minX && p.minY && p.minZ && p.maxX && p.maxY && p.maxZ)) {
+    // The device is sent the six axis arrays as they are (readsBoxRecords() is false).
+    throw std::invalid_argument("gpucol OpenCL pair finder: ProxyArrays without the six axis arrays");
+  }
   m_stats = PairFinderStats{};
   pairs.clear();
   m_active.clear();

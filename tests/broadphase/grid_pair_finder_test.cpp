@@ -7,6 +7,7 @@
 #include <tbb/global_control.h>
 
 #include <cstdint>
+#include <cstring>
 #include <functional>
 #include <random>
 #include <string>
@@ -19,6 +20,9 @@ struct Scene {
   std::vector<float> minX, minY, minZ, maxX, maxY, maxZ;
   std::vector<std::int32_t> group, mask;
   std::vector<std::uint8_t> flags;
+  // The boxes as records (recordView), rewritten by each call.
+  mutable std::vector<unsigned char> recordBytes;
+  mutable std::vector<const unsigned char*> recordBlocks;
 
   void add(float cx, float cy, float cz, float hx, float hy, float hz,
            std::uint8_t flag = gpucol::kProxyActive, std::int32_t g = 1, std::int32_t m = -1) {
@@ -34,6 +38,28 @@ struct Scene {
     v.group = group.data(), v.mask = mask.data(), v.flags = flags.data();
     return v;
   }
+  /// The same scene with its boxes in records (ProxyArrays::records, as GridBroadphase hands its proxies to
+  /// the CPU finder): blocks of 8 records of 40 bytes, stored in reverse block order, the corners at bytes 8
+  /// and 24 and NaN in every other byte, so that a wrong block, stride or offset changes the pairs.
+  gpucol::ProxyArrays recordView() const {
+    constexpr std::uint32_t kBits = 3, kStride = 40, kMinAt = 8, kMaxAt = 24;
+    const std::size_t n = flags.size(), blocks = (n >> kBits) + 1, blockBytes = std::size_t(kStride) << kBits;
+    recordBytes.assign(blocks * blockBytes, 0xFF);
+    recordBlocks.resize(blocks);
+    for (std::size_t b = 0; b < blocks; ++b)
+      recordBlocks[b] = recordBytes.data() + (blocks - 1 - b) * blockBytes;
+    for (std::size_t i = 0; i < n; ++i) {
+      unsigned char* r =
+          recordBytes.data() + (blocks - 1 - (i >> kBits)) * blockBytes + (i & ((1u << kBits) - 1)) * kStride;
+      const float lo[3] = {minX[i], minY[i], minZ[i]}, hi[3] = {maxX[i], maxY[i], maxZ[i]};
+      std::memcpy(r + kMinAt, lo, sizeof lo);
+      std::memcpy(r + kMaxAt, hi, sizeof hi);
+    }
+    gpucol::ProxyArrays v = view();
+    v.minX = v.minY = v.minZ = v.maxX = v.maxY = v.maxZ = nullptr;
+    v.records = gpucol::BoxRecords{recordBlocks.data(), kBits, kStride, kMinAt, kMaxAt};
+    return v;
+  }
 };
 
 Scene uniformCloud(int n, float side, float halfSize, std::uint32_t seed) {
@@ -45,35 +71,36 @@ Scene uniformCloud(int n, float side, float halfSize, std::uint32_t seed) {
 }
 
 /// Checks the finder against brute force with every combination of options, grid forced and not, the grid
-/// searched whole and in slabs (of 64 boxes, so that small scenes have many).
+/// searched whole and in slabs (of 64 boxes, so that small scenes have many), the boxes in arrays and in
+/// records.
 void expectMatchesBruteForce(const Scene& scene, const std::string& what, std::uint64_t minPairs = 1) {
-  const gpucol::ProxyArrays view = scene.view();
-  const std::vector<std::uint64_t> reference = gpucol::findPairsBruteForce(view);
+  const std::vector<std::uint64_t> reference = gpucol::findPairsBruteForce(scene.view());
   ASSERT_GE(reference.size(), minPairs) << what << ": the scene should have overlaps to test";
   auto finder = gpucol::makeCpuPairFinder();
-  for (std::uint32_t below : {0u, 1000000u})
-    for (auto rule : {gpucol::CellSizeRule::Size, gpucol::CellSizeRule::Density})
-      for (auto output : {gpucol::PairOutput::Compacted, gpucol::PairOutput::BitMask})
-        for (auto sqrtMode : {gpucol::MappingSqrt::Double, gpucol::MappingSqrt::Newton})
-          for (auto tiling : {gpucol::SlabTiling::Off, gpucol::SlabTiling::Always}) {
-            gpucol::PairFinderOptions o;
-            o.bruteForceBelow = below;
-            o.cellSizeRule = rule;
-            o.output = output;
-            o.mappingSqrt = sqrtMode;
-            o.slabTiling = tiling;
-            o.slabBoxes = 64;
-            std::vector<std::uint64_t> pairs;
-            finder->findPairs(view, o, pairs);
-            ASSERT_EQ(pairs, reference)
-                << what << " below=" << below << " rule=" << int(rule) << " output=" << int(output)
-                << " sqrt=" << int(sqrtMode) << " tiling=" << int(tiling)
-                << " grid=" << finder->stats().usedGrid << " slabs=" << finder->stats().slabs;
-            EXPECT_EQ(finder->stats().usedGrid, below == 0) << what;
-            if (tiling == gpucol::SlabTiling::Off || output == gpucol::PairOutput::BitMask) {
-              EXPECT_EQ(finder->stats().slabs, 0u) << what;
+  for (bool records : {false, true})
+    for (std::uint32_t below : {0u, 1000000u})
+      for (auto rule : {gpucol::CellSizeRule::Size, gpucol::CellSizeRule::Density})
+        for (auto output : {gpucol::PairOutput::Compacted, gpucol::PairOutput::BitMask})
+          for (auto sqrtMode : {gpucol::MappingSqrt::Double, gpucol::MappingSqrt::Newton})
+            for (auto tiling : {gpucol::SlabTiling::Off, gpucol::SlabTiling::Always}) {
+              gpucol::PairFinderOptions o;
+              o.bruteForceBelow = below;
+              o.cellSizeRule = rule;
+              o.output = output;
+              o.mappingSqrt = sqrtMode;
+              o.slabTiling = tiling;
+              o.slabBoxes = 64;
+              std::vector<std::uint64_t> pairs;
+              finder->findPairs(records ? scene.recordView() : scene.view(), o, pairs);
+              ASSERT_EQ(pairs, reference)
+                  << what << " records=" << records << " below=" << below << " rule=" << int(rule)
+                  << " output=" << int(output) << " sqrt=" << int(sqrtMode) << " tiling=" << int(tiling)
+                  << " grid=" << finder->stats().usedGrid << " slabs=" << finder->stats().slabs;
+              EXPECT_EQ(finder->stats().usedGrid, below == 0) << what;
+              if (tiling == gpucol::SlabTiling::Off || output == gpucol::PairOutput::BitMask) {
+                EXPECT_EQ(finder->stats().slabs, 0u) << what;
+              }
             }
-          }
 }
 
 TEST(GridPairFinder, UniformCloud) {
@@ -214,7 +241,8 @@ TEST(GridPairFinder, AddAndRemoveBetweenSearches) {
 /// boxes move (some far, some out of the grid's bounds), vanish, reappear, change filters, and a huge
 /// box moves; the pairs must equal brute force and the unchanged proxies must be counted as resting.
 /// With `callerKeepsPairs`, the caller hands the finder its previous result (ProxyArrays::lastPairs), as
-/// GridBroadphase does, except at one step, which must then be a full search.
+/// GridBroadphase does (with the boxes in records, as it does too), except at one step, which must then be a
+/// full search.
 void restingScenario(bool callerKeepsPairs) {
   Scene s = uniformCloud(6000, 20.0f, 0.7f, 12);
   for (std::size_t i = 0; i < s.flags.size(); i += 5) s.flags[i] |= gpucol::kProxyStatic;
@@ -231,7 +259,7 @@ void restingScenario(bool callerKeepsPairs) {
   constexpr int kWithoutLastPairs = 9;  // with callerKeepsPairs: the step that does not hand them over
   std::vector<std::uint64_t> last;
   for (int t = 0; t < 12; ++t) {
-    gpucol::ProxyArrays view = s.view();
+    gpucol::ProxyArrays view = callerKeepsPairs ? s.recordView() : s.view();
     view.moved = moved.data();
     if (callerKeepsPairs && t != kWithoutLastPairs) view.lastPairs = &last;
     std::vector<std::uint64_t> pairs;

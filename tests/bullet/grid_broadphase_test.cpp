@@ -163,6 +163,47 @@ TEST(GridBroadphase, PairCacheMatchesBruteForceOverStepsNoGrid) {
   EXPECT_FALSE(bp.stats().usedGrid);
 }
 
+TEST(GridBroadphase, BoxesReadInPlaceGiveTheSamePairsWithoutTheCopy) {
+  gpucol::Config config;
+  config.bruteForceBelow = 100;
+  gpucol::GridBroadphaseTuning inPlace;
+  inPlace.boxesInPlace = true;
+  gpucol::GridBroadphase bp(config);
+  bp.setTuning(inPlace);
+  runSteps(bp, bp.getOverlappingPairCache(), 1500, 3);
+  EXPECT_TRUE(bp.stats().usedGrid);
+
+  // The same scene stepped by both: one step that moves every box a little (few pairs change, so the
+  // step's peak is the search's), and the peaks differ by about the copy's 24 bytes per proxy.
+  btDefaultCollisionConfiguration configuration;
+  btCollisionDispatcher dispatcher(&configuration);
+  gpucol::GridBroadphase copying(config), reading(config);
+  reading.setTuning(inPlace);
+  constexpr int kCount = 4000;
+  std::mt19937 rng(4);
+  std::vector<Box> boxes(kCount);
+  for (Box& b : boxes) randomBox(rng, b, 40.0f);
+  std::vector<btBroadphaseProxy*> proxies[2];
+  gpucol::GridBroadphase* both[2] = {&copying, &reading};
+  for (int k = 0; k < 2; ++k) {
+    for (int i = 0; i < kCount; ++i) {
+      Box& b = boxes[std::size_t(i)];
+      proxies[k].push_back(both[k]->createProxy(b.lo, b.hi, BOX_SHAPE_PROXYTYPE,
+                                                reinterpret_cast<void*>(std::intptr_t(i)), b.group, b.mask,
+                                                &dispatcher));
+    }
+    both[k]->calculateOverlappingPairs(&dispatcher);
+    const btVector3 d(0.001f, 0.0f, 0.0f);
+    for (int i = 0; i < kCount; ++i)
+      both[k]->setAabb(proxies[k][std::size_t(i)], boxes[std::size_t(i)].lo + d, boxes[std::size_t(i)].hi + d,
+                       &dispatcher);
+    both[k]->calculateOverlappingPairs(&dispatcher);
+  }
+  EXPECT_EQ(cachePairs(copying.getOverlappingPairCache()), cachePairs(reading.getOverlappingPairCache()));
+  EXPECT_GE(copying.stats().peakBytes, reading.stats().peakBytes + 20u * kCount)
+      << "copy " << copying.stats().peakBytes << " in place " << reading.stats().peakBytes;
+}
+
 TEST(GridBroadphase, FiltersEditedOnTheProxyAreTakenUp) {
   // Bullet code may change m_collisionFilterGroup/Mask on a proxy after creating it, without any setAabb:
   // the next step takes the new filters (pairs vanish, static-static pairs go, and come back when

@@ -32,17 +32,15 @@ struct Bounds {
 /// Bounds of the boxes slots[begin, end) (not empty), in parallel (min and max are exact in any order).
 Bounds boundsOf(const ProxyArrays& p, const std::vector<std::uint32_t>& slots, std::size_t begin,
                 std::size_t end) {
-  const std::uint32_t f = slots[begin];
-  const Bounds first{{p.minX[f], p.minY[f], p.minZ[f]}, {p.maxX[f], p.maxY[f], p.maxZ[f]}};
+  const BoxCorners f = p.box(slots[begin]);
+  const Bounds first{{f.lo[0], f.lo[1], f.lo[2]}, {f.hi[0], f.hi[1], f.hi[2]}};
   return tbb::parallel_reduce(
       tbb::blocked_range<std::size_t>(begin, end, kChunk), first,
       [&](const tbb::blocked_range<std::size_t>& r, Bounds b) {
         for (std::size_t i = r.begin(); i != r.end(); ++i) {
-          const std::uint32_t s = slots[i];
-          b.lo[0] = std::min(b.lo[0], p.minX[s]), b.lo[1] = std::min(b.lo[1], p.minY[s]);
-          b.lo[2] = std::min(b.lo[2], p.minZ[s]);
-          b.hi[0] = std::max(b.hi[0], p.maxX[s]), b.hi[1] = std::max(b.hi[1], p.maxY[s]);
-          b.hi[2] = std::max(b.hi[2], p.maxZ[s]);
+          const BoxCorners c = p.box(slots[i]);
+          for (int a = 0; a < 3; ++a)
+            b.lo[a] = std::min(b.lo[a], c.lo[a]), b.hi[a] = std::max(b.hi[a], c.hi[a]);
         }
         return b;
       },
@@ -68,8 +66,8 @@ Grid chooseGrid(const ProxyArrays& p, const std::vector<std::uint32_t>& active,
   tbb::parallel_for(
       tbb::blocked_range<std::size_t>(0, samples, kChunk), [&](const tbb::blocked_range<std::size_t>& r) {
         for (std::size_t i = r.begin(); i != r.end(); ++i) {
-          const std::uint32_t s = active[i * stride];
-          extentScratch[i] = std::max({p.maxX[s] - p.minX[s], p.maxY[s] - p.minY[s], p.maxZ[s] - p.minZ[s]});
+          const BoxCorners b = p.box(active[i * stride]);
+          extentScratch[i] = std::max({b.hi[0] - b.lo[0], b.hi[1] - b.lo[1], b.hi[2] - b.lo[2]});
         }
       });
   std::nth_element(extentScratch.begin(), extentScratch.begin() + std::ptrdiff_t(samples / 2),
@@ -88,19 +86,12 @@ Grid chooseGrid(const ProxyArrays& p, const std::vector<std::uint32_t>& active,
 
   // Stage 3: huge boxes (estimated from extents, independent of the grid's origin), split in parallel over
   // fixed chunks of `active` (count, then fill), so both lists stay in `active` order.
-  const double inv = 1.0 / double(cell);
-  auto isHuge = [&](std::uint32_t s) {
-    const double covered = (double(p.maxX[s] - p.minX[s]) * inv + 1.0) *
-                           (double(p.maxY[s] - p.minY[s]) * inv + 1.0) *
-                           (double(p.maxZ[s] - p.minZ[s]) * inv + 1.0);
-    return covered > double(options.hugeCellLimit);
-  };
   const std::size_t chunks = (n + kChunk - 1) / kChunk;
   std::vector<std::size_t> hugeBefore(chunks + 1, 0);
   tbb::parallel_for(std::size_t(0), chunks, [&](std::size_t c) {
     std::size_t count = 0;
     for (std::size_t i = c * kChunk, e = std::min(n, (c + 1) * kChunk); i < e; ++i)
-      count += isHuge(active[i]);
+      count += isHuge(p, active[i], cell, options.hugeCellLimit);
     hugeBefore[c + 1] = count;
   });
   for (std::size_t c = 0; c < chunks; ++c) hugeBefore[c + 1] += hugeBefore[c];
@@ -110,7 +101,7 @@ Grid chooseGrid(const ProxyArrays& p, const std::vector<std::uint32_t>& active,
     std::size_t h = hugeBefore[c], b = c * kChunk - hugeBefore[c];
     for (std::size_t i = c * kChunk, e = std::min(n, (c + 1) * kChunk); i < e; ++i) {
       const std::uint32_t s = active[i];
-      if (isHuge(s))
+      if (isHuge(p, s, cell, options.hugeCellLimit))
         huge[h++] = s;
       else
         binned[b++] = s;

@@ -31,6 +31,16 @@ inline std::uint32_t cellOf(float x, float origin, float invCell, std::uint32_t 
   return std::min(std::uint32_t(t), dim - 1);
 }
 
+/// Stage 3's test: a box that covers more than `limit` cells of edge `cell` (estimated from its extents,
+/// independent of the grid's origin) is tested against all instead of being binned.
+inline bool isHuge(const ProxyArrays& p, std::uint32_t s, float cell, std::uint32_t limit) {
+  const double inv = 1.0 / double(cell);
+  const BoxCorners b = p.box(s);
+  const double covered = (double(b.hi[0] - b.lo[0]) * inv + 1.0) * (double(b.hi[1] - b.lo[1]) * inv + 1.0) *
+                         (double(b.hi[2] - b.lo[2]) * inv + 1.0);
+  return covered > double(limit);
+}
+
 /// Chooses the grid for the `active` proxies (not empty): stage 2, the cell edge from the median largest
 /// extent (size rule) or the paper's density (§4.1); stage 3, proxies whose boxes would cover more than
 /// `options.hugeCellLimit` cells go to `huge`, the others to `binned` (both in `active` order); then the

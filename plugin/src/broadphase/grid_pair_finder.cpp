@@ -53,8 +53,9 @@ constexpr std::uint64_t kMaxChunks = 256;
 
 inline bool aabbOverlap(const ProxyArrays& p, std::uint32_t a, std::uint32_t b) {
   // Touching counts: boxes that share a face, edge or corner overlap (min <= other max on every axis).
-  return p.minX[a] <= p.maxX[b] && p.minX[b] <= p.maxX[a] && p.minY[a] <= p.maxY[b] &&
-         p.minY[b] <= p.maxY[a] && p.minZ[a] <= p.maxZ[b] && p.minZ[b] <= p.maxZ[a];
+  const BoxCorners x = p.box(a), y = p.box(b);
+  return x.lo[0] <= y.hi[0] && y.lo[0] <= x.hi[0] && x.lo[1] <= y.hi[1] && y.lo[1] <= x.hi[1] &&
+         x.lo[2] <= y.hi[2] && y.lo[2] <= x.hi[2];
 }
 
 inline bool passesFilter(const ProxyArrays& p, std::uint32_t a, std::uint32_t b) {
@@ -65,9 +66,10 @@ inline bool passesFilter(const ProxyArrays& p, std::uint32_t a, std::uint32_t b)
 }
 
 inline std::uint32_t homeCell(const ProxyArrays& p, std::uint32_t s, const Grid& g) {
-  const std::uint32_t x = cellOf(p.minX[s], g.origin[0], g.invCell, g.dims[0]);
-  const std::uint32_t y = cellOf(p.minY[s], g.origin[1], g.invCell, g.dims[1]);
-  const std::uint32_t z = cellOf(p.minZ[s], g.origin[2], g.invCell, g.dims[2]);
+  const BoxCorners b = p.box(s);
+  const std::uint32_t x = cellOf(b.lo[0], g.origin[0], g.invCell, g.dims[0]);
+  const std::uint32_t y = cellOf(b.lo[1], g.origin[1], g.invCell, g.dims[1]);
+  const std::uint32_t z = cellOf(b.lo[2], g.origin[2], g.invCell, g.dims[2]);
   return std::uint32_t((std::uint64_t(z) * g.dims[1] + y) * g.dims[0] + x);
 }
 
@@ -245,6 +247,7 @@ class CpuPairFinder final : public PairFinder {
                  std::vector<std::uint64_t>& pairs) override;
   const PairFinderStats& stats() const override { return m_stats; }
   std::string name() const override { return "cpu"; }
+  bool readsBoxRecords() const override { return true; }
 
  private:
   void bruteForce(const ProxyArrays& p, const PairFinderOptions& options, std::vector<std::uint64_t>& pairs);
@@ -335,6 +338,7 @@ void CpuPairFinder::findPairs(const ProxyArrays& proxies, const PairFinderOption
     m_lastPairs.clear();
     return;
   }
+  const std::uint32_t activeCount = std::uint32_t(m_active.size());  // a grid search may free m_active
   // Stage 1: the path.
   if (m_active.size() < options.bruteForceBelow) {
     m_kept = false;
@@ -363,7 +367,7 @@ void CpuPairFinder::findPairs(const ProxyArrays& proxies, const PairFinderOption
     m_lastPairs.assign(pairs.begin(), pairs.end());
   else
     std::vector<std::uint64_t>().swap(m_lastPairs);
-  m_stats.rebinnedProxies = std::uint32_t(m_active.size()) - m_stats.restingProxies;
+  m_stats.rebinnedProxies = activeCount - m_stats.restingProxies;
   notePeak();
   m_stats.peakScratchBytes = m_peakBytes;
   releaseScratch();
@@ -888,6 +892,9 @@ void CpuPairFinder::grid(const ProxyArrays& p, const PairFinderOptions& options,
   const Grid g = chooseGrid(p, m_active, options, m_extent, m_binned, m_huge);
   notePeak();
   std::vector<float>().swap(m_extent);  // chooseGrid's scratch
+  // Beyond chooseGrid, only a kept grid needs the active list (m_unchanged); the binned and huge lists hold
+  // every active slot.
+  if (!keepGrid) std::vector<std::uint32_t>().swap(m_active);
   m_stats.hugeProxies = std::uint32_t(m_huge.size());
   m_keptGrid = g;
   m_stats.cellSize = g.cell;
@@ -927,6 +934,8 @@ bool CpuPairFinder::searchSlabs(const ProxyArrays& p, const PairFinderOptions& o
   if (!always && (keepGrid || m_binned.size() > kMaxSlabBoxes)) return false;
   StageClock clock;
   if (!m_slabs.plan(p, m_binned, g, options.slabBoxes, always ? 1 : kMinSlabs)) return false;
+  notePeak();
+  std::vector<std::uint32_t>().swap(m_binned);  // the slab lists hold every binned box
   m_stats.binMs = clock.lap();
   const std::size_t first = takeChunks(m_slabs.outputs(m_huge.size()));
   const SlabSearchCounts counts = m_slabs.search(p, m_huge, g, m_chunkPairs, first);
@@ -985,9 +994,10 @@ std::vector<std::uint64_t> findPairsBruteForce(const ProxyArrays& p) {
     if (!(p.flags[a] & kProxyActive)) continue;
     for (std::uint32_t b = a + 1; b < p.count; ++b) {
       if (!(p.flags[b] & kProxyActive)) continue;
-      const bool overlap = double(p.minX[a]) <= double(p.maxX[b]) && double(p.minX[b]) <= double(p.maxX[a]) &&
-                           double(p.minY[a]) <= double(p.maxY[b]) && double(p.minY[b]) <= double(p.maxY[a]) &&
-                           double(p.minZ[a]) <= double(p.maxZ[b]) && double(p.minZ[b]) <= double(p.maxZ[a]);
+      const BoxCorners x = p.box(a), y = p.box(b);
+      bool overlap = true;
+      for (int k = 0; k < 3; ++k)
+        overlap = overlap && double(x.lo[k]) <= double(y.hi[k]) && double(y.lo[k]) <= double(x.hi[k]);
       const bool filter = (p.group[a] & p.mask[b]) && (p.group[b] & p.mask[a]);
       const bool bothStatic = (p.flags[a] & kProxyStatic) && (p.flags[b] & kProxyStatic);
       if (overlap && filter && !bothStatic) pairs.push_back((std::uint64_t(a) << 32) | b);

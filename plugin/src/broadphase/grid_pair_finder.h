@@ -45,6 +45,7 @@
 //
 // Pair key: (std::uint64_t(lower slot) << 32) | higher slot. Slots are the indices into ProxyArrays.
 #include <cstdint>
+#include <cstring>
 #include <functional>
 #include <memory>
 #include <string>
@@ -58,6 +59,24 @@ namespace gpucol {
 constexpr std::uint8_t kProxyActive = 1u;
 /// Flag bit of ProxyArrays::flags: the proxy is static (static–static pairs are never generated).
 constexpr std::uint8_t kProxyStatic = 2u;
+
+/// The min and max corners of one box.
+struct BoxCorners {
+  float lo[3];
+  float hi[3];
+};
+
+/// Boxes kept in the caller's own records instead of six arrays (GridBroadphase's proxies, so that no copy of
+/// every box is made for the CPU finder): slot s's record starts at blocks[s >> blockBits] + (s mod
+/// 2^blockBits) * stride bytes and holds the min corner as three floats at byte minOffset and the max corner
+/// at maxOffset.
+struct BoxRecords {
+  const unsigned char* const* blocks = nullptr;
+  std::uint32_t blockBits = 0;  // below 32
+  std::uint32_t stride = 0;
+  std::uint32_t minOffset = 0;
+  std::uint32_t maxOffset = 0;
+};
 
 /// Structure-of-arrays view of every proxy slot (the pair finder reads it, never writes it).
 struct ProxyArrays {
@@ -90,6 +109,24 @@ struct ProxyArrays {
   /// a later call without them is then a full search. nullptr: the finder keeps what it needs itself. Never
   /// the `pairs` argument of the same call (that one is overwritten; it is then treated as not given).
   const std::vector<std::uint64_t>* lastPairs = nullptr;
+  /// Optional, in place of minX..maxZ (then nullptr): the boxes in the caller's records. Only a finder whose
+  /// readsBoxRecords() is true accepts them.
+  BoxRecords records;
+
+  /// The box of slot s, from the six arrays or from the records.
+  BoxCorners box(std::uint32_t s) const {
+    if (minX) return BoxCorners{{minX[s], minY[s], minZ[s]}, {maxX[s], maxY[s], maxZ[s]}};
+    const unsigned char* r = record(s);
+    BoxCorners b;
+    std::memcpy(b.lo, r + records.minOffset, sizeof b.lo);
+    std::memcpy(b.hi, r + records.maxOffset, sizeof b.hi);
+    return b;
+  }
+  /// The start of slot s's record (with records only).
+  const unsigned char* record(std::uint32_t s) const {
+    return records.blocks[s >> records.blockBits] +
+           std::size_t(s & ((1u << records.blockBits) - 1)) * records.stride;
+  }
 };
 
 /// How the grid's cell size is chosen (paper §4.1 and the alternative it is measured against).
@@ -172,6 +209,8 @@ class PairFinder {
   virtual std::string name() const = 0;
   /// True when the search runs on a GPU (Backend::Auto hands large scenes only to such a finder).
   virtual bool runsOnGpu() const { return false; }
+  /// True when the finder reads boxes from ProxyArrays::records (the six arrays may then be nullptr).
+  virtual bool readsBoxRecords() const { return false; }
 };
 
 /// The CPU implementation (oneTBB), the reference the OpenCL path must match bit for bit.

@@ -9,6 +9,7 @@
 
 #include "broadphase/grid_choice.h"
 #include "broadphase/grid_pair_finder.h"
+#include "bvh/prefetch.h"
 
 namespace gpucol {
 
@@ -55,22 +56,19 @@ inline CellRange cellRange(const LocalBox& b, const Grid& g) {
   return r;
 }
 
-/// Stage 3's test: a box that covers more than `limit` cells of edge `cell` (estimated from its extents).
-inline bool isHuge(const ProxyArrays& p, std::uint32_t s, float cell, std::uint32_t limit) {
-  const double inv = 1.0 / double(cell);
-  const double covered = (double(p.maxX[s] - p.minX[s]) * inv + 1.0) *
-                         (double(p.maxY[s] - p.minY[s]) * inv + 1.0) *
-                         (double(p.maxZ[s] - p.minZ[s]) * inv + 1.0);
-  return covered > double(limit);
+/// Asks for slot s's box ahead of a boxOf in scattered slot order. Only records need it: a box there is a
+/// line of its own, while a line of the six arrays holds 16 slots, which neighbouring reads share.
+inline void prefetchBox(const ProxyArrays& p, std::uint32_t s) {
+  if (p.minX) return;
+  const unsigned char* r = p.record(s);
+  prefetch(r + p.records.minOffset);
+  prefetch(r + p.records.maxOffset + 2 * sizeof(float));
 }
 
 inline LocalBox boxOf(const ProxyArrays& p, std::uint32_t s) {
-  return LocalBox{{p.minX[s], p.minY[s], p.minZ[s]},
-                  {p.maxX[s], p.maxY[s], p.maxZ[s]},
-                  s,
-                  p.group[s],
-                  p.mask[s],
-                  p.flags[s]};
+  const BoxCorners b = p.box(s);
+  return LocalBox{
+      {b.lo[0], b.lo[1], b.lo[2]}, {b.hi[0], b.hi[1], b.hi[2]}, s, p.group[s], p.mask[s], p.flags[s]};
 }
 
 /// Touching-counts overlap of two local boxes, without short-circuit branches (see testRuns).

@@ -53,10 +53,11 @@ void QueryGrid::build(const ProxyArrays& p, const std::vector<std::uint32_t>& sl
     for (int a = 0; a < 3; ++a) m_hi[a] = m_grid.origin[a];
     return;
   }
-  const float* const hiOf[3] = {p.maxX, p.maxY, p.maxZ};
-  for (int a = 0; a < 3; ++a) {
-    m_hi[a] = hiOf[a][binned[0]];
-    for (std::uint32_t s : binned) m_hi[a] = std::max(m_hi[a], hiOf[a][s]);
+  const BoxCorners first = p.box(binned[0]);
+  for (int a = 0; a < 3; ++a) m_hi[a] = first.hi[a];
+  for (std::uint32_t s : binned) {
+    const BoxCorners b = p.box(s);
+    for (int a = 0; a < 3; ++a) m_hi[a] = std::max(m_hi[a], b.hi[a]);
   }
   // The search's cell size, coarsened until the cell array is dense (cells at most twice the boxes).
   const std::uint64_t maxCells = kCellsPerBox * binned.size() + kCellsSlack;
@@ -67,12 +68,12 @@ void QueryGrid::build(const ProxyArrays& p, const std::vector<std::uint32_t>& sl
       m_grid.dims[a] =
           std::uint32_t(std::floor((double(m_hi[a]) - double(m_grid.origin[a])) / double(m_grid.cell)) + 1.0);
   }
-  const float* const loOf[3] = {p.minX, p.minY, p.minZ};
   auto rangeOf = [&](std::uint32_t s) {
+    const BoxCorners b = p.box(s);
     CellBox r;
     for (int a = 0; a < 3; ++a) {
-      r.lo[a] = cellOf(loOf[a][s], m_grid.origin[a], m_grid.invCell, m_grid.dims[a]);
-      r.hi[a] = cellOf(hiOf[a][s], m_grid.origin[a], m_grid.invCell, m_grid.dims[a]);
+      r.lo[a] = cellOf(b.lo[a], m_grid.origin[a], m_grid.invCell, m_grid.dims[a]);
+      r.hi[a] = cellOf(b.hi[a], m_grid.origin[a], m_grid.invCell, m_grid.dims[a]);
     }
     return r;
   };

@@ -21,6 +21,8 @@ constexpr std::uint64_t kMinSlabBoxes = 256;
 /// A slab is also closed once it has this many cells per box aimed at, so a sparse stretch of the grid
 /// does not make one slab's cell array large.
 constexpr std::uint64_t kCellsPerSlabBox = 8;
+/// A slab's boxes lie about kSlabsAimed slots apart: each is fetched this many boxes ahead of its copy.
+constexpr std::size_t kBoxesAhead = 16;
 /// Binned boxes per task of the planning passes.
 constexpr std::size_t kPlanGrain = 4096;
 /// Tasks of the planning passes at most (each has a count per slab).
@@ -37,13 +39,6 @@ inline bool ownedByCell(std::uint32_t a, std::uint32_t b) {
   return ((a | b) >> kStartShift) == kAllAxes;
 }
 
-inline const float* loAxis(const ProxyArrays& p, int a) {
-  return a == 0 ? p.minX : a == 1 ? p.minY : p.minZ;
-}
-inline const float* hiAxis(const ProxyArrays& p, int a) {
-  return a == 0 ? p.maxX : a == 1 ? p.maxY : p.maxZ;
-}
-
 }  // namespace
 
 bool SlabSearch::plan(const ProxyArrays& p, const std::vector<std::uint32_t>& binned, const Grid& g,
@@ -54,12 +49,12 @@ bool SlabSearch::plan(const ProxyArrays& p, const std::vector<std::uint32_t>& bi
   for (int a = 1; a < 3; ++a)
     if (g.dims[a] > g.dims[m_axis]) m_axis = a;
   const std::uint32_t layers = g.dims[m_axis];
-  const float* lo = loAxis(p, m_axis);
-  const float* hi = hiAxis(p, m_axis);
   auto layerOf = [&](float x) { return cellOf(x, g.origin[m_axis], g.invCell, layers); };
   // f(slab) for every slab the box of slot s reaches (after the slabs are cut).
   auto forSlabsOf = [&](std::uint32_t s, auto&& f) {
-    for (std::uint32_t k = m_layerSlab[layerOf(lo[s])], last = m_layerSlab[layerOf(hi[s])]; k <= last; ++k)
+    const BoxCorners b = p.box(s);
+    for (std::uint32_t k = m_layerSlab[layerOf(b.lo[m_axis])], last = m_layerSlab[layerOf(b.hi[m_axis])];
+         k <= last; ++k)
       f(k);
   };
   const std::size_t chunks =
@@ -81,7 +76,7 @@ bool SlabSearch::plan(const ProxyArrays& p, const std::vector<std::uint32_t>& bi
   tbb::parallel_for(std::size_t(0), layerChunks, [&](std::size_t c) {
     std::size_t* count = m_chunkCount.data() + c * layers;
     for (std::size_t i = c * layerChunk, end = std::min(n, i + layerChunk); i < end; ++i)
-      ++count[layerOf(lo[binned[i]])];
+      ++count[layerOf(p.box(binned[i]).lo[m_axis])];
   });
   m_layerSlab.resize(layers);
   tbb::parallel_for(std::uint32_t(0), layers, [&](std::uint32_t l) {
@@ -141,8 +136,13 @@ SlabSearchCounts SlabSearch::search(const ProxyArrays& p, const std::vector<std:
   tbb::parallel_for(
       tbb::blocked_range<std::size_t>(0, slabCount, 1),
       [&](const tbb::blocked_range<std::size_t>& r) {
-        for (std::size_t k = r.begin(); k != r.end(); ++k)
-          counts[k] = searchSlab(k, p, huge, g, out[first + k]);
+        for (std::size_t k = r.begin(); k != r.end(); ++k) {
+          // Found into the thread's list, then copied at their exact size: lists grown by push_back hold
+          // up to twice their pairs, and all of them are held until the gather.
+          std::vector<std::uint64_t>& found = m_scratch.local().pairs;
+          counts[k] = searchSlab(k, p, huge, g, found);
+          out[first + k].assign(found.begin(), found.end());
+        }
       },
       tbb::simple_partitioner());
   // Stage 3: huge boxes among themselves, each pair from the earlier one in `huge`.
@@ -182,6 +182,7 @@ SlabSearchCounts SlabSearch::searchSlab(std::size_t slab, const ProxyArrays& p,
   t.range.resize(m);
   std::uint64_t keys = 0;
   for (std::size_t j = 0; j < m; ++j) {
+    if (j + kBoxesAhead < m) prefetchBox(p, m_members[begin + j + kBoxesAhead]);
     t.box[j] = boxOf(p, m_members[begin + j]);
     t.range[j] = cellRange(t.box[j], g);
     keys += toSlab(t.range[j]).count();
@@ -286,7 +287,7 @@ std::size_t SlabSearch::bytes() const {
                       (m_memberStart.capacity() + m_chunkCount.capacity()) * sizeof(std::size_t);
   for (const Scratch& t : m_scratch)
     bytes += t.box.capacity() * sizeof(LocalBox) + t.range.capacity() * sizeof(CellRange) +
-             (t.cellStart.capacity() + t.entries.capacity()) * 4;
+             (t.cellStart.capacity() + t.entries.capacity()) * 4 + t.pairs.capacity() * 8;
   return bytes;
 }
 

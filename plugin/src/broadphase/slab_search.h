@@ -63,6 +63,7 @@ class SlabSearch {
     std::vector<CellRange> range;          // their cells in slab coordinates
     std::vector<std::uint32_t> cellStart;  // first entry per slab cell (+1 sentinel)
     std::vector<std::uint32_t> entries;    // box indices by cell, kSlabHome on a box's home cell
+    std::vector<std::uint64_t> pairs;      // the pairs of the slab being searched
   };
 
   SlabSearchCounts searchSlab(std::size_t slab, const ProxyArrays& p, const std::vector<std::uint32_t>& huge,
