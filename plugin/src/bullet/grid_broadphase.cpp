@@ -647,9 +647,6 @@ void GridBroadphase::calculateOverlappingPairs(btDispatcher* dispatcher) {
   // and the diff's lists of changes.
   const std::size_t stepBytes =
       d.view.bytes() + std::max(fs.peakScratchBytes, fs.scratchBytes) - fs.scratchBytes;
-    fprintf(stderr, "view %zu finderPeak %zu finderKeep %zu held %zu found %zu current %zu\n", d.view.bytes(),
-            fs.peakScratchBytes, fs.scratchBytes, d.heldBytes(), d.found.capacity() * 8,
-            d.current.capacity() * 8);
   d.view.release();
   d.diffAndUpdateCache(dispatcher, st);
   for (std::uint32_t s : d.pendingFree) {
