@@ -8,6 +8,7 @@
 #include <chrono>
 #include <cmath>
 #include <cstdio>
+#include <deque>
 #include <fstream>
 #include <functional>
 #include <iostream>
@@ -391,8 +392,7 @@ void runAll(const Options& o) {
       std::vector<std::size_t> slot;  // steppers[i]'s place in results
       std::vector<std::unique_ptr<GridBroadphase>> grids;
       std::vector<std::unique_ptr<btBroadphaseInterface>> peers;
-      std::vector<std::vector<GridBroadphaseStats>> stepStats;
-      stepStats.reserve(2);
+      std::deque<std::vector<GridBroadphaseStats>> stepStats;  // a deque: the steppers hold pointers into it
       auto add = [&](std::unique_ptr<Stepper> stepper) {
         slot.push_back(results.size());
         results.emplace_back();
