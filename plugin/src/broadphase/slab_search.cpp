@@ -39,6 +39,29 @@ inline bool ownedByCell(std::uint32_t a, std::uint32_t b) {
   return ((a | b) >> kStartShift) == kAllAxes;
 }
 
+/// Slot s's extent along one axis, read from that axis's two arrays (the planning passes read nothing else
+/// there) or from the records.
+class AxisExtent {
+ public:
+  AxisExtent(const ProxyArrays& p, int axis)
+      : m_p(p),
+        m_axis(axis),
+        m_lo(axis == 0   ? p.minX
+             : axis == 1 ? p.minY
+                         : p.minZ),
+        m_hi(axis == 0   ? p.maxX
+             : axis == 1 ? p.maxY
+                         : p.maxZ) {}
+  float lo(std::uint32_t s) const { return m_lo ? m_lo[s] : m_p.box(s).lo[m_axis]; }
+  float hi(std::uint32_t s) const { return m_hi ? m_hi[s] : m_p.box(s).hi[m_axis]; }
+
+ private:
+  const ProxyArrays& m_p;
+  int m_axis;
+  const float* m_lo;
+  const float* m_hi;
+};
+
 }  // namespace
 
 bool SlabSearch::plan(const ProxyArrays& p, const std::vector<std::uint32_t>& binned, const Grid& g,
@@ -50,10 +73,10 @@ bool SlabSearch::plan(const ProxyArrays& p, const std::vector<std::uint32_t>& bi
     if (g.dims[a] > g.dims[m_axis]) m_axis = a;
   const std::uint32_t layers = g.dims[m_axis];
   auto layerOf = [&](float x) { return cellOf(x, g.origin[m_axis], g.invCell, layers); };
+  const AxisExtent extent(p, m_axis);
   // f(slab) for every slab the box of slot s reaches (after the slabs are cut).
   auto forSlabsOf = [&](std::uint32_t s, auto&& f) {
-    const BoxCorners b = p.box(s);
-    for (std::uint32_t k = m_layerSlab[layerOf(b.lo[m_axis])], last = m_layerSlab[layerOf(b.hi[m_axis])];
+    for (std::uint32_t k = m_layerSlab[layerOf(extent.lo(s))], last = m_layerSlab[layerOf(extent.hi(s))];
          k <= last; ++k)
       f(k);
   };
@@ -76,7 +99,7 @@ bool SlabSearch::plan(const ProxyArrays& p, const std::vector<std::uint32_t>& bi
   tbb::parallel_for(std::size_t(0), layerChunks, [&](std::size_t c) {
     std::size_t* count = m_chunkCount.data() + c * layers;
     for (std::size_t i = c * layerChunk, end = std::min(n, i + layerChunk); i < end; ++i)
-      ++count[layerOf(p.box(binned[i]).lo[m_axis])];
+      ++count[layerOf(extent.lo(binned[i]))];
   });
   m_layerSlab.resize(layers);
   tbb::parallel_for(std::uint32_t(0), layers, [&](std::uint32_t l) {
