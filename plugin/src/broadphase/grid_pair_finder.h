@@ -78,7 +78,8 @@ struct BoxRecords {
   std::uint32_t maxOffset = 0;
 };
 
-/// Structure-of-arrays view of every proxy slot (the pair finder reads it, never writes it).
+/// Structure-of-arrays view of every proxy slot, the boxes in six arrays or in the caller's records (the pair
+/// finder reads it, never writes it).
 struct ProxyArrays {
   /// Number of slots (live proxies and holes); every array below has this many entries.
   std::uint32_t count = 0;

@@ -9,7 +9,6 @@
 
 #include "broadphase/grid_choice.h"
 #include "broadphase/grid_pair_finder.h"
-#include "bvh/prefetch.h"
 
 namespace gpucol {
 
@@ -54,15 +53,6 @@ inline CellRange cellRange(const LocalBox& b, const Grid& g) {
     r.hi[a] = cellOf(b.hi[a], g.origin[a], g.invCell, g.dims[a]);
   }
   return r;
-}
-
-/// Asks for slot s's box ahead of a boxOf in scattered slot order. Only records need it: a box there is a
-/// line of its own, while a line of the six arrays holds 16 slots, which neighbouring reads share.
-inline void prefetchBox(const ProxyArrays& p, std::uint32_t s) {
-  if (p.minX) return;
-  const unsigned char* r = p.record(s);
-  prefetch(r + p.records.minOffset);
-  prefetch(r + p.records.maxOffset + 2 * sizeof(float));
 }
 
 inline LocalBox boxOf(const ProxyArrays& p, std::uint32_t s) {

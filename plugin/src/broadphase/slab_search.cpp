@@ -21,8 +21,6 @@ constexpr std::uint64_t kMinSlabBoxes = 256;
 /// A slab is also closed once it has this many cells per box aimed at, so a sparse stretch of the grid
 /// does not make one slab's cell array large.
 constexpr std::uint64_t kCellsPerSlabBox = 8;
-/// A slab's boxes lie about kSlabsAimed slots apart: each is fetched this many boxes ahead of its copy.
-constexpr std::size_t kBoxesAhead = 16;
 /// Binned boxes per task of the planning passes.
 constexpr std::size_t kPlanGrain = 4096;
 /// Tasks of the planning passes at most (each has a count per slab).
@@ -205,7 +203,6 @@ SlabSearchCounts SlabSearch::searchSlab(std::size_t slab, const ProxyArrays& p,
   t.range.resize(m);
   std::uint64_t keys = 0;
   for (std::size_t j = 0; j < m; ++j) {
-    if (j + kBoxesAhead < m) prefetchBox(p, m_members[begin + j + kBoxesAhead]);
     t.box[j] = boxOf(p, m_members[begin + j]);
     t.range[j] = cellRange(t.box[j], g);
     keys += toSlab(t.range[j]).count();
