@@ -84,9 +84,10 @@ struct ViewBuffer {
   float* axis(int a) { return axes.get() + std::size_t(a) * slots; }
   std::uint8_t* flags() { return marks.get(); }
   std::uint8_t* moved() { return marks.get() + slots; }
-  void allocate(std::size_t n) {
+  void allocate(std::size_t n, bool withAxes) {
     if (n != slots || !marks) marks.reset(new std::uint8_t[2 * n]), axes.reset();
     slots = n;
+    if (withAxes) allocateAxes();
   }
   void allocateAxes() {
     if (!axes) axes.reset(new float[6 * slots]);
@@ -181,11 +182,17 @@ struct GridBroadphase::Impl {
   }
 
   /// Takes each live proxy's filter from the proxy (Bullet code may edit it after creation); with `fill`,
-  /// also writes the flags and moved bytes of the finder's view and clears the kMoved bits (the view carries
-  /// them). In parallel: each slot is written by one task only. Returns true when a filter changed.
+  /// also writes the finder's view of every slot (its boxes too when the view has their arrays: this pass
+  /// reads every proxy anyway) and clears the kMoved bits (the view carries them). In parallel: each slot is
+  /// written by one task only. Returns true when a filter changed.
   bool scan(bool fill) {
     // Proxies whose static bit flips here (rare: a filter edited on the proxy).
     std::atomic<std::int64_t> staticDelta{0};
+    const bool boxes = fill && view.axes;
+    float* const lo[3] = {boxes ? view.axis(0) : nullptr, boxes ? view.axis(1) : nullptr,
+                          boxes ? view.axis(2) : nullptr};
+    float* const hi[3] = {boxes ? view.axis(3) : nullptr, boxes ? view.axis(4) : nullptr,
+                          boxes ? view.axis(5) : nullptr};
     std::uint8_t* const flags = view.flags();
     std::uint8_t* const moved = view.moved();
     const bool changed = tbb::parallel_reduce(
@@ -205,8 +212,13 @@ struct GridBroadphase::Impl {
                 changed = true;
               }
               if (fill) flags[s] = (st & kNonFinite) ? 0 : flagsOf(group[s]);
+              if (boxes)
+                for (int a = 0; a < 3; ++a)
+                  lo[a][s] = float(p.m_aabbMin[a]), hi[a][s] = float(p.m_aabbMax[a]);
             } else if (fill) {
               flags[s] = 0;
+              if (boxes)
+                for (int a = 0; a < 3; ++a) lo[a][s] = 0.0f, hi[a][s] = 0.0f;
             }
             if (fill) {
               moved[s] = std::uint8_t((st & kMoved) != 0);
@@ -250,19 +262,25 @@ struct GridBroadphase::Impl {
                       });
   }
 
+  /// True when the scan copies the boxes into the view, as every finder but an in-place CPU finder reads
+  /// them.
+  bool copyInScan() const { return !(kProxyBoxesAreFloats && tuning.boxesInPlace); }
+
   /// The finder's view of the filled buffer (consumes nonFiniteChanged): the boxes in the proxies when
-  /// `readsRecords`, else copied into the view's arrays (the proxies read once, then a copy less than half
-  /// their size: at 100K moving boxes, steps took 1.51-1.85 times as long in place; README).
+  /// `readsRecords`, else in the view's arrays (the proxies read once, then a copy less than half their size:
+  /// at 100K moving boxes, steps took 1.51-1.85 times as long in place; README), which the scan filled unless
+  /// boxesInPlace met a finder that cannot read them in place.
   ProxyArrays finderView(bool readsRecords) {
     ProxyArrays v;
     v.count = slotCount;
     if (readsRecords) {
       v.records = boxRecords();
     } else {
+      const bool filled = view.axes != nullptr;
       view.allocateAxes();
       float* const axis[6] = {view.axis(0), view.axis(1), view.axis(2),
                               view.axis(3), view.axis(4), view.axis(5)};
-      copyBoxes(axis);
+      if (!filled) copyBoxes(axis);
       v.minX = axis[0], v.minY = axis[1], v.minZ = axis[2], v.maxX = axis[3], v.maxY = axis[4],
       v.maxZ = axis[5];
     }
@@ -605,10 +623,10 @@ void GridBroadphase::calculateOverlappingPairs(btDispatcher* dispatcher) {
   st.proxies = d.liveCount;
   // When a box already changed, the scan fills the finder's view as it goes; otherwise it only looks for
   // filter changes, and the view is filled when it found one.
-  if (d.dirty) d.view.allocate(d.slotCount);
+  if (d.dirty) d.view.allocate(d.slotCount, d.copyInScan());
   if (d.scan(d.dirty)) {
     d.dirty = true;
-    d.view.allocate(d.slotCount);
+    d.view.allocate(d.slotCount, d.copyInScan());
     d.scan(true);
   }
   st.staticProxies = d.staticCount;
