@@ -9,6 +9,7 @@
 #include <cstdint>
 #include <cstring>
 #include <functional>
+#include <limits>
 #include <random>
 #include <string>
 #include <vector>
@@ -73,7 +74,8 @@ Scene uniformCloud(int n, float side, float halfSize, std::uint32_t seed) {
 /// Checks the finder against brute force with every combination of options, grid forced and not, the grid
 /// searched whole and in slabs (of 64 boxes, so that small scenes have many), the boxes in arrays and in
 /// records.
-void expectMatchesBruteForce(const Scene& scene, const std::string& what, std::uint64_t minPairs = 1) {
+void expectMatchesBruteForce(const Scene& scene, const std::string& what, std::uint64_t minPairs = 1,
+                             std::uint32_t hugeCellLimit = gpucol::PairFinderOptions{}.hugeCellLimit) {
   const std::vector<std::uint64_t> reference = gpucol::findPairsBruteForce(scene.view());
   ASSERT_GE(reference.size(), minPairs) << what << ": the scene should have overlaps to test";
   auto finder = gpucol::makeCpuPairFinder();
@@ -90,6 +92,7 @@ void expectMatchesBruteForce(const Scene& scene, const std::string& what, std::u
               o.mappingSqrt = sqrtMode;
               o.slabTiling = tiling;
               o.slabBoxes = 64;
+              o.hugeCellLimit = hugeCellLimit;
               std::vector<std::uint64_t> pairs;
               finder->findPairs(records ? scene.recordView() : scene.view(), o, pairs);
               ASSERT_EQ(pairs, reference)
@@ -164,6 +167,40 @@ TEST(GridPairFinder, HugeBoxesTestedThroughTheirCells) {
   // Through the cells, a huge box visits far fewer entries than the 20,090 binned boxes it would test
   // one by one.
   EXPECT_LT(finder->stats().candidates, 30u * 20090u / 2);
+}
+
+TEST(GridPairFinder, BoxesSpanningMoreThan255CellsOnAnAxis) {
+  // With no huge limit, rods across a thin square of small boxes are binned across about 290 cells on x or
+  // on z, more than a packed cell range holds (8 bits per axis): their cells are walked from the whole range
+  // instead, in the whole grid and in the slabs, which cut one of the two axes (so the rods along the other
+  // one stay wide in every slab). The square is dense enough for a counting sort and slabs (cells <= 8 ×
+  // boxes + 1024).
+  std::mt19937 rng(21);
+  std::uniform_real_distribution<float> xz(-50.0f, 50.0f), y(-0.04f, 0.04f), size(0.07f, 0.09f);
+  Scene s;
+  for (int i = 0; i < 12000; ++i) s.add(xz(rng), y(rng), xz(rng), size(rng), 0.05f, size(rng));
+  for (int i = 0; i < 4; ++i) {
+    s.add(0.01f * xz(rng), y(rng), xz(rng), 49.5f, 0.05f, 0.05f);
+    s.add(xz(rng), y(rng), 0.01f * xz(rng), 0.05f, 0.05f, 49.5f);
+  }
+  const std::vector<std::uint64_t> reference = gpucol::findPairsBruteForce(s.view());
+  ASSERT_GE(reference.size(), 100u);
+  auto finder = gpucol::makeCpuPairFinder();
+  for (bool records : {false, true})
+    for (auto tiling : {gpucol::SlabTiling::Off, gpucol::SlabTiling::Always}) {
+      gpucol::PairFinderOptions o;
+      o.bruteForceBelow = 0;
+      o.hugeCellLimit = std::numeric_limits<std::uint32_t>::max();
+      o.slabTiling = tiling;
+      std::vector<std::uint64_t> pairs;
+      finder->findPairs(records ? s.recordView() : s.view(), o, pairs);
+      ASSERT_EQ(pairs, reference) << "records=" << records << " tiling=" << int(tiling);
+      const gpucol::PairFinderStats& st = finder->stats();
+      EXPECT_EQ(st.hugeProxies, 0u);
+      EXPECT_GT(std::min(st.dims[0], st.dims[2]), 270u) << "the rods must span more than 255 cells";
+      EXPECT_EQ(st.slabs > 0, tiling == gpucol::SlabTiling::Always)
+          << st.dims[0] << " x " << st.dims[1] << " x " << st.dims[2] << " cells: not dense?";
+    }
 }
 
 TEST(GridPairFinder, AllInOnePlane) {

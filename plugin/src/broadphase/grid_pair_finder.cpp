@@ -78,34 +78,6 @@ inline void forEachCell(const CellRange& r, const Grid& g, F&& f) {
   forEachCellOf(r, g.dims, [&](std::uint32_t c, std::uint32_t, std::uint32_t, std::uint32_t) { f(c); });
 }
 
-/// A box's cells on a dense grid in 8 bytes: the number of its first cell and its extra cells per axis (hi -
-/// lo, up to 255; a box that spans more is marked and walked from its CellRange instead).
-struct PackedCells {
-  std::uint32_t first;
-  std::uint8_t span[3];
-  std::uint8_t wide;  // 1: a span did not fit 8 bits
-
-  static PackedCells of(const CellRange& r, const Grid& g) {
-    PackedCells p{
-        std::uint32_t((std::uint64_t(r.lo[2]) * g.dims[1] + r.lo[1]) * g.dims[0] + r.lo[0]), {0, 0, 0}, 0};
-    for (int a = 0; a < 3; ++a) {
-      const std::uint32_t d = r.hi[a] - r.lo[a];
-      p.wide |= std::uint8_t(d > 255);
-      p.span[a] = std::uint8_t(d);
-    }
-    return p;
-  }
-  bool fits() const { return wide == 0; }
-  /// f(cell) for every cell, in the order forEachCell visits them.
-  template <typename F>
-  void forEach(const Grid& g, F&& f) const {
-    const std::uint32_t dx = g.dims[0], dxy = g.dims[0] * g.dims[1];
-    for (std::uint32_t z = 0, zc = first; z <= span[2]; ++z, zc += dxy)
-      for (std::uint32_t y = 0, yc = zc; y <= span[1]; ++y, yc += dx)
-        for (std::uint32_t x = 0; x <= span[0]; ++x) f(yc + x);
-  }
-};
-
 /// Milliseconds since the last lap (stage timings of PairFinderStats).
 class StageClock {
  public:
@@ -331,6 +303,7 @@ void CpuPairFinder::findPairs(const ProxyArrays& proxies, const PairFinderOption
   pairs.clear();
   // Stage 0: the active list, ascending, so brute force emits keys already in order.
   m_active.clear();
+  m_active.reserve(proxies.count);  // exactly: grown by push_back it could hold twice its entries
   for (std::uint32_t s = 0; s < proxies.count; ++s)
     if (proxies.flags[s] & kProxyActive) m_active.push_back(s);
   if (m_active.size() < 2) {
@@ -620,7 +593,7 @@ void CpuPairFinder::binSorted(const ProxyArrays& p, const Grid& g) {
         for (std::size_t i = r.begin(); i != r.end(); ++i) {
           const CellRange range = cellRange(m_box[i], g);
           sum += range.count();
-          if (dense) m_packed[i] = PackedCells::of(range, g);
+          if (dense) m_packed[i] = PackedCells::of(range, g.dims);
         }
         return sum;
       },
@@ -643,7 +616,7 @@ void CpuPairFinder::binSorted(const ProxyArrays& p, const Grid& g) {
         n, cells, m_cellStart,
         [&](std::size_t i, auto&& f) {
           if (m_packed[i].fits())
-            m_packed[i].forEach(g, f);
+            m_packed[i].forEach(g.dims, [&](std::uint32_t c, std::uint32_t) { f(c); });
           else
             forEachCell(cellRange(m_box[i], g), g, f);
         },

@@ -86,6 +86,37 @@ inline void forEachCellOf(const CellRange& r, const std::uint32_t dims[3], F&& f
     }
 }
 
+/// A box's cells on a dense grid in 8 bytes: the number of its first cell and its extra cells per axis (hi -
+/// lo, up to 255; a box that spans more is marked and walked from its CellRange instead).
+struct PackedCells {
+  std::uint32_t first;
+  std::uint8_t span[3];
+  std::uint8_t wide;  // 1: a span did not fit 8 bits
+
+  /// Range `r` of a grid of `dims` cells (whose count fits 32 bits).
+  static PackedCells of(const CellRange& r, const std::uint32_t dims[3]) {
+    PackedCells p{
+        std::uint32_t((std::uint64_t(r.lo[2]) * dims[1] + r.lo[1]) * dims[0] + r.lo[0]), {0, 0, 0}, 0};
+    for (int a = 0; a < 3; ++a) {
+      const std::uint32_t d = r.hi[a] - r.lo[a];
+      p.wide |= std::uint8_t(d > 255);
+      p.span[a] = std::uint8_t(d);
+    }
+    return p;
+  }
+  bool fits() const { return wide == 0; }
+  /// f(cell, first) for every cell, in the order forEachCellOf visits them; `first` has bit a set when the
+  /// cell is the range's first on axis a.
+  template <typename F>
+  void forEach(const std::uint32_t dims[3], F&& f) const {
+    const std::uint32_t dx = dims[0], dxy = dims[0] * dims[1];
+    for (std::uint32_t z = 0, zc = first; z <= span[2]; ++z, zc += dxy)
+      for (std::uint32_t y = 0, yc = zc; y <= span[1]; ++y, yc += dx)
+        for (std::uint32_t x = 0; x <= span[0]; ++x)
+          f(yc + x, std::uint32_t(x == 0) | std::uint32_t(y == 0) << 1 | std::uint32_t(z == 0) << 2);
+  }
+};
+
 /// Stage 3 among the huge boxes: huge[i] against each later one (so each pair is tested once), into `out`.
 /// Returns the candidates tested.
 inline std::uint64_t hugeAgainstLaterHuge(const ProxyArrays& p, const std::vector<std::uint32_t>& huge,

@@ -32,6 +32,16 @@ constexpr std::size_t kPlanChunks = 64;
 constexpr int kStartShift = 29;
 constexpr std::uint32_t kAllAxes = 7;
 constexpr std::uint32_t kSlabBox = (1u << kStartShift) - 1;
+/// Resizes v to n elements with a capacity of exactly n when it must grow (resize alone would double it, and
+/// each thread holds its scratch at the largest slab's size until the search ends).
+template <typename T>
+void resizeExact(std::vector<T>& v, std::size_t n) {
+  if (n > v.capacity()) {
+    v.clear();
+    v.reserve(n);
+  }
+  v.resize(n);
+}
 /// Stage 9 on two entries (or an entry and a huge box's bits) of one cell.
 inline bool ownedByCell(std::uint32_t a, std::uint32_t b) {
   return ((a | b) >> kStartShift) == kAllAxes;
@@ -199,13 +209,14 @@ SlabSearchCounts SlabSearch::searchSlab(std::size_t slab, const ProxyArrays& p,
     return r;
   };
   Scratch& t = m_scratch.local();
-  t.box.resize(m);
-  t.range.resize(m);
+  resizeExact(t.box, m);
+  resizeExact(t.cells, m);
   std::uint64_t keys = 0;
   for (std::size_t j = 0; j < m; ++j) {
     t.box[j] = boxOf(p, m_members[begin + j]);
-    t.range[j] = cellRange(t.box[j], g);
-    keys += toSlab(t.range[j]).count();
+    const CellRange r = toSlab(cellRange(t.box[j], g));
+    keys += r.count();
+    t.cells[j] = PackedCells::of(r, dims);
   }
   if (keys > std::numeric_limits<std::uint32_t>::max())
     throw std::runtime_error("gpucol::GridBroadphase: " + std::to_string(keys) +
@@ -221,24 +232,36 @@ SlabSearchCounts SlabSearch::searchSlab(std::size_t slab, const ProxyArrays& p,
             std::uint32_t(z == first[2]) << 2)
            << kStartShift;
   };
+  // f(cell, start bits) for every slab cell of box j, the bits (an entry's top three) saying on which axes
+  // the cell is the box's first.
+  auto forCellsOf = [&](std::size_t j, auto&& f) {
+    const LocalBox& b = t.box[j];
+    if (t.cells[j].fits()) {
+      const std::uint32_t axes =
+          cellOf(b.lo[A], g.origin[A], g.invCell, g.dims[A]) >= a0 ? kAllAxes : kAllAxes & ~(1u << A);
+      t.cells[j].forEach(
+          dims, [&](std::uint32_t c, std::uint32_t firstOn) { f(c, (firstOn & axes) << kStartShift); });
+      return;
+    }
+    const CellRange whole = cellRange(b, g);
+    std::uint32_t first[3];
+    firstCells(whole, first);
+    forEachCellOf(toSlab(whole), dims,
+                  [&](std::uint32_t c, std::uint32_t x, std::uint32_t y, std::uint32_t z) {
+                    f(c, startBits(first, x, y, z));
+                  });
+  };
 
   // Stages 4-5: a counting sort of the slab's entries by cell. Counts go up, an inclusive scan turns them
   // into cell ends, and placing counts them back down to each cell's start.
   t.cellStart.assign(std::size_t(cells) + 1, 0);
   std::uint32_t* start = t.cellStart.data();
-  for (std::size_t j = 0; j < m; ++j)
-    forEachCellOf(toSlab(t.range[j]), dims,
-                  [&](std::uint32_t c, std::uint32_t, std::uint32_t, std::uint32_t) { ++start[c]; });
+  for (std::size_t j = 0; j < m; ++j) forCellsOf(j, [&](std::uint32_t c, std::uint32_t) { ++start[c]; });
   for (std::uint32_t c = 1; c <= cells; ++c) start[c] += start[c - 1];
-  t.entries.resize(keys);
-  for (std::size_t j = 0; j < m; ++j) {
-    std::uint32_t first[3];
-    firstCells(t.range[j], first);
-    forEachCellOf(toSlab(t.range[j]), dims,
-                  [&](std::uint32_t c, std::uint32_t x, std::uint32_t y, std::uint32_t z) {
-                    t.entries[--start[c]] = std::uint32_t(j) | startBits(first, x, y, z);
-                  });
-  }
+  resizeExact(t.entries, keys);
+  for (std::size_t j = 0; j < m; ++j)
+    forCellsOf(j,
+               [&](std::uint32_t c, std::uint32_t bits) { t.entries[--start[c]] = std::uint32_t(j) | bits; });
 
   // Stages 8-9 per cell of two or more boxes: the cell's ownership from the entries alone, then the overlap
   // and the filter.
@@ -306,7 +329,7 @@ std::size_t SlabSearch::bytes() const {
   std::size_t bytes = (m_firstLayer.capacity() + m_layerSlab.capacity() + m_members.capacity()) * 4 +
                       (m_memberStart.capacity() + m_chunkCount.capacity()) * sizeof(std::size_t);
   for (const Scratch& t : m_scratch)
-    bytes += t.box.capacity() * sizeof(LocalBox) + t.range.capacity() * sizeof(CellRange) +
+    bytes += t.box.capacity() * sizeof(LocalBox) + t.cells.capacity() * sizeof(PackedCells) +
              (t.cellStart.capacity() + t.entries.capacity()) * 4 + t.pairs.capacity() * 8;
   return bytes;
 }

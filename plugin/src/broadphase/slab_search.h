@@ -60,7 +60,7 @@ class SlabSearch {
   /// One thread's working memory for the slab it is searching.
   struct Scratch {
     std::vector<LocalBox> box;             // the slab's boxes, in slab-list order
-    std::vector<CellRange> range;          // their cells in slab coordinates
+    std::vector<PackedCells> cells;        // their cells in slab coordinates
     std::vector<std::uint32_t> cellStart;  // first entry per slab cell (+1 sentinel)
     std::vector<std::uint32_t> entries;    // box indices by cell, kSlabHome on a box's home cell
     std::vector<std::uint64_t> pairs;      // the pairs of the slab being searched
