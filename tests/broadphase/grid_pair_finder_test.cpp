@@ -203,6 +203,32 @@ TEST(GridPairFinder, BoxesSpanningMoreThan255CellsOnAnAxis) {
     }
 }
 
+TEST(GridPairFinder, SlabsAcrossMoreThan65536Layers) {
+  // A line of box pairs about 70,000 cells long: the slab planning keeps each box's layers in 16 bits each
+  // only below 65,536 layers, so here it reads them from the boxes in all its passes.
+  std::mt19937 rng(22);
+  std::uniform_real_distribution<float> jitter(-0.02f, 0.02f);
+  Scene s;
+  for (int i = 0; i < 4500; ++i) {
+    const float x = 3.1f * float(i);
+    s.add(x, 0, 0, 0.05f, 0.05f, 0.05f);
+    s.add(x + 0.08f + jitter(rng), jitter(rng), 0, 0.05f, 0.05f, 0.05f);  // overlaps the first but for a few
+  }
+  const std::vector<std::uint64_t> reference = gpucol::findPairsBruteForce(s.view());
+  ASSERT_GE(reference.size(), 1000u);
+  auto finder = gpucol::makeCpuPairFinder();
+  for (bool records : {false, true}) {
+    gpucol::PairFinderOptions o;
+    o.bruteForceBelow = 0;
+    o.slabTiling = gpucol::SlabTiling::Always;
+    std::vector<std::uint64_t> pairs;
+    finder->findPairs(records ? s.recordView() : s.view(), o, pairs);
+    ASSERT_EQ(pairs, reference) << "records=" << records;
+    EXPECT_GT(finder->stats().dims[0], 65536u);
+    EXPECT_GE(finder->stats().slabs, 8u);
+  }
+}
+
 TEST(GridPairFinder, AllInOnePlane) {
   std::mt19937 rng(4);
   std::uniform_real_distribution<float> pos(-40.0f, 40.0f), size(0.2f, 1.0f);

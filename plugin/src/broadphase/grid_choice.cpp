@@ -6,6 +6,7 @@
 
 #include <algorithm>
 #include <cmath>
+#include <limits>
 
 namespace gpucol {
 namespace {
@@ -19,9 +20,11 @@ constexpr float kObjectsPerCell = 4.0f;
 /// Cell coordinates must fit the 32-bit cell index of a key (dims product < 2^32).
 constexpr std::uint64_t kMaxCells = (std::uint64_t(1) << 32) - 1;
 /// Above this many boxes the median extent is taken over a regular sample of about this many.
-constexpr std::size_t kMedianSamples = 65536;
+constexpr std::size_t kMedianSamples = 4096;
 /// Boxes per parallel task of the stage's loops.
 constexpr std::size_t kChunk = 16384;
+/// The bounds of no box.
+constexpr float kInf = std::numeric_limits<float>::infinity();
 
 /// Min and max corners of a set of boxes.
 struct Bounds {
@@ -59,7 +62,8 @@ Grid chooseGrid(const ProxyArrays& p, const std::vector<std::uint32_t>& active,
   const std::size_t n = active.size();
   // Stage 2: the median of the largest extent, robust to a few huge boxes (a mean would follow them). Above
   // kMedianSamples boxes, the median of every stride-th box: the cell size only sets the speed, never the
-  // pairs, and nth_element over every box was the larger part of this stage at 1M boxes (serial).
+  // pairs. nth_element over every box was the larger part of this stage at 1M boxes (serial), and in place
+  // (boxesInPlace) a pass over every box is a walk over all of Bullet's proxies in memory.
   const std::size_t stride = std::max<std::size_t>(1, n / kMedianSamples);
   const std::size_t samples = (n + stride - 1) / stride;
   extentScratch.resize(samples);
@@ -84,33 +88,48 @@ Grid chooseGrid(const ProxyArrays& p, const std::vector<std::uint32_t>& active,
   }
   if (!(cell > 0.0f) || !std::isfinite(cell)) cell = 1.0f;  // all boxes are points at one spot
 
-  // Stage 3: huge boxes (estimated from extents, independent of the grid's origin), split in parallel over
-  // fixed chunks of `active` (count, then fill), so both lists stay in `active` order.
+  // Stage 3 and the bounds of the binned boxes in one pass over fixed chunks of `active` (each box is read
+  // once: in place, in Bullet's proxies, every pass is a walk over memory): a chunk's binned slots go to its
+  // own stretch of `binned`, closed up afterwards, and its huge ones to a list of its own, so both lists
+  // stay in `active` order.
   const std::size_t chunks = (n + kChunk - 1) / kChunk;
-  std::vector<std::size_t> hugeBefore(chunks + 1, 0);
+  binned.resize(n);
+  std::vector<std::vector<std::uint32_t>> chunkHuge(chunks);
+  std::vector<Bounds> chunkBounds(chunks);
   tbb::parallel_for(std::size_t(0), chunks, [&](std::size_t c) {
-    std::size_t count = 0;
-    for (std::size_t i = c * kChunk, e = std::min(n, (c + 1) * kChunk); i < e; ++i)
-      count += isHuge(p, active[i], cell, options.hugeCellLimit);
-    hugeBefore[c + 1] = count;
-  });
-  for (std::size_t c = 0; c < chunks; ++c) hugeBefore[c + 1] += hugeBefore[c];
-  huge.resize(hugeBefore[chunks]);
-  binned.resize(n - hugeBefore[chunks]);
-  tbb::parallel_for(std::size_t(0), chunks, [&](std::size_t c) {
-    std::size_t h = hugeBefore[c], b = c * kChunk - hugeBefore[c];
-    for (std::size_t i = c * kChunk, e = std::min(n, (c + 1) * kChunk); i < e; ++i) {
+    const std::size_t begin = c * kChunk, end = std::min(n, begin + kChunk);
+    std::size_t b = begin;
+    Bounds& box = chunkBounds[c];
+    box = Bounds{{kInf, kInf, kInf}, {-kInf, -kInf, -kInf}};
+    for (std::size_t i = begin; i < end; ++i) {
       const std::uint32_t s = active[i];
-      if (isHuge(p, s, cell, options.hugeCellLimit))
-        huge[h++] = s;
-      else
-        binned[b++] = s;
+      const BoxCorners corners = p.box(s);
+      if (isHuge(corners, cell, options.hugeCellLimit)) {
+        chunkHuge[c].push_back(s);
+        continue;
+      }
+      binned[b++] = s;
+      for (int a = 0; a < 3; ++a)
+        box.lo[a] = std::min(box.lo[a], corners.lo[a]), box.hi[a] = std::max(box.hi[a], corners.hi[a]);
     }
   });
+  huge.clear();
+  std::size_t kept = 0;
+  Bounds box{{kInf, kInf, kInf}, {-kInf, -kInf, -kInf}};
+  for (std::size_t c = 0; c < chunks; ++c) {
+    const std::size_t begin = c * kChunk, count = std::min(n, begin + kChunk) - begin - chunkHuge[c].size();
+    std::copy(binned.begin() + std::ptrdiff_t(begin), binned.begin() + std::ptrdiff_t(begin + count),
+              binned.begin() + std::ptrdiff_t(kept));
+    kept += count;
+    huge.insert(huge.end(), chunkHuge[c].begin(), chunkHuge[c].end());
+    for (int a = 0; a < 3; ++a)
+      box.lo[a] = std::min(box.lo[a], chunkBounds[c].lo[a]),
+      box.hi[a] = std::max(box.hi[a], chunkBounds[c].hi[a]);
+  }
+  binned.resize(kept);
 
   Grid g;
   if (binned.empty()) return g;
-  const Bounds box = boundsOf(p, binned, 0, binned.size());
   const float* bmin = box.lo;
   const float* bmax = box.hi;
   // Coarsen until the cell index fits 32 bits: exactness never depends on the cell size.

@@ -33,12 +33,15 @@ inline std::uint32_t cellOf(float x, float origin, float invCell, std::uint32_t 
 
 /// Stage 3's test: a box that covers more than `limit` cells of edge `cell` (estimated from its extents,
 /// independent of the grid's origin) is tested against all instead of being binned.
-inline bool isHuge(const ProxyArrays& p, std::uint32_t s, float cell, std::uint32_t limit) {
+inline bool isHuge(const BoxCorners& b, float cell, std::uint32_t limit) {
   const double inv = 1.0 / double(cell);
-  const BoxCorners b = p.box(s);
   const double covered = (double(b.hi[0] - b.lo[0]) * inv + 1.0) * (double(b.hi[1] - b.lo[1]) * inv + 1.0) *
                          (double(b.hi[2] - b.lo[2]) * inv + 1.0);
   return covered > double(limit);
+}
+/// Stage 3's test on slot s's box.
+inline bool isHuge(const ProxyArrays& p, std::uint32_t s, float cell, std::uint32_t limit) {
+  return isHuge(p.box(s), cell, limit);
 }
 
 /// Chooses the grid for the `active` proxies (not empty): stage 2, the cell edge from the median largest

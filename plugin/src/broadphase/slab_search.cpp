@@ -21,6 +21,8 @@ constexpr std::uint64_t kMinSlabBoxes = 256;
 /// A slab is also closed once it has this many cells per box aimed at, so a sparse stretch of the grid
 /// does not make one slab's cell array large.
 constexpr std::uint64_t kCellsPerSlabBox = 8;
+/// Layers up to which the planning keeps each box's first and last layer in 16 bits each.
+constexpr std::uint32_t kPackedLayers = 1u << 16;
 /// Binned boxes per task of the planning passes.
 constexpr std::size_t kPlanGrain = 4096;
 /// Tasks of the planning passes at most (each has a count per slab).
@@ -82,11 +84,20 @@ bool SlabSearch::plan(const ProxyArrays& p, const std::vector<std::uint32_t>& bi
   const std::uint32_t layers = g.dims[m_axis];
   auto layerOf = [&](float x) { return cellOf(x, g.origin[m_axis], g.invCell, layers); };
   const AxisExtent extent(p, m_axis);
-  // f(slab) for every slab the box of slot s reaches (after the slabs are cut).
-  auto forSlabsOf = [&](std::uint32_t s, auto&& f) {
-    for (std::uint32_t k = m_layerSlab[layerOf(extent.lo(s))], last = m_layerSlab[layerOf(extent.hi(s))];
-         k <= last; ++k)
-      f(k);
+  // Each box's first and last layer, packed in 32 bits by the first pass for the two after it (in place,
+  // each pass over the boxes is a walk over Bullet's proxies in memory), when layers fit 16 bits.
+  const bool packLayers = layers <= kPackedLayers;
+  if (packLayers) resizeExact(m_boxLayers, n);
+  auto layersOf = [&](std::size_t i) {
+    if (packLayers)
+      return std::pair<std::uint32_t, std::uint32_t>(m_boxLayers[i] & 0xFFFFu, m_boxLayers[i] >> 16);
+    return std::pair<std::uint32_t, std::uint32_t>(layerOf(extent.lo(binned[i])),
+                                                   layerOf(extent.hi(binned[i])));
+  };
+  // f(slab) for every slab binned[i]'s box reaches (after the slabs are cut).
+  auto forSlabsOf = [&](std::size_t i, auto&& f) {
+    const auto [first, last] = layersOf(i);
+    for (std::uint32_t k = m_layerSlab[first], end = m_layerSlab[last]; k <= end; ++k) f(k);
   };
   const std::size_t chunks =
       std::min(kPlanChunks, std::max<std::size_t>(1, (n + kPlanGrain - 1) / kPlanGrain));
@@ -106,8 +117,11 @@ bool SlabSearch::plan(const ProxyArrays& p, const std::vector<std::uint32_t>& bi
   m_chunkCount.assign(layerChunks * layers, 0);
   tbb::parallel_for(std::size_t(0), layerChunks, [&](std::size_t c) {
     std::size_t* count = m_chunkCount.data() + c * layers;
-    for (std::size_t i = c * layerChunk, end = std::min(n, i + layerChunk); i < end; ++i)
-      ++count[layerOf(extent.lo(binned[i]))];
+    for (std::size_t i = c * layerChunk, end = std::min(n, i + layerChunk); i < end; ++i) {
+      const std::uint32_t first = layerOf(extent.lo(binned[i]));
+      ++count[first];
+      if (packLayers) m_boxLayers[i] = first | layerOf(extent.hi(binned[i])) << 16;
+    }
   });
   m_layerSlab.resize(layers);
   tbb::parallel_for(std::uint32_t(0), layers, [&](std::uint32_t l) {
@@ -132,6 +146,7 @@ bool SlabSearch::plan(const ProxyArrays& p, const std::vector<std::uint32_t>& bi
   const std::size_t slabCount = slabs();
   if (slabCount < minSlabs) {
     m_firstLayer.clear();
+    std::vector<std::uint32_t>().swap(m_boxLayers);
     return false;
   }
 
@@ -140,7 +155,7 @@ bool SlabSearch::plan(const ProxyArrays& p, const std::vector<std::uint32_t>& bi
   m_chunkCount.assign(chunks * slabCount, 0);
   forChunks([&](std::size_t c, std::size_t begin, std::size_t end) {
     std::size_t* count = m_chunkCount.data() + c * slabCount;
-    for (std::size_t i = begin; i < end; ++i) forSlabsOf(binned[i], [&](std::uint32_t k) { ++count[k]; });
+    for (std::size_t i = begin; i < end; ++i) forSlabsOf(i, [&](std::uint32_t k) { ++count[k]; });
   });
   m_memberStart.assign(slabCount + 1, 0);
   std::size_t sum = 0;
@@ -153,7 +168,7 @@ bool SlabSearch::plan(const ProxyArrays& p, const std::vector<std::uint32_t>& bi
   forChunks([&](std::size_t c, std::size_t begin, std::size_t end) {
     std::size_t* next = m_chunkCount.data() + c * slabCount;
     for (std::size_t i = begin; i < end; ++i)
-      forSlabsOf(binned[i], [&](std::uint32_t k) { m_members[next[k]++] = binned[i]; });
+      forSlabsOf(i, [&](std::uint32_t k) { m_members[next[k]++] = binned[i]; });
   });
   return true;
 }
@@ -161,6 +176,7 @@ bool SlabSearch::plan(const ProxyArrays& p, const std::vector<std::uint32_t>& bi
 SlabSearchCounts SlabSearch::search(const ProxyArrays& p, const std::vector<std::uint32_t>& huge,
                                     const Grid& g, std::vector<std::vector<std::uint64_t>>& out,
                                     std::size_t first) {
+  std::vector<std::uint32_t>().swap(m_boxLayers);  // the plan's (kept until now for the caller's peak)
   const std::size_t slabCount = slabs();
   std::vector<SlabSearchCounts> counts(slabCount + huge.size());
   // Slabs differ in cost (a pile at the bottom of a column): one slab per task, taken as threads free up.
@@ -326,8 +342,9 @@ SlabSearchCounts SlabSearch::searchSlab(std::size_t slab, const ProxyArrays& p,
 }
 
 std::size_t SlabSearch::bytes() const {
-  std::size_t bytes = (m_firstLayer.capacity() + m_layerSlab.capacity() + m_members.capacity()) * 4 +
-                      (m_memberStart.capacity() + m_chunkCount.capacity()) * sizeof(std::size_t);
+  std::size_t bytes =
+      (m_firstLayer.capacity() + m_layerSlab.capacity() + m_members.capacity() + m_boxLayers.capacity()) * 4 +
+      (m_memberStart.capacity() + m_chunkCount.capacity()) * sizeof(std::size_t);
   for (const Scratch& t : m_scratch)
     bytes += t.box.capacity() * sizeof(LocalBox) + t.cells.capacity() * sizeof(PackedCells) +
              (t.cellStart.capacity() + t.entries.capacity()) * 4 + t.pairs.capacity() * 8;
@@ -337,6 +354,7 @@ std::size_t SlabSearch::bytes() const {
 void SlabSearch::release() {
   auto release = [](auto& v) { std::decay_t<decltype(v)>().swap(v); };
   release(m_firstLayer), release(m_layerSlab), release(m_memberStart), release(m_members);
+  release(m_boxLayers);
   release(m_chunkCount);
   m_scratch.clear();
 }

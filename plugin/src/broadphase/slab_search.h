@@ -74,6 +74,7 @@ class SlabSearch {
   std::vector<std::uint32_t> m_layerSlab;   // per layer: its slab
   std::vector<std::size_t> m_memberStart;   // per slab: first index in m_members (+ the end)
   std::vector<std::uint32_t> m_members;     // slots by slab, ascending within a slab
+  std::vector<std::uint32_t> m_boxLayers;   // planning: per binned box, its first | last layer << 16
   std::vector<std::size_t> m_chunkCount;    // counting scratch: per (chunk, slab)
   tbb::enumerable_thread_specific<Scratch> m_scratch;
 };
