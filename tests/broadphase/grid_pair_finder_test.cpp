@@ -451,6 +451,32 @@ TEST(GridPairFinder, SlabSearchWhenMostProxiesMove) {
   ASSERT_EQ(pairs, gpucol::findPairsBruteForce(view));
 }
 
+/// Beyond kMaxSlabBoxes (2^18) binned boxes Auto searches the grid whole and AnySize still in slabs, with the
+/// same pairs; both keep the grid of a first search whole for stage 11.
+TEST(GridPairFinder, SlabSearchAtAnySize) {
+  const Scene s = uniformCloud(270000, 90.0f, 0.6f, 17);
+  std::vector<std::uint8_t> moved(s.flags.size(), 1);
+  gpucol::ProxyArrays view = s.view();
+  std::vector<std::uint64_t> whole, slabs;
+  for (auto tiling : {gpucol::SlabTiling::Auto, gpucol::SlabTiling::AnySize}) {
+    auto finder = gpucol::makeCpuPairFinder();
+    gpucol::PairFinderOptions o;
+    o.slabTiling = tiling;
+    std::vector<std::uint64_t>& pairs = tiling == gpucol::SlabTiling::Auto ? whole : slabs;
+    view.moved = nullptr;
+    finder->findPairs(view, o, pairs);
+    EXPECT_EQ(finder->stats().slabs, 0u) << "a first search keeps its grid";
+    view.moved = moved.data();
+    finder->findPairs(view, o, pairs);
+    if (tiling == gpucol::SlabTiling::Auto)
+      EXPECT_EQ(finder->stats().slabs, 0u);
+    else
+      EXPECT_GE(finder->stats().slabs, 8u);
+  }
+  ASSERT_GE(whole.size(), 10000u);
+  EXPECT_EQ(slabs, whole);
+}
+
 TEST(GridPairFinder, DeterministicWhateverTheThreadCount) {
   const Scene s = uniformCloud(20000, 40.0f, 0.8f, 11);
   gpucol::PairFinderOptions o;

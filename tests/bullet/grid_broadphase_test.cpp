@@ -163,6 +163,41 @@ TEST(GridBroadphase, PairCacheMatchesBruteForceOverStepsNoGrid) {
   EXPECT_FALSE(bp.stats().usedGrid);
 }
 
+TEST(GridBroadphase, BoxesReadInPlaceAreSearchedInSlabsAtAnySize) {
+  // Beyond 2^18 moving proxies the default searches the grid whole, and in place in slabs: the same pairs,
+  // and a peak lower by more than the copy's 24 bytes per proxy (the whole-grid search's own working memory).
+  btDefaultCollisionConfiguration configuration;
+  btCollisionDispatcher dispatcher(&configuration);
+  gpucol::GridBroadphaseTuning inPlace;
+  inPlace.boxesInPlace = true;
+  gpucol::GridBroadphase copying, reading;
+  reading.setTuning(inPlace);
+  constexpr int kCount = 270000;
+  std::mt19937 rng(5);
+  std::vector<Box> boxes(kCount);
+  for (Box& b : boxes) randomBox(rng, b, 90.0f);
+  gpucol::GridBroadphase* both[2] = {&copying, &reading};
+  for (gpucol::GridBroadphase* bp : both) {
+    std::vector<btBroadphaseProxy*> proxies;
+    for (int i = 0; i < kCount; ++i) {
+      const Box& b = boxes[std::size_t(i)];
+      proxies.push_back(bp->createProxy(b.lo, b.hi, BOX_SHAPE_PROXYTYPE,
+                                        reinterpret_cast<void*>(std::intptr_t(i)), b.group, b.mask,
+                                        &dispatcher));
+    }
+    bp->calculateOverlappingPairs(&dispatcher);
+    const btVector3 d(0.001f, 0.0f, 0.0f);
+    for (int i = 0; i < kCount; ++i)
+      bp->setAabb(proxies[std::size_t(i)], boxes[std::size_t(i)].lo + d, boxes[std::size_t(i)].hi + d,
+                  &dispatcher);
+    bp->calculateOverlappingPairs(&dispatcher);
+  }
+  ASSERT_GE(copying.stats().overlappingPairs, 10000u);
+  EXPECT_EQ(cachePairs(copying.getOverlappingPairCache()), cachePairs(reading.getOverlappingPairCache()));
+  EXPECT_GE(copying.stats().peakBytes, reading.stats().peakBytes + 60u * kCount)
+      << "copy " << copying.stats().peakBytes << " in place " << reading.stats().peakBytes;
+}
+
 TEST(GridBroadphase, BoxesReadInPlaceGiveTheSamePairsWithoutTheCopy) {
   gpucol::Config config;
   config.bruteForceBelow = 100;

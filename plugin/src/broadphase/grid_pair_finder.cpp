@@ -904,7 +904,8 @@ bool CpuPairFinder::searchSlabs(const ProxyArrays& p, const PairFinderOptions& o
       g.cells() > denseCellLimit(m_binned.size()))
     return false;
   const bool always = options.slabTiling == SlabTiling::Always;
-  if (!always && (keepGrid || m_binned.size() > kMaxSlabBoxes)) return false;
+  if (!always && (keepGrid || (options.slabTiling == SlabTiling::Auto && m_binned.size() > kMaxSlabBoxes)))
+    return false;
   StageClock clock;
   if (!m_slabs.plan(p, m_binned, g, options.slabBoxes, always ? 1 : kMinSlabs)) return false;
   notePeak();

@@ -141,9 +141,11 @@ enum class MappingSqrt { Double, Newton };
 
 /// Whether the CPU finder searches a dense grid slab by slab (slab_search.h); results are identical.
 /// Auto: full searches whose grid is not kept for stage 11 (most proxies moved), with compacted output, of at
-/// most kMaxSlabBoxes binned boxes, when the grid cuts into at least kMinSlabs slabs. Always: every full
-/// search of a dense grid with compacted output (tests). Off: never (benchmarks compare).
-enum class SlabTiling { Auto, Always, Off };
+/// most kMaxSlabBoxes binned boxes, when the grid cuts into at least kMinSlabs slabs. AnySize: as Auto
+/// with no limit on the boxes (less memory at the peak than the whole-grid search, which was faster at 1M
+/// boxes; GridBroadphaseTuning::boxesInPlace). Always: every full search of a dense grid with compacted
+/// output (tests). Off: never (benchmarks compare).
+enum class SlabTiling { Auto, AnySize, Always, Off };
 
 /// Knobs of one pair search.
 struct PairFinderOptions {

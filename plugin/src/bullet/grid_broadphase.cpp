@@ -446,7 +446,11 @@ struct GridBroadphase::Impl {
     o.output = tuning.bitMaskOutput ? PairOutput::BitMask : PairOutput::Compacted;
     o.mappingSqrt = tuning.newtonSqrt ? MappingSqrt::Newton : MappingSqrt::Double;
     o.hugeCellLimit = tuning.hugeCellLimit;
-    o.slabTiling = tuning.slabSearch ? SlabTiling::Auto : SlabTiling::Off;
+    // Boxes read in place ask for the least memory: slabs at every size (at 1M boxes the whole-grid search's
+    // own working memory is larger than the copy of the boxes that reading in place saves).
+    o.slabTiling = !tuning.slabSearch                            ? SlabTiling::Off
+                   : kProxyBoxesAreFloats && tuning.boxesInPlace ? SlabTiling::AnySize
+                                                                 : SlabTiling::Auto;
     return o;
   }
 
