@@ -163,6 +163,22 @@ TEST(GridBroadphase, PairCacheMatchesBruteForceOverStepsNoGrid) {
   EXPECT_FALSE(bp.stats().usedGrid);
 }
 
+/// Creates a proxy for each box (its index as client object) in `bp` and steps, then moves every box 0.001
+/// along x and steps again: every proxy moves and few pairs change, so that step's peak is the search's.
+void stepAndNudge(gpucol::GridBroadphase& bp, const std::vector<Box>& boxes, btDispatcher* dispatcher) {
+  std::vector<btBroadphaseProxy*> proxies;
+  for (std::size_t i = 0; i < boxes.size(); ++i) {
+    const Box& b = boxes[i];
+    proxies.push_back(bp.createProxy(b.lo, b.hi, BOX_SHAPE_PROXYTYPE,
+                                     reinterpret_cast<void*>(std::intptr_t(i)), b.group, b.mask, dispatcher));
+  }
+  bp.calculateOverlappingPairs(dispatcher);
+  const btVector3 d(0.001f, 0.0f, 0.0f);
+  for (std::size_t i = 0; i < boxes.size(); ++i)
+    bp.setAabb(proxies[i], boxes[i].lo + d, boxes[i].hi + d, dispatcher);
+  bp.calculateOverlappingPairs(dispatcher);
+}
+
 TEST(GridBroadphase, BoxesReadInPlaceAreSearchedInSlabsAtAnySize) {
   // Beyond 2^18 moving proxies the default searches the grid whole, and in place in slabs: the same pairs,
   // and a peak lower by more than the copy's 24 bytes per proxy (the whole-grid search's own working memory).
@@ -176,22 +192,7 @@ TEST(GridBroadphase, BoxesReadInPlaceAreSearchedInSlabsAtAnySize) {
   std::mt19937 rng(5);
   std::vector<Box> boxes(kCount);
   for (Box& b : boxes) randomBox(rng, b, 90.0f);
-  gpucol::GridBroadphase* both[2] = {&copying, &reading};
-  for (gpucol::GridBroadphase* bp : both) {
-    std::vector<btBroadphaseProxy*> proxies;
-    for (int i = 0; i < kCount; ++i) {
-      const Box& b = boxes[std::size_t(i)];
-      proxies.push_back(bp->createProxy(b.lo, b.hi, BOX_SHAPE_PROXYTYPE,
-                                        reinterpret_cast<void*>(std::intptr_t(i)), b.group, b.mask,
-                                        &dispatcher));
-    }
-    bp->calculateOverlappingPairs(&dispatcher);
-    const btVector3 d(0.001f, 0.0f, 0.0f);
-    for (int i = 0; i < kCount; ++i)
-      bp->setAabb(proxies[std::size_t(i)], boxes[std::size_t(i)].lo + d, boxes[std::size_t(i)].hi + d,
-                  &dispatcher);
-    bp->calculateOverlappingPairs(&dispatcher);
-  }
+  for (gpucol::GridBroadphase* bp : {&copying, &reading}) stepAndNudge(*bp, boxes, &dispatcher);
   ASSERT_GE(copying.stats().overlappingPairs, 10000u);
   EXPECT_EQ(cachePairs(copying.getOverlappingPairCache()), cachePairs(reading.getOverlappingPairCache()));
   EXPECT_GE(copying.stats().peakBytes, reading.stats().peakBytes + 60u * kCount)
@@ -218,22 +219,7 @@ TEST(GridBroadphase, BoxesReadInPlaceGiveTheSamePairsWithoutTheCopy) {
   std::mt19937 rng(4);
   std::vector<Box> boxes(kCount);
   for (Box& b : boxes) randomBox(rng, b, 40.0f);
-  std::vector<btBroadphaseProxy*> proxies[2];
-  gpucol::GridBroadphase* both[2] = {&copying, &reading};
-  for (int k = 0; k < 2; ++k) {
-    for (int i = 0; i < kCount; ++i) {
-      Box& b = boxes[std::size_t(i)];
-      proxies[k].push_back(both[k]->createProxy(b.lo, b.hi, BOX_SHAPE_PROXYTYPE,
-                                                reinterpret_cast<void*>(std::intptr_t(i)), b.group, b.mask,
-                                                &dispatcher));
-    }
-    both[k]->calculateOverlappingPairs(&dispatcher);
-    const btVector3 d(0.001f, 0.0f, 0.0f);
-    for (int i = 0; i < kCount; ++i)
-      both[k]->setAabb(proxies[k][std::size_t(i)], boxes[std::size_t(i)].lo + d, boxes[std::size_t(i)].hi + d,
-                       &dispatcher);
-    both[k]->calculateOverlappingPairs(&dispatcher);
-  }
+  for (gpucol::GridBroadphase* bp : {&copying, &reading}) stepAndNudge(*bp, boxes, &dispatcher);
   EXPECT_EQ(cachePairs(copying.getOverlappingPairCache()), cachePairs(reading.getOverlappingPairCache()));
   EXPECT_GE(copying.stats().peakBytes, reading.stats().peakBytes + 20u * kCount)
       << "copy " << copying.stats().peakBytes << " in place " << reading.stats().peakBytes;

@@ -118,8 +118,9 @@ Grid chooseGrid(const ProxyArrays& p, const std::vector<std::uint32_t>& active,
   Bounds box{{kInf, kInf, kInf}, {-kInf, -kInf, -kInf}};
   for (std::size_t c = 0; c < chunks; ++c) {
     const std::size_t begin = c * kChunk, count = std::min(n, begin + kChunk) - begin - chunkHuge[c].size();
-    std::copy(binned.begin() + std::ptrdiff_t(begin), binned.begin() + std::ptrdiff_t(begin + count),
-              binned.begin() + std::ptrdiff_t(kept));
+    if (kept != begin)  // std::copy forward: the target starts before the source
+      std::copy(binned.begin() + std::ptrdiff_t(begin), binned.begin() + std::ptrdiff_t(begin + count),
+                binned.begin() + std::ptrdiff_t(kept));
     kept += count;
     huge.insert(huge.end(), chunkHuge[c].begin(), chunkHuge[c].end());
     for (int a = 0; a < 3; ++a)
