@@ -179,24 +179,31 @@ void stepAndNudge(gpucol::GridBroadphase& bp, const std::vector<Box>& boxes, btD
   bp.calculateOverlappingPairs(dispatcher);
 }
 
-TEST(GridBroadphase, BoxesReadInPlaceAreSearchedInSlabsAtAnySize) {
-  // Beyond 2^18 moving proxies the default searches the grid whole, and in place in slabs: the same pairs,
-  // and a peak lower by more than the copy's 24 bytes per proxy (the whole-grid search's own working memory).
+/// One scene of `count` random boxes in a cube of half side `side`, stepped by a broad phase that copies the
+/// boxes and by one that reads them in place (stepAndNudge): the same pairs, at least `minPairs` of them, and
+/// a peak at least `savedPerProxy` bytes per proxy lower in place.
+void expectInPlaceSamePairsLowerPeak(const gpucol::Config& config, int count, float side, std::uint32_t seed,
+                                     std::size_t savedPerProxy, std::uint64_t minPairs) {
   btDefaultCollisionConfiguration configuration;
   btCollisionDispatcher dispatcher(&configuration);
   gpucol::GridBroadphaseTuning inPlace;
   inPlace.boxesInPlace = true;
-  gpucol::GridBroadphase copying, reading;
+  gpucol::GridBroadphase copying(config), reading(config);
   reading.setTuning(inPlace);
-  constexpr int kCount = 270000;
-  std::mt19937 rng(5);
-  std::vector<Box> boxes(kCount);
-  for (Box& b : boxes) randomBox(rng, b, 90.0f);
+  std::mt19937 rng(seed);
+  std::vector<Box> boxes(std::size_t(count), Box{});
+  for (Box& b : boxes) randomBox(rng, b, side);
   for (gpucol::GridBroadphase* bp : {&copying, &reading}) stepAndNudge(*bp, boxes, &dispatcher);
-  ASSERT_GE(copying.stats().overlappingPairs, 10000u);
+  ASSERT_GE(copying.stats().overlappingPairs, minPairs);
   EXPECT_EQ(cachePairs(copying.getOverlappingPairCache()), cachePairs(reading.getOverlappingPairCache()));
-  EXPECT_GE(copying.stats().peakBytes, reading.stats().peakBytes + 60u * kCount)
+  EXPECT_GE(copying.stats().peakBytes, reading.stats().peakBytes + savedPerProxy * std::size_t(count))
       << "copy " << copying.stats().peakBytes << " in place " << reading.stats().peakBytes;
+}
+
+TEST(GridBroadphase, BoxesReadInPlaceAreSearchedInSlabsAtAnySize) {
+  // Beyond 2^18 moving proxies the default searches the grid whole, and in place in slabs: the same pairs,
+  // and a peak lower by more than the copy's 24 bytes per proxy (the whole-grid search's own working memory).
+  expectInPlaceSamePairsLowerPeak(gpucol::Config{}, 270000, 90.0f, 5, 60, 10000);
 }
 
 TEST(GridBroadphase, BoxesReadInPlaceGiveTheSamePairsWithoutTheCopy) {
@@ -211,18 +218,7 @@ TEST(GridBroadphase, BoxesReadInPlaceGiveTheSamePairsWithoutTheCopy) {
 
   // The same scene stepped by both: one step that moves every box a little (few pairs change, so the
   // step's peak is the search's), and the peaks differ by about the copy's 24 bytes per proxy.
-  btDefaultCollisionConfiguration configuration;
-  btCollisionDispatcher dispatcher(&configuration);
-  gpucol::GridBroadphase copying(config), reading(config);
-  reading.setTuning(inPlace);
-  constexpr int kCount = 4000;
-  std::mt19937 rng(4);
-  std::vector<Box> boxes(kCount);
-  for (Box& b : boxes) randomBox(rng, b, 40.0f);
-  for (gpucol::GridBroadphase* bp : {&copying, &reading}) stepAndNudge(*bp, boxes, &dispatcher);
-  EXPECT_EQ(cachePairs(copying.getOverlappingPairCache()), cachePairs(reading.getOverlappingPairCache()));
-  EXPECT_GE(copying.stats().peakBytes, reading.stats().peakBytes + 20u * kCount)
-      << "copy " << copying.stats().peakBytes << " in place " << reading.stats().peakBytes;
+  expectInPlaceSamePairsLowerPeak(config, 4000, 40.0f, 4, 20, 0);
 }
 
 TEST(GridBroadphase, FiltersEditedOnTheProxyAreTakenUp) {
