@@ -78,6 +78,10 @@ struct BoxRecords {
   std::uint32_t maxOffset = 0;
 };
 
+/// Boxes ahead of the one read whose record is prefetched (ProxyArrays::prefetchBox) where slots are read
+/// far apart (a slab's boxes in Bullet's proxies). Walks over every slot in order gained nothing from it.
+constexpr std::size_t kBoxPrefetchAhead = 16;
+
 /// Structure-of-arrays view of every proxy slot, the boxes in six arrays or in the caller's records (the pair
 /// finder reads it, never writes it).
 struct ProxyArrays {
@@ -123,8 +127,17 @@ struct ProxyArrays {
     std::memcpy(b.hi, r + records.maxOffset, sizeof b.hi);
     return b;
   }
+  /// Asks the cache for slot s's box ahead of box(s) when it lies in a record; the six arrays, read in slot
+  /// order, are followed by the hardware prefetcher already. Always inlined: GCC otherwise finds the call
+  /// free of effects and deletes it.
+  __attribute__((always_inline)) void prefetchBox(std::uint32_t s) const {
+    if (minX) return;
+    const unsigned char* r = record(s);
+    __builtin_prefetch(r + records.minOffset);
+    __builtin_prefetch(r + records.maxOffset + 2 * sizeof(float));
+  }
   /// The start of slot s's record (with records only).
-  const unsigned char* record(std::uint32_t s) const {
+  __attribute__((always_inline)) const unsigned char* record(std::uint32_t s) const {
     return records.blocks[s >> records.blockBits] +
            std::size_t(s & ((1u << records.blockBits) - 1)) * records.stride;
   }

@@ -228,8 +228,10 @@ SlabSearchCounts SlabSearch::searchSlab(std::size_t slab, const ProxyArrays& p,
   resizeExact(t.box, m);
   resizeExact(t.cells, m);
   std::uint64_t keys = 0;
+  const std::uint32_t* member = m_members.data() + begin;
   for (std::size_t j = 0; j < m; ++j) {
-    t.box[j] = boxOf(p, m_members[begin + j]);
+    if (j + kBoxPrefetchAhead < m) p.prefetchBox(member[j + kBoxPrefetchAhead]);
+    t.box[j] = boxOf(p, member[j]);
     const CellRange r = toSlab(cellRange(t.box[j], g));
     keys += r.count();
     t.cells[j] = PackedCells::of(r, dims);
