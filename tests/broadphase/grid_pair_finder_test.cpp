@@ -12,6 +12,7 @@
 #include <limits>
 #include <random>
 #include <string>
+#include <utility>
 #include <vector>
 
 namespace {
@@ -226,6 +227,43 @@ TEST(GridPairFinder, SlabsAcrossMoreThan65536Layers) {
     ASSERT_EQ(pairs, reference) << "records=" << records;
     EXPECT_GT(finder->stats().dims[0], 65536u);
     EXPECT_GE(finder->stats().slabs, 8u);
+    EXPECT_EQ(finder->stats().slabAxisKept, records) << "in records, every pass reads the kept extents";
+  }
+}
+
+/// Boxes in records: the grid choice keeps their extents along the last plan's slab axis, and the plan takes
+/// them when its axis is the same, else reads the boxes. The scene's longest axis turns from z to x.
+TEST(GridPairFinder, SlabPlanTakesTheExtentsKeptAlongItsAxis) {
+  const Scene alongZ = [] {
+    std::mt19937 rng(23);
+    std::uniform_real_distribution<float> across(-6.0f, 6.0f), along(-60.0f, 60.0f), size(0.1f, 0.6f);
+    Scene s;
+    for (int i = 0; i < 6000; ++i)
+      s.add(across(rng), across(rng), along(rng), size(rng), size(rng), size(rng));
+    return s;
+  }();
+  Scene alongX = alongZ;
+  std::swap(alongX.minX, alongX.minZ);
+  std::swap(alongX.maxX, alongX.maxZ);
+  auto finder = gpucol::makeCpuPairFinder();  // its first guess: x
+  gpucol::PairFinderOptions o;
+  o.bruteForceBelow = 0;
+  o.slabTiling = gpucol::SlabTiling::Always;
+  struct Step {
+    const Scene* scene;
+    bool records;
+    bool kept;
+  };
+  const Step steps[] = {{&alongZ, true, false}, {&alongZ, true, true}, {&alongZ, false, false},
+                        {&alongX, true, false}, {&alongX, true, true}, {&alongZ, true, false}};
+  int k = 0;
+  for (const Step& step : steps) {
+    std::vector<std::uint64_t> pairs;
+    finder->findPairs(step.records ? step.scene->recordView() : step.scene->view(), o, pairs);
+    ASSERT_EQ(pairs, gpucol::findPairsBruteForce(step.scene->view())) << "step " << k;
+    EXPECT_GE(finder->stats().slabs, 8u) << "step " << k;
+    EXPECT_EQ(finder->stats().slabAxisKept, step.kept) << "step " << k;
+    ++k;
   }
 }
 

@@ -58,7 +58,7 @@ Bounds boundsOf(const ProxyArrays& p, const std::vector<std::uint32_t>& slots, s
 
 Grid chooseGrid(const ProxyArrays& p, const std::vector<std::uint32_t>& active,
                 const PairFinderOptions& options, std::vector<float>& extentScratch,
-                std::vector<std::uint32_t>& binned, std::vector<std::uint32_t>& huge) {
+                std::vector<std::uint32_t>& binned, std::vector<std::uint32_t>& huge, AxisExtents* kept) {
   const std::size_t n = active.size();
   // Stage 2: the median of the largest extent, robust to a few huge boxes (a mean would follow them). Above
   // kMedianSamples boxes, the median of every stride-th box: the cell size only sets the speed, never the
@@ -94,6 +94,9 @@ Grid chooseGrid(const ProxyArrays& p, const std::vector<std::uint32_t>& active,
   // stay in `active` order.
   const std::size_t chunks = (n + kChunk - 1) / kChunk;
   binned.resize(n);
+  const int keptAxis = kept ? kept->axis : -1;
+  if (keptAxis >= 0) kept->values.resize(2 * n);
+  float* keptValue = keptAxis >= 0 ? kept->values.data() : nullptr;
   std::vector<std::vector<std::uint32_t>> chunkHuge(chunks);
   std::vector<Bounds> chunkBounds(chunks);
   tbb::parallel_for(std::size_t(0), chunks, [&](std::size_t c) {
@@ -108,26 +111,31 @@ Grid chooseGrid(const ProxyArrays& p, const std::vector<std::uint32_t>& active,
         chunkHuge[c].push_back(s);
         continue;
       }
+      if (keptValue) keptValue[2 * b] = corners.lo[keptAxis], keptValue[2 * b + 1] = corners.hi[keptAxis];
       binned[b++] = s;
       for (int a = 0; a < 3; ++a)
         box.lo[a] = std::min(box.lo[a], corners.lo[a]), box.hi[a] = std::max(box.hi[a], corners.hi[a]);
     }
   });
   huge.clear();
-  std::size_t kept = 0;
+  std::size_t closed = 0;
   Bounds box{{kInf, kInf, kInf}, {-kInf, -kInf, -kInf}};
   for (std::size_t c = 0; c < chunks; ++c) {
     const std::size_t begin = c * kChunk, count = std::min(n, begin + kChunk) - begin - chunkHuge[c].size();
-    if (kept != begin)  // std::copy forward: the target starts before the source
+    if (closed != begin) {  // std::copy forward: the target starts before the source
       std::copy(binned.begin() + std::ptrdiff_t(begin), binned.begin() + std::ptrdiff_t(begin + count),
-                binned.begin() + std::ptrdiff_t(kept));
-    kept += count;
+                binned.begin() + std::ptrdiff_t(closed));
+      if (keptValue)
+        std::copy(keptValue + 2 * begin, keptValue + 2 * (begin + count), keptValue + 2 * closed);
+    }
+    closed += count;
     huge.insert(huge.end(), chunkHuge[c].begin(), chunkHuge[c].end());
     for (int a = 0; a < 3; ++a)
       box.lo[a] = std::min(box.lo[a], chunkBounds[c].lo[a]),
       box.hi[a] = std::max(box.hi[a], chunkBounds[c].hi[a]);
   }
-  binned.resize(kept);
+  binned.resize(closed);
+  if (keptValue) kept->values.resize(2 * closed);
 
   Grid g;
   if (binned.empty()) return g;

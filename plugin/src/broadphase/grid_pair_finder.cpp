@@ -276,8 +276,9 @@ class CpuPairFinder final : public PairFinder {
   std::vector<std::uint64_t> m_bits;            // bit mask output (stage 10)
   std::vector<std::vector<std::uint64_t>> m_chunkPairs;  // output per chunk (freed once gathered)
   SlabSearch m_slabs;                                    // the slab search's plan and working memory
-  std::size_t m_peakBytes = 0;                           // high-water mark of this search (notePeak)
-  std::size_t m_chunksUsed = 0;                          // chunks of m_chunkPairs filled by this search
+  AxisExtents m_keptExtents;     // in place: the binned boxes' extents along the last slab axis (the plan's)
+  std::size_t m_peakBytes = 0;   // high-water mark of this search (notePeak)
+  std::size_t m_chunksUsed = 0;  // chunks of m_chunkPairs filled by this search
 
   /// Reserves `count` more output chunks and returns the index of the first.
   std::size_t takeChunks(std::size_t count) {
@@ -862,7 +863,13 @@ void CpuPairFinder::grid(const ProxyArrays& p, const PairFinderOptions& options,
   m_stats.usedGrid = true;
   m_denseBuilt = false;
   StageClock clock;
-  const Grid g = chooseGrid(p, m_active, options, m_extent, m_binned, m_huge);
+  // Read in place, every pass over the boxes walks Bullet's proxies: the grid choice keeps their extents
+  // along the slab axis of the last plan (axes rarely change between steps) for this step's plan.
+  const bool slabsMayServe = options.slabTiling != SlabTiling::Off &&
+                             options.output == PairOutput::Compacted &&
+                             (!keepGrid || options.slabTiling == SlabTiling::Always);
+  m_keptExtents.axis = p.minX == nullptr && slabsMayServe ? m_slabs.axis() : -1;
+  const Grid g = chooseGrid(p, m_active, options, m_extent, m_binned, m_huge, &m_keptExtents);
   notePeak();
   std::vector<float>().swap(m_extent);  // chooseGrid's scratch
   // Beyond chooseGrid, only a kept grid needs the active list (m_unchanged); the binned and huge lists hold
@@ -873,7 +880,9 @@ void CpuPairFinder::grid(const ProxyArrays& p, const PairFinderOptions& options,
   m_stats.cellSize = g.cell;
   for (int a = 0; a < 3; ++a) m_stats.dims[a] = g.dims[a];
   m_stats.chooseMs = clock.lap();
-  if (!searchSlabs(p, options, keepGrid, g)) {
+  const bool slabs = searchSlabs(p, options, keepGrid, g);
+  std::vector<float>().swap(m_keptExtents.values);  // unused when the plan did not take them
+  if (!slabs) {
     m_isBinned.assign(p.count, 0);
     for (std::uint32_t s : m_binned) m_isBinned[s] = 1;
     if (!m_binned.empty()) {
@@ -907,7 +916,7 @@ bool CpuPairFinder::searchSlabs(const ProxyArrays& p, const PairFinderOptions& o
   if (!always && (keepGrid || (options.slabTiling == SlabTiling::Auto && m_binned.size() > kMaxSlabBoxes)))
     return false;
   StageClock clock;
-  if (!m_slabs.plan(p, m_binned, g, options.slabBoxes, always ? 1 : kMinSlabs)) return false;
+  if (!m_slabs.plan(p, m_binned, g, options.slabBoxes, always ? 1 : kMinSlabs, &m_keptExtents)) return false;
   notePeak();
   std::vector<std::uint32_t>().swap(m_binned);  // the slab lists hold every binned box
   m_stats.binMs = clock.lap();
@@ -915,6 +924,7 @@ bool CpuPairFinder::searchSlabs(const ProxyArrays& p, const PairFinderOptions& o
   const SlabSearchCounts counts = m_slabs.search(p, m_huge, g, m_chunkPairs, first);
   m_stats.testMs = clock.lap();
   m_stats.slabs = std::uint32_t(m_slabs.slabs());
+  m_stats.slabAxisKept = m_slabs.tookKeptExtents();
   m_stats.keys = counts.keys;
   m_stats.candidates += counts.candidates;
   notePeak();
@@ -938,7 +948,7 @@ std::size_t CpuPairFinder::scratchBytes() const {
   bytes += m_runPrefix.capacity() * 8 + m_bits.capacity() * 8 + m_blockRuns.capacity() * 4 +
            m_offsets.capacity() * 4;
   for (const auto& c : m_chunkPairs) bytes += c.capacity() * 8;
-  return bytes + m_slabs.bytes();
+  return bytes + m_keptExtents.values.capacity() * 4 + m_slabs.bytes();
 }
 
 PairFinderFactory& openClFactory() {

@@ -199,6 +199,9 @@ struct PairFinderStats {
   std::size_t peakScratchBytes = 0;
   /// Slabs of a slab search (slab_search.h); 0 when the grid was searched whole.
   std::uint32_t slabs = 0;
+  /// True when the slab plan took the binned boxes' extents along its axis from the grid choice's pass (boxes
+  /// read in place, the slab axis as guessed from the last plan) instead of reading the boxes again.
+  bool slabAxisKept = false;
   /// True when the search kept the last grid and binned only moved proxies (stage 11).
   bool incremental = false;
   /// Active proxies neither re-binned nor tested among themselves in this search (stage 11).

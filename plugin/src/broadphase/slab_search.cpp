@@ -49,25 +49,31 @@ inline bool ownedByCell(std::uint32_t a, std::uint32_t b) {
   return ((a | b) >> kStartShift) == kAllAxes;
 }
 
-/// Slot s's extent along one axis, read from that axis's two arrays (the planning passes read nothing else
-/// there) or from the records.
+/// The extent along one axis of binned box i (slot s): kept by the grid choice, or read from that axis's two
+/// arrays (the planning passes read nothing else there), or from the records.
 class AxisExtent {
  public:
-  AxisExtent(const ProxyArrays& p, int axis)
+  AxisExtent(const ProxyArrays& p, int axis, const float* kept)
       : m_p(p),
         m_axis(axis),
+        m_kept(kept),
         m_lo(axis == 0   ? p.minX
              : axis == 1 ? p.minY
                          : p.minZ),
         m_hi(axis == 0   ? p.maxX
              : axis == 1 ? p.maxY
                          : p.maxZ) {}
-  float lo(std::uint32_t s) const { return m_lo ? m_lo[s] : m_p.box(s).lo[m_axis]; }
-  float hi(std::uint32_t s) const { return m_hi ? m_hi[s] : m_p.box(s).hi[m_axis]; }
+  float lo(std::size_t i, std::uint32_t s) const {
+    return m_kept ? m_kept[2 * i] : m_lo ? m_lo[s] : m_p.box(s).lo[m_axis];
+  }
+  float hi(std::size_t i, std::uint32_t s) const {
+    return m_kept ? m_kept[2 * i + 1] : m_hi ? m_hi[s] : m_p.box(s).hi[m_axis];
+  }
 
  private:
   const ProxyArrays& m_p;
   int m_axis;
+  const float* m_kept;
   const float* m_lo;
   const float* m_hi;
 };
@@ -75,7 +81,7 @@ class AxisExtent {
 }  // namespace
 
 bool SlabSearch::plan(const ProxyArrays& p, const std::vector<std::uint32_t>& binned, const Grid& g,
-                      std::uint32_t slabBoxes, std::uint32_t minSlabs) {
+                      std::uint32_t slabBoxes, std::uint32_t minSlabs, AxisExtents* kept) {
   m_firstLayer.clear();
   const std::size_t n = binned.size();
   m_axis = 0;
@@ -83,7 +89,9 @@ bool SlabSearch::plan(const ProxyArrays& p, const std::vector<std::uint32_t>& bi
     if (g.dims[a] > g.dims[m_axis]) m_axis = a;
   const std::uint32_t layers = g.dims[m_axis];
   auto layerOf = [&](float x) { return cellOf(x, g.origin[m_axis], g.invCell, layers); };
-  const AxisExtent extent(p, m_axis);
+  const bool useKept = kept && kept->axis == m_axis && kept->values.size() == 2 * n;
+  m_tookKept = useKept;
+  const AxisExtent extent(p, m_axis, useKept ? kept->values.data() : nullptr);
   // Each box's first and last layer, packed in 32 bits by the first pass for the two after it (in place,
   // each pass over the boxes is a walk over Bullet's proxies in memory), when layers fit 16 bits.
   const bool packLayers = layers <= kPackedLayers;
@@ -91,8 +99,8 @@ bool SlabSearch::plan(const ProxyArrays& p, const std::vector<std::uint32_t>& bi
   auto layersOf = [&](std::size_t i) {
     if (packLayers)
       return std::pair<std::uint32_t, std::uint32_t>(m_boxLayers[i] & 0xFFFFu, m_boxLayers[i] >> 16);
-    return std::pair<std::uint32_t, std::uint32_t>(layerOf(extent.lo(binned[i])),
-                                                   layerOf(extent.hi(binned[i])));
+    return std::pair<std::uint32_t, std::uint32_t>(layerOf(extent.lo(i, binned[i])),
+                                                   layerOf(extent.hi(i, binned[i])));
   };
   // f(slab) for every slab binned[i]'s box reaches (after the slabs are cut).
   auto forSlabsOf = [&](std::size_t i, auto&& f) {
@@ -118,11 +126,16 @@ bool SlabSearch::plan(const ProxyArrays& p, const std::vector<std::uint32_t>& bi
   tbb::parallel_for(std::size_t(0), layerChunks, [&](std::size_t c) {
     std::size_t* count = m_chunkCount.data() + c * layers;
     for (std::size_t i = c * layerChunk, end = std::min(n, i + layerChunk); i < end; ++i) {
-      const std::uint32_t first = layerOf(extent.lo(binned[i]));
+      const std::uint32_t first = layerOf(extent.lo(i, binned[i]));
       ++count[first];
-      if (packLayers) m_boxLayers[i] = first | layerOf(extent.hi(binned[i])) << 16;
+      if (packLayers) m_boxLayers[i] = first | layerOf(extent.hi(i, binned[i])) << 16;
     }
   });
+  // Past the first pass the packed layers serve; otherwise the extents serve every pass.
+  auto releaseKept = [&] {
+    if (useKept) std::vector<float>().swap(kept->values);
+  };
+  if (packLayers) releaseKept();
   m_layerSlab.resize(layers);
   tbb::parallel_for(std::uint32_t(0), layers, [&](std::uint32_t l) {
     std::size_t sum = 0;
@@ -145,6 +158,7 @@ bool SlabSearch::plan(const ProxyArrays& p, const std::vector<std::uint32_t>& bi
   m_firstLayer.push_back(layers);
   const std::size_t slabCount = slabs();
   if (slabCount < minSlabs) {
+    releaseKept();
     m_firstLayer.clear();
     std::vector<std::uint32_t>().swap(m_boxLayers);
     return false;
@@ -170,6 +184,7 @@ bool SlabSearch::plan(const ProxyArrays& p, const std::vector<std::uint32_t>& bi
     for (std::size_t i = begin; i < end; ++i)
       forSlabsOf(i, [&](std::uint32_t k) { m_members[next[k]++] = binned[i]; });
   });
+  releaseKept();
   return true;
 }
 

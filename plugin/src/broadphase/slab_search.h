@@ -40,9 +40,15 @@ class SlabSearch {
  public:
   /// Cuts grid `g` of the `binned` slots into slabs of about `slabBoxes` boxes each (0: the scene's count
   /// over kSlabsAimed, and at least kMinSlabBoxes), and lists each binned slot in every slab it reaches.
-  /// Returns false, with nothing planned, when fewer than `minSlabs` slabs come out.
+  /// Returns false, with nothing planned, when fewer than `minSlabs` slabs come out. `kept`, when its axis
+  /// is the one the slabs cut (axis()), gives the binned boxes' extents along it, which are then not read
+  /// from `p`; its values are freed as soon as the plan no longer needs them.
   bool plan(const ProxyArrays& p, const std::vector<std::uint32_t>& binned, const Grid& g,
-            std::uint32_t slabBoxes, std::uint32_t minSlabs);
+            std::uint32_t slabBoxes, std::uint32_t minSlabs, AxisExtents* kept = nullptr);
+  /// The axis the last plan cut (the one with most cells), also after release(): a guess for the next.
+  int axis() const { return m_axis; }
+  /// Whether the last plan took its extents from `kept`.
+  bool tookKeptExtents() const { return m_tookKept; }
   /// Slabs of the last plan.
   std::size_t slabs() const { return m_firstLayer.empty() ? 0 : m_firstLayer.size() - 1; }
   /// Output lists search() fills: one per slab, one per huge box.
@@ -70,6 +76,7 @@ class SlabSearch {
                               const Grid& g, std::vector<std::uint64_t>& out);
 
   int m_axis = 0;                           // the axis the slabs cut (the one with most cells)
+  bool m_tookKept = false;                  // the last plan read the grid choice's kept extents
   std::vector<std::uint32_t> m_firstLayer;  // per slab: its first layer along m_axis (+ the end)
   std::vector<std::uint32_t> m_layerSlab;   // per layer: its slab
   std::vector<std::size_t> m_memberStart;   // per slab: first index in m_members (+ the end)
