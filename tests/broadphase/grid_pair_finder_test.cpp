@@ -232,14 +232,18 @@ TEST(GridPairFinder, SlabsAcrossMoreThan65536Layers) {
 }
 
 /// Boxes in records: the grid choice keeps their extents along the last plan's slab axis, and the plan takes
-/// them when its axis is the same, else reads the boxes. The scene's longest axis turns from z to x.
+/// them when its axis is the same, else reads the boxes. The scene's longest axis turns from z to x. Huge
+/// boxes among the first of more than 16,384 boxes make the grid choice close up its chunks' binned stretches
+/// (and the kept extents with them).
 TEST(GridPairFinder, SlabPlanTakesTheExtentsKeptAlongItsAxis) {
   const Scene alongZ = [] {
     std::mt19937 rng(23);
-    std::uniform_real_distribution<float> across(-6.0f, 6.0f), along(-60.0f, 60.0f), size(0.1f, 0.6f);
+    std::uniform_real_distribution<float> across(-8.0f, 8.0f), along(-80.0f, 80.0f), size(0.1f, 0.6f);
     Scene s;
-    for (int i = 0; i < 6000; ++i)
-      s.add(across(rng), across(rng), along(rng), size(rng), size(rng), size(rng));
+    for (int i = 0; i < 17000; ++i) {
+      const float huge = i % 1000 == 7 && i < 16384 ? 40.0f : 0.0f;
+      s.add(across(rng), across(rng), along(rng), size(rng), size(rng), size(rng) + huge);
+    }
     return s;
   }();
   Scene alongX = alongZ;
@@ -249,19 +253,24 @@ TEST(GridPairFinder, SlabPlanTakesTheExtentsKeptAlongItsAxis) {
   gpucol::PairFinderOptions o;
   o.bruteForceBelow = 0;
   o.slabTiling = gpucol::SlabTiling::Always;
+  const std::vector<std::uint64_t> pairsAlongZ = gpucol::findPairsBruteForce(alongZ.view()),
+                                   pairsAlongX = gpucol::findPairsBruteForce(alongX.view());
   struct Step {
     const Scene* scene;
+    const std::vector<std::uint64_t>* reference;
     bool records;
     bool kept;
   };
-  const Step steps[] = {{&alongZ, true, false}, {&alongZ, true, true}, {&alongZ, false, false},
-                        {&alongX, true, false}, {&alongX, true, true}, {&alongZ, true, false}};
+  const Step steps[] = {{&alongZ, &pairsAlongZ, true, false},  {&alongZ, &pairsAlongZ, true, true},
+                        {&alongZ, &pairsAlongZ, false, false}, {&alongX, &pairsAlongX, true, false},
+                        {&alongX, &pairsAlongX, true, true},   {&alongZ, &pairsAlongZ, true, false}};
   int k = 0;
   for (const Step& step : steps) {
     std::vector<std::uint64_t> pairs;
     finder->findPairs(step.records ? step.scene->recordView() : step.scene->view(), o, pairs);
-    ASSERT_EQ(pairs, gpucol::findPairsBruteForce(step.scene->view())) << "step " << k;
+    ASSERT_EQ(pairs, *step.reference) << "step " << k;
     EXPECT_GE(finder->stats().slabs, 8u) << "step " << k;
+    EXPECT_GE(finder->stats().hugeProxies, 10u) << "step " << k;
     EXPECT_EQ(finder->stats().slabAxisKept, step.kept) << "step " << k;
     ++k;
   }

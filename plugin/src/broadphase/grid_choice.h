@@ -55,8 +55,9 @@ struct AxisExtents {
 /// extent (size rule) or the paper's density (§4.1); stage 3, proxies whose boxes would cover more than
 /// `options.hugeCellLimit` cells go to `huge`, the others to `binned` (both in `active` order); then the
 /// grid spans the binned boxes, its cells doubled until their count fits 32 bits (the pairs found never
-/// depend on the cell size). `extentScratch` is working memory kept by the caller between searches. With
-/// `kept` and kept->axis set, also fills kept->values for the binned boxes.
+/// depend on the cell size). `binned` may be `active` itself (it is then written over it). `extentScratch`
+/// is working memory kept by the caller between searches. With `kept` and kept->axis set, also fills
+/// kept->values for the binned boxes.
 Grid chooseGrid(const ProxyArrays& p, const std::vector<std::uint32_t>& active,
                 const PairFinderOptions& options, std::vector<float>& extentScratch,
                 std::vector<std::uint32_t>& binned, std::vector<std::uint32_t>& huge,

@@ -869,12 +869,13 @@ void CpuPairFinder::grid(const ProxyArrays& p, const PairFinderOptions& options,
                              options.output == PairOutput::Compacted &&
                              (!keepGrid || options.slabTiling == SlabTiling::Always);
   m_keptExtents.axis = p.minX == nullptr && slabsMayServe ? m_slabs.axis() : -1;
-  const Grid g = chooseGrid(p, m_active, options, m_extent, m_binned, m_huge, &m_keptExtents);
+  // Beyond chooseGrid, only a kept grid needs the active list (m_unchanged); the binned and huge lists hold
+  // every active slot. Without one, the binned list is written over the active list.
+  if (!keepGrid) m_binned.swap(m_active), std::vector<std::uint32_t>().swap(m_active);
+  const Grid g =
+      chooseGrid(p, keepGrid ? m_active : m_binned, options, m_extent, m_binned, m_huge, &m_keptExtents);
   notePeak();
   std::vector<float>().swap(m_extent);  // chooseGrid's scratch
-  // Beyond chooseGrid, only a kept grid needs the active list (m_unchanged); the binned and huge lists hold
-  // every active slot.
-  if (!keepGrid) std::vector<std::uint32_t>().swap(m_active);
   m_stats.hugeProxies = std::uint32_t(m_huge.size());
   m_keptGrid = g;
   m_stats.cellSize = g.cell;

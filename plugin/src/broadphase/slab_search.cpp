@@ -93,8 +93,9 @@ bool SlabSearch::plan(const ProxyArrays& p, const std::vector<std::uint32_t>& bi
   m_tookKept = useKept;
   const AxisExtent extent(p, m_axis, useKept ? kept->values.data() : nullptr);
   // Each box's first and last layer, packed in 32 bits by the first pass for the two after it (in place,
-  // each pass over the boxes is a walk over Bullet's proxies in memory), when layers fit 16 bits.
-  const bool packLayers = layers <= kPackedLayers;
+  // each pass over the boxes is a walk over Bullet's proxies in memory), when layers fit 16 bits. Kept
+  // extents serve every pass instead (packing them would hold both at once).
+  const bool packLayers = layers <= kPackedLayers && !useKept;
   if (packLayers) resizeExact(m_boxLayers, n);
   auto layersOf = [&](std::size_t i) {
     if (packLayers)
@@ -131,11 +132,9 @@ bool SlabSearch::plan(const ProxyArrays& p, const std::vector<std::uint32_t>& bi
       if (packLayers) m_boxLayers[i] = first | layerOf(extent.hi(i, binned[i])) << 16;
     }
   });
-  // Past the first pass the packed layers serve; otherwise the extents serve every pass.
   auto releaseKept = [&] {
     if (useKept) std::vector<float>().swap(kept->values);
   };
-  if (packLayers) releaseKept();
   m_layerSlab.resize(layers);
   tbb::parallel_for(std::uint32_t(0), layers, [&](std::uint32_t l) {
     std::size_t sum = 0;
