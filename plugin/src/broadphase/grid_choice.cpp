@@ -95,8 +95,9 @@ Grid chooseGrid(const ProxyArrays& p, const std::vector<std::uint32_t>& active,
   const std::size_t chunks = (n + kChunk - 1) / kChunk;
   binned.resize(n);
   const int keptAxis = kept ? kept->axis : -1;
-  if (keptAxis >= 0) kept->values.resize(2 * n);
-  float* keptValue = keptAxis >= 0 ? kept->values.data() : nullptr;
+  if (keptAxis >= 0) kept->lo.resize(n), kept->hi.resize(n);
+  std::uint32_t* keptLo = keptAxis >= 0 ? kept->lo.data() : nullptr;
+  std::uint32_t* keptHi = keptAxis >= 0 ? kept->hi.data() : nullptr;
   std::vector<std::vector<std::uint32_t>> chunkHuge(chunks);
   std::vector<Bounds> chunkBounds(chunks);
   tbb::parallel_for(std::size_t(0), chunks, [&](std::size_t c) {
@@ -111,7 +112,7 @@ Grid chooseGrid(const ProxyArrays& p, const std::vector<std::uint32_t>& active,
         chunkHuge[c].push_back(s);
         continue;
       }
-      if (keptValue) keptValue[2 * b] = corners.lo[keptAxis], keptValue[2 * b + 1] = corners.hi[keptAxis];
+      if (keptLo) keptLo[b] = floatBits(corners.lo[keptAxis]), keptHi[b] = floatBits(corners.hi[keptAxis]);
       binned[b++] = s;
       for (int a = 0; a < 3; ++a)
         box.lo[a] = std::min(box.lo[a], corners.lo[a]), box.hi[a] = std::max(box.hi[a], corners.hi[a]);
@@ -125,8 +126,10 @@ Grid chooseGrid(const ProxyArrays& p, const std::vector<std::uint32_t>& active,
     if (closed != begin) {  // std::copy forward: the target starts before the source
       std::copy(binned.begin() + std::ptrdiff_t(begin), binned.begin() + std::ptrdiff_t(begin + count),
                 binned.begin() + std::ptrdiff_t(closed));
-      if (keptValue)
-        std::copy(keptValue + 2 * begin, keptValue + 2 * (begin + count), keptValue + 2 * closed);
+      if (keptLo) {
+        std::copy(keptLo + begin, keptLo + begin + count, keptLo + closed);
+        std::copy(keptHi + begin, keptHi + begin + count, keptHi + closed);
+      }
     }
     closed += count;
     huge.insert(huge.end(), chunkHuge[c].begin(), chunkHuge[c].end());
@@ -135,7 +138,7 @@ Grid chooseGrid(const ProxyArrays& p, const std::vector<std::uint32_t>& active,
       box.hi[a] = std::max(box.hi[a], chunkBounds[c].hi[a]);
   }
   binned.resize(closed);
-  if (keptValue) kept->values.resize(2 * closed);
+  if (keptLo) kept->lo.resize(closed), kept->hi.resize(closed);
 
   Grid g;
   if (binned.empty()) return g;

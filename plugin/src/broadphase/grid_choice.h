@@ -5,6 +5,7 @@
 
 #include <algorithm>
 #include <cstdint>
+#include <cstring>
 #include <vector>
 
 #include "broadphase/grid_pair_finder.h"
@@ -45,11 +46,26 @@ inline bool isHuge(const ProxyArrays& p, std::uint32_t s, float cell, std::uint3
 }
 
 /// Each binned box's extent along one axis, kept by chooseGrid for a slab plan when the boxes are read in
-/// place: the plan's first pass then reads these 8 bytes per box instead of walking Bullet's proxies again.
+/// place: the plan's first pass then reads these 8 bytes per box instead of walking Bullet's proxies again,
+/// and writes each box's packed layers over `lo`, which it then takes as its layer list (so the two are
+/// never held beside each other). The floats are kept as their bits for that.
 struct AxisExtents {
-  int axis = -1;              ///< The axis kept (-1: none); the caller's guess of the slab axis.
-  std::vector<float> values;  ///< lo, hi of binned[i] at 2i, 2i+1 (as many boxes as `binned`).
+  int axis = -1;                  ///< The axis kept (-1: none); the caller's guess of the slab axis.
+  std::vector<std::uint32_t> lo;  ///< floatBits of binned[i]'s min corner on `axis`.
+  std::vector<std::uint32_t> hi;  ///< floatBits of binned[i]'s max corner on `axis`.
 };
+
+/// The bits of a float, and back (AxisExtents).
+inline std::uint32_t floatBits(float x) {
+  std::uint32_t b;
+  std::memcpy(&b, &x, sizeof b);
+  return b;
+}
+inline float bitsFloat(std::uint32_t b) {
+  float x;
+  std::memcpy(&x, &b, sizeof x);
+  return x;
+}
 
 /// Chooses the grid for the `active` proxies (not empty): stage 2, the cell edge from the median largest
 /// extent (size rule) or the paper's density (§4.1); stage 3, proxies whose boxes would cover more than
@@ -57,7 +73,7 @@ struct AxisExtents {
 /// grid spans the binned boxes, its cells doubled until their count fits 32 bits (the pairs found never
 /// depend on the cell size). `binned` may be `active` itself (it is then written over it). `extentScratch`
 /// is working memory kept by the caller between searches. With `kept` and kept->axis set, also fills
-/// kept->values for the binned boxes.
+/// kept->lo and kept->hi for the binned boxes.
 Grid chooseGrid(const ProxyArrays& p, const std::vector<std::uint32_t>& active,
                 const PairFinderOptions& options, std::vector<float>& extentScratch,
                 std::vector<std::uint32_t>& binned, std::vector<std::uint32_t>& huge,

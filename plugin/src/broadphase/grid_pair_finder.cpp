@@ -882,7 +882,8 @@ void CpuPairFinder::grid(const ProxyArrays& p, const PairFinderOptions& options,
   for (int a = 0; a < 3; ++a) m_stats.dims[a] = g.dims[a];
   m_stats.chooseMs = clock.lap();
   const bool slabs = searchSlabs(p, options, keepGrid, g);
-  std::vector<float>().swap(m_keptExtents.values);  // unused when the plan did not take them
+  // Unused when the plan did not take them.
+  std::vector<std::uint32_t>().swap(m_keptExtents.lo), std::vector<std::uint32_t>().swap(m_keptExtents.hi);
   if (!slabs) {
     m_isBinned.assign(p.count, 0);
     for (std::uint32_t s : m_binned) m_isBinned[s] = 1;
@@ -949,7 +950,7 @@ std::size_t CpuPairFinder::scratchBytes() const {
   bytes += m_runPrefix.capacity() * 8 + m_bits.capacity() * 8 + m_blockRuns.capacity() * 4 +
            m_offsets.capacity() * 4;
   for (const auto& c : m_chunkPairs) bytes += c.capacity() * 8;
-  return bytes + m_keptExtents.values.capacity() * 4 + m_slabs.bytes();
+  return bytes + (m_keptExtents.lo.capacity() + m_keptExtents.hi.capacity()) * 4 + m_slabs.bytes();
 }
 
 PairFinderFactory& openClFactory() {

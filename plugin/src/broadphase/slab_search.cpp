@@ -53,10 +53,11 @@ inline bool ownedByCell(std::uint32_t a, std::uint32_t b) {
 /// arrays (the planning passes read nothing else there), or from the records.
 class AxisExtent {
  public:
-  AxisExtent(const ProxyArrays& p, int axis, const float* kept)
+  AxisExtent(const ProxyArrays& p, int axis, const AxisExtents* kept)
       : m_p(p),
         m_axis(axis),
-        m_kept(kept),
+        m_keptLo(kept ? kept->lo.data() : nullptr),
+        m_keptHi(kept ? kept->hi.data() : nullptr),
         m_lo(axis == 0   ? p.minX
              : axis == 1 ? p.minY
                          : p.minZ),
@@ -64,16 +65,17 @@ class AxisExtent {
              : axis == 1 ? p.maxY
                          : p.maxZ) {}
   float lo(std::size_t i, std::uint32_t s) const {
-    return m_kept ? m_kept[2 * i] : m_lo ? m_lo[s] : m_p.box(s).lo[m_axis];
+    return m_keptLo ? bitsFloat(m_keptLo[i]) : m_lo ? m_lo[s] : m_p.box(s).lo[m_axis];
   }
   float hi(std::size_t i, std::uint32_t s) const {
-    return m_kept ? m_kept[2 * i + 1] : m_hi ? m_hi[s] : m_p.box(s).hi[m_axis];
+    return m_keptHi ? bitsFloat(m_keptHi[i]) : m_hi ? m_hi[s] : m_p.box(s).hi[m_axis];
   }
 
  private:
   const ProxyArrays& m_p;
   int m_axis;
-  const float* m_kept;
+  const std::uint32_t* m_keptLo;
+  const std::uint32_t* m_keptHi;
   const float* m_lo;
   const float* m_hi;
 };
@@ -89,14 +91,19 @@ bool SlabSearch::plan(const ProxyArrays& p, const std::vector<std::uint32_t>& bi
     if (g.dims[a] > g.dims[m_axis]) m_axis = a;
   const std::uint32_t layers = g.dims[m_axis];
   auto layerOf = [&](float x) { return cellOf(x, g.origin[m_axis], g.invCell, layers); };
-  const bool useKept = kept && kept->axis == m_axis && kept->values.size() == 2 * n;
+  const bool useKept = kept && kept->axis == m_axis && kept->lo.size() == n && kept->hi.size() == n;
   m_tookKept = useKept;
-  const AxisExtent extent(p, m_axis, useKept ? kept->values.data() : nullptr);
+  const AxisExtent extent(p, m_axis, useKept ? kept : nullptr);
+  auto releaseKept = [&] {
+    if (useKept) std::vector<std::uint32_t>().swap(kept->lo), std::vector<std::uint32_t>().swap(kept->hi);
+  };
   // Each box's first and last layer, packed in 32 bits by the first pass for the two after it (in place,
-  // each pass over the boxes is a walk over Bullet's proxies in memory), when layers fit 16 bits. Kept
-  // extents serve every pass instead (packing them would hold both at once).
-  const bool packLayers = layers <= kPackedLayers && !useKept;
-  if (packLayers) resizeExact(m_boxLayers, n);
+  // each pass over the boxes is a walk over Bullet's proxies in memory), when layers fit 16 bits. Over kept
+  // extents they are written on the box's own kept min (read just before), which becomes the layer list:
+  // the kept extents and the layers are never held side by side.
+  const bool packLayers = layers <= kPackedLayers;
+  if (packLayers && !useKept) resizeExact(m_boxLayers, n);
+  std::uint32_t* packed = !packLayers ? nullptr : useKept ? kept->lo.data() : m_boxLayers.data();
   auto layersOf = [&](std::size_t i) {
     if (packLayers)
       return std::pair<std::uint32_t, std::uint32_t>(m_boxLayers[i] & 0xFFFFu, m_boxLayers[i] >> 16);
@@ -129,12 +136,13 @@ bool SlabSearch::plan(const ProxyArrays& p, const std::vector<std::uint32_t>& bi
     for (std::size_t i = c * layerChunk, end = std::min(n, i + layerChunk); i < end; ++i) {
       const std::uint32_t first = layerOf(extent.lo(i, binned[i]));
       ++count[first];
-      if (packLayers) m_boxLayers[i] = first | layerOf(extent.hi(i, binned[i])) << 16;
+      if (packed) packed[i] = first | layerOf(extent.hi(i, binned[i])) << 16;
     }
   });
-  auto releaseKept = [&] {
-    if (useKept) std::vector<float>().swap(kept->values);
-  };
+  if (packed && useKept) {
+    m_boxLayers.swap(kept->lo);
+    releaseKept();
+  }
   m_layerSlab.resize(layers);
   tbb::parallel_for(std::uint32_t(0), layers, [&](std::uint32_t l) {
     std::size_t sum = 0;
