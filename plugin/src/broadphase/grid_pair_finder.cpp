@@ -858,6 +858,12 @@ void CpuPairFinder::gather(std::vector<std::uint64_t>& pairs) {
   });
 }
 
+/// Whether the options let a search be done in slabs before its grid is known (searchSlabs has the rest).
+bool slabsMayServe(const PairFinderOptions& options, bool keepGrid) {
+  return options.slabTiling != SlabTiling::Off && options.output == PairOutput::Compacted &&
+         (!keepGrid || options.slabTiling == SlabTiling::Always);
+}
+
 void CpuPairFinder::grid(const ProxyArrays& p, const PairFinderOptions& options, bool keepGrid,
                          std::vector<std::uint64_t>& pairs) {
   m_stats.usedGrid = true;
@@ -865,10 +871,7 @@ void CpuPairFinder::grid(const ProxyArrays& p, const PairFinderOptions& options,
   StageClock clock;
   // Read in place, every pass over the boxes walks Bullet's proxies: the grid choice keeps their extents
   // along the slab axis of the last plan (axes rarely change between steps) for this step's plan.
-  const bool slabsMayServe = options.slabTiling != SlabTiling::Off &&
-                             options.output == PairOutput::Compacted &&
-                             (!keepGrid || options.slabTiling == SlabTiling::Always);
-  m_keptExtents.axis = p.minX == nullptr && slabsMayServe ? m_slabs.axis() : -1;
+  m_keptExtents.axis = p.minX == nullptr && slabsMayServe(options, keepGrid) ? m_slabs.axis() : -1;
   // Beyond chooseGrid, only a kept grid needs the active list (m_unchanged); the binned and huge lists hold
   // every active slot. Without one, the binned list is written over the active list.
   if (!keepGrid) m_binned.swap(m_active), std::vector<std::uint32_t>().swap(m_active);
@@ -911,12 +914,10 @@ bool CpuPairFinder::searchSlabs(const ProxyArrays& p, const PairFinderOptions& o
                                 const Grid& g) {
   // The whole-grid search serves what slabs cannot: the bit mask (indexed by global candidate numbers), a
   // grid kept for stage 11, and sparse grids (a slab of a sparse grid would have mostly empty cells).
-  if (options.slabTiling == SlabTiling::Off || options.output != PairOutput::Compacted || m_binned.empty() ||
-      g.cells() > denseCellLimit(m_binned.size()))
+  if (!slabsMayServe(options, keepGrid) || m_binned.empty() || g.cells() > denseCellLimit(m_binned.size()))
     return false;
   const bool always = options.slabTiling == SlabTiling::Always;
-  if (!always && (keepGrid || (options.slabTiling == SlabTiling::Auto && m_binned.size() > kMaxSlabBoxes)))
-    return false;
+  if (options.slabTiling == SlabTiling::Auto && m_binned.size() > kMaxSlabBoxes) return false;
   StageClock clock;
   if (!m_slabs.plan(p, m_binned, g, options.slabBoxes, always ? 1 : kMinSlabs, &m_keptExtents)) return false;
   notePeak();
