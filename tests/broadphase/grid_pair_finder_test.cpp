@@ -6,6 +6,7 @@
 #include <gtest/gtest.h>
 #include <tbb/global_control.h>
 
+#include <algorithm>
 #include <cstdint>
 #include <cstring>
 #include <functional>
@@ -14,6 +15,8 @@
 #include <string>
 #include <utility>
 #include <vector>
+
+#include "broadphase/grid_choice.h"
 
 namespace {
 
@@ -273,6 +276,94 @@ TEST(GridPairFinder, SlabPlanTakesTheExtentsKeptAlongItsAxis) {
     EXPECT_GE(finder->stats().hugeProxies, 10u) << "step " << k;
     EXPECT_EQ(finder->stats().slabAxisKept, step.kept) << "step " << k;
     ++k;
+  }
+}
+
+/// The survey a caller's own pass over `s` makes at cell edge `cell` (BoxSurvey), with each slot's extent
+/// along `axis`.
+gpucol::BoxSurvey surveyOf(const Scene& s, float cell, std::uint32_t hugeCellLimit, int axis) {
+  gpucol::BoxSurvey survey;
+  survey.cell = cell;
+  survey.hugeCellLimit = hugeCellLimit;
+  survey.extents.axis = axis;
+  survey.extents.bySlot = true;
+  for (int a = 0; a < 3; ++a)
+    survey.lo[a] = std::numeric_limits<float>::infinity(), survey.hi[a] = -survey.lo[a];
+  const gpucol::ProxyArrays v = s.view();
+  for (std::uint32_t i = 0; i < v.count; ++i) {
+    const gpucol::BoxCorners b = v.box(i);
+    survey.extents.lo.push_back(gpucol::floatBits(b.lo[axis]));
+    survey.extents.hi.push_back(gpucol::floatBits(b.hi[axis]));
+    if (!(v.flags[i] & gpucol::kProxyActive)) continue;
+    if (gpucol::isHuge(b, cell, hugeCellLimit)) {
+      survey.huge.push_back(i);
+      continue;
+    }
+    for (int a = 0; a < 3; ++a)
+      survey.lo[a] = std::min(survey.lo[a], b.lo[a]), survey.hi[a] = std::max(survey.hi[a], b.hi[a]);
+  }
+  return survey;
+}
+
+/// A survey of the boxes made by the caller (GridBroadphase's scan, in place) replaces the grid choice's
+/// walk: the huge list, the bounds and the slab axis's extents by slot come from it. It is taken only at
+/// about this search's cell edge; its huge list and bounds never change the pairs; its extents are taken
+/// only along the plan's axis. Holes (inactive slots) and huge boxes make slot and binned index differ.
+TEST(GridPairFinder, GridChoiceTakesTheCallersSurvey) {
+  std::mt19937 rng(31);
+  std::uniform_real_distribution<float> across(-8.0f, 8.0f), along(-80.0f, 80.0f), size(0.1f, 0.6f);
+  Scene s;
+  for (int i = 0; i < 17000; ++i) {
+    const float huge = i % 1000 == 7 ? 40.0f : 0.0f;
+    s.add(across(rng), across(rng), along(rng), size(rng), size(rng), size(rng) + huge,
+          i % 97 == 3 ? std::uint8_t(0) : gpucol::kProxyActive);
+  }
+  const std::vector<std::uint64_t> reference = gpucol::findPairsBruteForce(s.view());
+  ASSERT_GE(reference.size(), 1000u);
+  auto finder = gpucol::makeCpuPairFinder();
+  gpucol::PairFinderOptions o;
+  o.bruteForceBelow = 0;
+  o.slabTiling = gpucol::SlabTiling::Always;
+  float cell = 0.0f;
+  int axis = -1;
+  EXPECT_FALSE(finder->surveyWanted(o, cell, axis)) << "no search yet";
+  std::vector<std::uint64_t> pairs;
+  finder->findPairs(s.recordView(), o, pairs);
+  ASSERT_EQ(pairs, reference);
+  const std::uint32_t hugeWalked = finder->stats().hugeProxies;
+  EXPECT_GE(hugeWalked, 10u);
+  ASSERT_TRUE(finder->surveyWanted(o, cell, axis));
+  EXPECT_EQ(axis, 2) << "the scene is longest along z";
+  struct Case {
+    const char* what;
+    float cellFactor;
+    int axis;
+    bool clearHuge;
+    bool taken;
+    bool extentsTaken;  // the survey's
+  };
+  const Case cases[] = {{"as asked", 1.0f, 2, false, true, true},
+                        {"cell a little off", 1.5f, 2, false, true, true},
+                        {"another axis", 1.0f, 0, false, true, false},
+                        {"no huge listed", 1.0f, 2, true, true, true},
+                        {"cell far off", 4.0f, 2, false, false, false}};
+  for (const Case& c : cases) {
+    gpucol::BoxSurvey survey = surveyOf(s, cell * c.cellFactor, o.hugeCellLimit, c.axis);
+    if (c.clearHuge) survey.huge.clear();
+    gpucol::ProxyArrays v = s.recordView();
+    v.survey = &survey;
+    finder->findPairs(v, o, pairs);
+    ASSERT_EQ(pairs, reference) << c.what;
+    const gpucol::PairFinderStats& st = finder->stats();
+    EXPECT_EQ(st.surveyTaken, c.taken) << c.what;
+    // Not taken, the grid choice reads the boxes and keeps their extents itself.
+    EXPECT_EQ(st.slabAxisKept, c.extentsTaken || !c.taken) << c.what;
+    EXPECT_EQ(survey.extents.lo.empty(), c.extentsTaken) << c.what << ": the extents taken over";
+    EXPECT_GE(st.slabs, 8u) << c.what;
+    EXPECT_EQ(st.hugeProxies, c.clearHuge ? 0u
+                              : c.taken   ? std::uint32_t(survey.huge.size())
+                                          : hugeWalked)
+        << c.what;
   }
 }
 

@@ -10,6 +10,7 @@
 
 #include <algorithm>
 #include <cmath>
+#include <limits>
 #include <map>
 #include <memory>
 #include <random>
@@ -225,6 +226,100 @@ TEST(GridBroadphase, BoxesReadInPlaceGiveTheSamePairsWithoutTheCopy) {
   // The same scene stepped by both: one step that moves every box a little (few pairs change, so the
   // step's peak is the search's), and the peaks differ by about the copy's 24 bytes per proxy.
   expectInPlaceSamePairsLowerPeak(config, 4000, 40.0f, 4, 20, 0);
+}
+
+/// In place, the step's scan of the proxies surveys the boxes for the grid choice (BoxSurvey): every box
+/// moves each step, some vanish and appear (slots reused), a few are huge, one box is NaN for a while, a
+/// filter is edited on a proxy (the scan then runs twice) and at one step every box grows tenfold (the
+/// survey's cell edge is then far off and the grid choice reads the boxes itself).
+TEST(GridBroadphase, BoxesReadInPlaceAreSurveyedByTheScan) {
+  gpucol::Config config;
+  config.bruteForceBelow = 100;
+  gpucol::GridBroadphaseTuning inPlace;
+  inPlace.boxesInPlace = true;
+  gpucol::GridBroadphase bp(config);
+  bp.setTuning(inPlace);
+  btDefaultCollisionConfiguration configuration;
+  btCollisionDispatcher dispatcher(&configuration);
+  std::mt19937 rng(41);
+  const int count = 3000;
+  std::vector<Box> boxes(count);
+  for (int i = 0; i < count; ++i) {
+    randomBox(rng, boxes[i], 30.0f);
+    if (i % 500 == 9) boxes[i].hi += btVector3(25.0f, 25.0f, 25.0f);  // huge
+    if (i % 13 == 0) boxes[i].group = btBroadphaseProxy::StaticFilter;
+    addProxy(bp, boxes, i, &dispatcher);
+  }
+  std::uniform_real_distribution<float> nudge(-0.3f, 0.3f);
+  const btScalar nan = std::numeric_limits<btScalar>::quiet_NaN();
+  int surveyed = 0;
+  for (int t = 0; t < 12; ++t) {
+    const btScalar grow = t == 7 ? 10.0f : t == 8 ? 0.1f : 1.0f;
+    for (int i = 0; i < count; ++i) {
+      Box& b = boxes[std::size_t(i)];
+      if (t > 0 && rng() % 40 == 0) {
+        if (b.proxy) {
+          bp.destroyProxy(b.proxy, &dispatcher), b.proxy = nullptr;
+        } else {
+          randomBox(rng, b, 30.0f), addProxy(bp, boxes, i, &dispatcher);
+        }
+      } else if (b.proxy) {
+        const btVector3 c = (b.lo + b.hi) * 0.5f + btVector3(nudge(rng), nudge(rng), nudge(rng));
+        const btVector3 h = (b.hi - b.lo) * 0.5f * grow;
+        b.lo = c - h, b.hi = c + h;
+        bp.setAabb(b.proxy, b.lo, b.hi, &dispatcher);
+      }
+    }
+    Box& odd = boxes[1];
+    if (odd.proxy && t == 4) bp.setAabb(odd.proxy, btVector3(nan, 0, 0), btVector3(1, 1, 1), &dispatcher);
+    if (odd.proxy && t == 4) odd.proxy->m_collisionFilterMask = 0;  // also keeps it out of bruteForce below
+    if (odd.proxy && t == 5) bp.setAabb(odd.proxy, odd.lo, odd.hi, &dispatcher);
+    if (t == 6) boxes[2].mask = 0;
+    if (t == 6 && boxes[2].proxy) boxes[2].proxy->m_collisionFilterMask = 0;  // the scan runs twice
+    if (t == 4) odd.mask = 0;
+    bp.calculateOverlappingPairs(&dispatcher);
+    ASSERT_EQ(cachePairs(bp.getOverlappingPairCache()), bruteForce(boxes)) << "step " << t;
+    ASSERT_TRUE(bp.stats().usedGrid);
+    // The first search keeps its grid (nothing is known about motion yet), and so do the searches of steps
+    // 4 and 5, where a box's finiteness changed: the steps after them ask for no survey (stage 11 would read
+    // only the moved boxes). At step 7 the boxes grew tenfold since the survey's cell edge was chosen, and at
+    // step 8 they shrank back.
+    const bool expected = t == 2 || t == 3 || t == 4 || t >= 9;
+    EXPECT_EQ(bp.stats().boxesSurveyed, expected) << "step " << t;
+    surveyed += bp.stats().boxesSurveyed;
+  }
+  EXPECT_EQ(surveyed, 6);
+}
+
+TEST(GridBroadphase, FilterEditedInAStepWhereBoxesMovedKeepsTheMoves) {
+  // A filter edited on a proxy in a step where boxes also moved: the scan that fills the finder's view marks
+  // both kinds of change. A few boxes move, so the finder searches its kept grid for the moved ones only.
+  gpucol::Config config;
+  config.bruteForceBelow = 100;
+  gpucol::GridBroadphase bp(config);
+  btDefaultCollisionConfiguration configuration;
+  btCollisionDispatcher dispatcher(&configuration);
+  std::mt19937 rng(6);
+  std::vector<Box> boxes(4000);
+  for (std::size_t i = 0; i < boxes.size(); ++i) {
+    randomBox(rng, boxes[i], 20.0f);
+    addProxy(bp, boxes, int(i), &dispatcher);
+  }
+  bp.calculateOverlappingPairs(&dispatcher);
+  ASSERT_EQ(cachePairs(bp.getOverlappingPairCache()), bruteForce(boxes));
+  for (int round = 0; round < 3; ++round) {
+    for (std::size_t i = round; i < boxes.size(); i += 50) {
+      Box& b = boxes[i];
+      randomBox(rng, b, 20.0f);
+      bp.setAabb(b.proxy, b.lo, b.hi, &dispatcher);
+    }
+    Box& edited = boxes[std::size_t(7 + round)];
+    edited.mask = round == 1 ? btBroadphaseProxy::AllFilter : 0;
+    edited.proxy->m_collisionFilterMask = edited.mask;
+    bp.calculateOverlappingPairs(&dispatcher);
+    EXPECT_EQ(cachePairs(bp.getOverlappingPairCache()), bruteForce(boxes)) << "round " << round;
+    EXPECT_GT(bp.stats().restingProxies, 3000u) << "round " << round << ": not the kept grid's search";
+  }
 }
 
 TEST(GridBroadphase, FiltersEditedOnTheProxyAreTakenUp) {

@@ -60,6 +60,9 @@ struct GridBroadphaseStats {
   std::uint32_t rebinnedProxies = 0;
   /// Edge of the grid's cubic cells (0 without grid).
   float cellSize = 0.0f;
+  /// True when the boxes, read in place (GridBroadphaseTuning::boxesInPlace), were surveyed for the grid
+  /// choice by the step's scan of the proxies, which then read no box itself.
+  bool boxesSurveyed = false;
   /// Bytes the broad phase holds between steps: the proxies Bullet holds (56 bytes each, in blocks of 256),
   /// the filter and state per slot (9 bytes), free-slot lists, the last step's sorted pair keys (8 bytes
   /// per pair, plus the few the cache's filter refused; the CPU finder carries resting pairs over from

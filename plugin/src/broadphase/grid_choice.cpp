@@ -23,6 +23,8 @@ constexpr std::uint64_t kMaxCells = (std::uint64_t(1) << 32) - 1;
 constexpr std::size_t kMedianSamples = 4096;
 /// Boxes per parallel task of the stage's loops.
 constexpr std::size_t kChunk = 16384;
+/// A survey's cell edge is taken while it is within this factor of the one this search's sample gives.
+constexpr float kSurveyCellRatio = 2.0f;
 /// The bounds of no box.
 constexpr float kInf = std::numeric_limits<float>::infinity();
 
@@ -58,7 +60,8 @@ Bounds boundsOf(const ProxyArrays& p, const std::vector<std::uint32_t>& slots, s
 
 Grid chooseGrid(const ProxyArrays& p, const std::vector<std::uint32_t>& active,
                 const PairFinderOptions& options, std::vector<float>& extentScratch,
-                std::vector<std::uint32_t>& binned, std::vector<std::uint32_t>& huge, AxisExtents* kept) {
+                std::vector<std::uint32_t>& binned, std::vector<std::uint32_t>& huge, AxisExtents* kept,
+                const BoxSurvey* survey, bool* surveyTaken) {
   const std::size_t n = active.size();
   // Stage 2: the median of the largest extent, robust to a few huge boxes (a mean would follow them). Above
   // kMedianSamples boxes, the median of every stride-th box: the cell size only sets the speed, never the
@@ -87,6 +90,17 @@ Grid chooseGrid(const ProxyArrays& p, const std::vector<std::uint32_t>& active,
     if (density > 0.0f && std::isfinite(density)) cell = std::max(density, median);
   }
   if (!(cell > 0.0f) || !std::isfinite(cell)) cell = 1.0f;  // all boxes are points at one spot
+  // The caller's survey, made at the last search's cell edge, serves while this sample's edge is within a
+  // factor of kSurveyCellRatio of it (the cell edge only sets the speed; a scene whose sizes changed more
+  // is read again, and the next survey is made at its new edge).
+  const bool taken = survey && options.cellSizeRule == CellSizeRule::Size &&
+                     survey->hugeCellLimit == options.hugeCellLimit && survey->cell > 0.0f &&
+                     survey->cell <= kSurveyCellRatio * cell && cell <= kSurveyCellRatio * survey->cell &&
+                     survey->lo[0] <= survey->hi[0] && survey->lo[1] <= survey->hi[1] &&
+                     survey->lo[2] <= survey->hi[2];
+  if (surveyTaken) *surveyTaken = taken;
+  if (taken) cell = survey->cell;
+  const float sizedCell = cell;
 
   // Stage 3 and the bounds of the binned boxes in one pass over fixed chunks of `active` (each box is read
   // once: in place, in Bullet's proxies, every pass is a walk over memory): a chunk's binned slots go to its
@@ -94,7 +108,7 @@ Grid chooseGrid(const ProxyArrays& p, const std::vector<std::uint32_t>& active,
   // stay in `active` order.
   const std::size_t chunks = (n + kChunk - 1) / kChunk;
   binned.resize(n);
-  const int keptAxis = kept ? kept->axis : -1;
+  const int keptAxis = kept && !taken ? kept->axis : -1;
   if (keptAxis >= 0) kept->lo.resize(n), kept->hi.resize(n);
   std::uint32_t* keptLo = keptAxis >= 0 ? kept->lo.data() : nullptr;
   std::uint32_t* keptHi = keptAxis >= 0 ? kept->hi.data() : nullptr;
@@ -105,6 +119,19 @@ Grid chooseGrid(const ProxyArrays& p, const std::vector<std::uint32_t>& active,
     std::size_t b = begin;
     Bounds& box = chunkBounds[c];
     box = Bounds{{kInf, kInf, kInf}, {-kInf, -kInf, -kInf}};
+    if (taken) {  // the survey's huge slots, met in ascending order
+      const std::vector<std::uint32_t>& listed = survey->huge;
+      auto h = std::lower_bound(listed.begin(), listed.end(), active[begin]);
+      for (std::size_t i = begin; i < end; ++i) {
+        const std::uint32_t s = active[i];
+        while (h != listed.end() && *h < s) ++h;
+        if (h != listed.end() && *h == s)
+          chunkHuge[c].push_back(s);
+        else
+          binned[b++] = s;
+      }
+      return;
+    }
     for (std::size_t i = begin; i < end; ++i) {
       const std::uint32_t s = active[i];
       const BoxCorners corners = p.box(s);
@@ -139,8 +166,11 @@ Grid chooseGrid(const ProxyArrays& p, const std::vector<std::uint32_t>& active,
   }
   binned.resize(closed);
   if (keptLo) kept->lo.resize(closed), kept->hi.resize(closed);
+  if (taken)
+    for (int a = 0; a < 3; ++a) box.lo[a] = survey->lo[a], box.hi[a] = survey->hi[a];
 
   Grid g;
+  g.sizedCell = sizedCell;
   if (binned.empty()) return g;
   const float* bmin = box.lo;
   const float* bmax = box.hi;
@@ -162,6 +192,7 @@ Grid chooseGrid(const ProxyArrays& p, const std::vector<std::uint32_t>& active,
   }
   for (int a = 0; a < 3; ++a) g.origin[a] = bmin[a];
   g.cell = cell;
+  g.sizedCell = sizedCell;
   g.invCell = 1.0f / cell;
   return g;
 }

@@ -16,6 +16,7 @@ namespace gpucol {
 struct Grid {
   float origin[3] = {0, 0, 0};        ///< Lower corner: the min corner of all binned boxes.
   float cell = 1.0f;                  ///< Cell edge length.
+  float sizedCell = 1.0f;             ///< Stage 2's cell edge, before any doubling to fit 32 bits.
   float invCell = 1.0f;               ///< 1 / cell.
   std::uint32_t dims[3] = {1, 1, 1};  ///< Cells per axis.
   /// Number of cells.
@@ -51,8 +52,26 @@ inline bool isHuge(const ProxyArrays& p, std::uint32_t s, float cell, std::uint3
 /// never held beside each other). The floats are kept as their bits for that.
 struct AxisExtents {
   int axis = -1;                  ///< The axis kept (-1: none); the caller's guess of the slab axis.
-  std::vector<std::uint32_t> lo;  ///< floatBits of binned[i]'s min corner on `axis`.
-  std::vector<std::uint32_t> hi;  ///< floatBits of binned[i]'s max corner on `axis`.
+  bool bySlot = false;            ///< Indexed by slot (a BoxSurvey's) instead of by binned index.
+  std::vector<std::uint32_t> lo;  ///< floatBits of binned[i]'s (or slot i's) min corner on `axis`.
+  std::vector<std::uint32_t> hi;  ///< floatBits of binned[i]'s (or slot i's) max corner on `axis`.
+};
+
+/// The grid choice's reads of every box, made by the caller's own pass over them (GridBroadphase's per-step
+/// scan of its proxies, when the boxes are read in place), so that a step walks Bullet's proxies once: at
+/// stage 2's cell edge of the last search (PairFinder::surveyWanted), which active boxes are huge, the bounds
+/// of the others, and every slot's extent along the guessed slab axis. chooseGrid takes it when the median
+/// of this search's sample gives about the same cell edge; else it reads the boxes itself. The pairs never
+/// depend on it: a box listed as huge or not is tested either way, and the bounds only place the grid.
+struct BoxSurvey {
+  float cell = 0.0f;                ///< The cell edge the huge test used.
+  std::uint32_t hugeCellLimit = 0;  ///< The cell count limit it used.
+  std::vector<std::uint32_t> huge;  ///< The huge active slots, ascending.
+  float lo[3] = {0, 0, 0};          ///< Min corner of the other active boxes.
+  float hi[3] = {-1, -1, -1};       ///< Max corner of them (below lo: none).
+  AxisExtents extents;              ///< By slot (bySlot), count entries; axis -1: not surveyed.
+  /// Bytes held.
+  std::size_t bytes() const { return (huge.capacity() + extents.lo.capacity() + extents.hi.capacity()) * 4; }
 };
 
 /// The bits of a float, and back (AxisExtents).
@@ -73,10 +92,11 @@ inline float bitsFloat(std::uint32_t b) {
 /// grid spans the binned boxes, its cells doubled until their count fits 32 bits (the pairs found never
 /// depend on the cell size). `binned` may be `active` itself (it is then written over it). `extentScratch`
 /// is working memory kept by the caller between searches. With `kept` and kept->axis set, also fills
-/// kept->lo and kept->hi for the binned boxes.
+/// kept->lo and kept->hi for the binned boxes. With `survey` (made for every slot of `p`), stage 3 and the
+/// bounds come from it when its cell edge is taken (`*surveyTaken`); `kept` is then left alone.
 Grid chooseGrid(const ProxyArrays& p, const std::vector<std::uint32_t>& active,
                 const PairFinderOptions& options, std::vector<float>& extentScratch,
                 std::vector<std::uint32_t>& binned, std::vector<std::uint32_t>& huge,
-                AxisExtents* kept = nullptr);
+                AxisExtents* kept = nullptr, const BoxSurvey* survey = nullptr, bool* surveyTaken = nullptr);
 
 }  // namespace gpucol

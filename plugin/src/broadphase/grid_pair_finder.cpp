@@ -220,6 +220,7 @@ class CpuPairFinder final : public PairFinder {
   const PairFinderStats& stats() const override { return m_stats; }
   std::string name() const override { return "cpu"; }
   bool readsBoxRecords() const override { return true; }
+  bool surveyWanted(const PairFinderOptions& options, float& cell, int& axis) const override;
 
  private:
   void bruteForce(const ProxyArrays& p, const PairFinderOptions& options, std::vector<std::uint64_t>& pairs);
@@ -277,6 +278,7 @@ class CpuPairFinder final : public PairFinder {
   std::vector<std::vector<std::uint64_t>> m_chunkPairs;  // output per chunk (freed once gathered)
   SlabSearch m_slabs;                                    // the slab search's plan and working memory
   AxisExtents m_keptExtents;     // in place: the binned boxes' extents along the last slab axis (the plan's)
+  float m_lastSizedCell = 0.0f;  // stage 2's cell edge of the last grid search (0: brute force since)
   std::size_t m_peakBytes = 0;   // high-water mark of this search (notePeak)
   std::size_t m_chunksUsed = 0;  // chunks of m_chunkPairs filled by this search
 
@@ -316,6 +318,7 @@ void CpuPairFinder::findPairs(const ProxyArrays& proxies, const PairFinderOption
   // Stage 1: the path.
   if (m_active.size() < options.bruteForceBelow) {
     m_kept = false;
+    m_lastSizedCell = 0.0f;
     bruteForce(proxies, options, pairs);
   } else if (keepGrid(proxies, options)) {
     incremental(proxies, options, pairs);
@@ -864,6 +867,14 @@ bool slabsMayServe(const PairFinderOptions& options, bool keepGrid) {
          (!keepGrid || options.slabTiling == SlabTiling::Always);
 }
 
+bool CpuPairFinder::surveyWanted(const PairFinderOptions& options, float& cell, int& axis) const {
+  // A kept grid serves the next search when few proxies move (stage 11), which reads no box but the moved.
+  if (!(m_lastSizedCell > 0.0f) || m_kept || options.cellSizeRule != CellSizeRule::Size) return false;
+  cell = m_lastSizedCell;
+  axis = slabsMayServe(options, false) ? m_slabs.axis() : -1;
+  return true;
+}
+
 void CpuPairFinder::grid(const ProxyArrays& p, const PairFinderOptions& options, bool keepGrid,
                          std::vector<std::uint64_t>& pairs) {
   m_stats.usedGrid = true;
@@ -872,11 +883,18 @@ void CpuPairFinder::grid(const ProxyArrays& p, const PairFinderOptions& options,
   // Read in place, every pass over the boxes walks Bullet's proxies: the grid choice keeps their extents
   // along the slab axis of the last plan (axes rarely change between steps) for this step's plan.
   m_keptExtents.axis = p.minX == nullptr && slabsMayServe(options, keepGrid) ? m_slabs.axis() : -1;
+  m_keptExtents.bySlot = false;
   // Beyond chooseGrid, only a kept grid needs the active list (m_unchanged); the binned and huge lists hold
   // every active slot. Without one, the binned list is written over the active list.
   if (!keepGrid) m_binned.swap(m_active), std::vector<std::uint32_t>().swap(m_active);
-  const Grid g =
-      chooseGrid(p, keepGrid ? m_active : m_binned, options, m_extent, m_binned, m_huge, &m_keptExtents);
+  bool surveyTaken = false;
+  const Grid g = chooseGrid(p, keepGrid ? m_active : m_binned, options, m_extent, m_binned, m_huge,
+                            &m_keptExtents, p.survey, &surveyTaken);
+  m_stats.surveyTaken = surveyTaken;
+  // The survey's extents are by slot; the plan takes them as it takes the grid choice's own.
+  if (surveyTaken && m_keptExtents.axis >= 0 && p.survey->extents.axis == m_keptExtents.axis)
+    std::swap(m_keptExtents, p.survey->extents);
+  m_lastSizedCell = options.cellSizeRule == CellSizeRule::Size ? g.sizedCell : 0.0f;
   notePeak();
   std::vector<float>().swap(m_extent);  // chooseGrid's scratch
   m_stats.hugeProxies = std::uint32_t(m_huge.size());

@@ -84,6 +84,8 @@ constexpr std::size_t kBoxPrefetchAhead = 16;
 
 /// Structure-of-arrays view of every proxy slot, the boxes in six arrays or in the caller's records (the pair
 /// finder reads it, never writes it).
+struct BoxSurvey;  // grid_choice.h
+
 struct ProxyArrays {
   /// Number of slots (live proxies and holes); every array below has this many entries.
   std::uint32_t count = 0;
@@ -117,6 +119,9 @@ struct ProxyArrays {
   /// Optional, in place of minX..maxZ (then nullptr): the boxes in the caller's records. Only a finder whose
   /// readsBoxRecords() is true accepts them.
   BoxRecords records;
+  /// Optional: what the caller's own pass over every box found for the grid choice, asked for with
+  /// PairFinder::surveyWanted. The finder may take its arrays (they are then left empty).
+  BoxSurvey* survey = nullptr;
 
   /// The box of slot s, from the six arrays or from the records.
   BoxCorners box(std::uint32_t s) const {
@@ -202,6 +207,8 @@ struct PairFinderStats {
   /// True when the slab plan took the binned boxes' extents along its axis from the grid choice's pass (boxes
   /// read in place, the slab axis as guessed from the last plan) instead of reading the boxes again.
   bool slabAxisKept = false;
+  /// True when the grid choice took ProxyArrays::survey (no box was read for stage 3 and the bounds).
+  bool surveyTaken = false;
   /// True when the search kept the last grid and binned only moved proxies (stage 11).
   bool incremental = false;
   /// Active proxies neither re-binned nor tested among themselves in this search (stage 11).
@@ -230,6 +237,12 @@ class PairFinder {
   virtual bool runsOnGpu() const { return false; }
   /// True when the finder reads boxes from ProxyArrays::records (the six arrays may then be nullptr).
   virtual bool readsBoxRecords() const { return false; }
+  /// True when the next search would take a BoxSurvey (ProxyArrays::survey) made at cell edge `cell` with
+  /// `options`, with each box's extent along `axis` (-1: none); false when it has no use for one.
+  virtual bool surveyWanted(const PairFinderOptions& options, float& cell, int& axis) const {
+    (void)options, (void)cell, (void)axis;
+    return false;
+  }
 };
 
 /// The CPU implementation (oneTBB), the reference the OpenCL path must match bit for bit.

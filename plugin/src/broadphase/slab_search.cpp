@@ -56,6 +56,7 @@ class AxisExtent {
   AxisExtent(const ProxyArrays& p, int axis, const AxisExtents* kept)
       : m_p(p),
         m_axis(axis),
+        m_bySlot(kept && kept->bySlot),
         m_keptLo(kept ? kept->lo.data() : nullptr),
         m_keptHi(kept ? kept->hi.data() : nullptr),
         m_lo(axis == 0   ? p.minX
@@ -65,15 +66,16 @@ class AxisExtent {
              : axis == 1 ? p.maxY
                          : p.maxZ) {}
   float lo(std::size_t i, std::uint32_t s) const {
-    return m_keptLo ? bitsFloat(m_keptLo[i]) : m_lo ? m_lo[s] : m_p.box(s).lo[m_axis];
+    return m_keptLo ? bitsFloat(m_keptLo[m_bySlot ? s : i]) : m_lo ? m_lo[s] : m_p.box(s).lo[m_axis];
   }
   float hi(std::size_t i, std::uint32_t s) const {
-    return m_keptHi ? bitsFloat(m_keptHi[i]) : m_hi ? m_hi[s] : m_p.box(s).hi[m_axis];
+    return m_keptHi ? bitsFloat(m_keptHi[m_bySlot ? s : i]) : m_hi ? m_hi[s] : m_p.box(s).hi[m_axis];
   }
 
  private:
   const ProxyArrays& m_p;
   int m_axis;
+  bool m_bySlot;
   const std::uint32_t* m_keptLo;
   const std::uint32_t* m_keptHi;
   const float* m_lo;
@@ -91,7 +93,9 @@ bool SlabSearch::plan(const ProxyArrays& p, const std::vector<std::uint32_t>& bi
     if (g.dims[a] > g.dims[m_axis]) m_axis = a;
   const std::uint32_t layers = g.dims[m_axis];
   auto layerOf = [&](float x) { return cellOf(x, g.origin[m_axis], g.invCell, layers); };
-  const bool useKept = kept && kept->axis == m_axis && kept->lo.size() == n && kept->hi.size() == n;
+  const std::size_t keptSize = kept && kept->bySlot ? p.count : n;
+  const bool useKept =
+      kept && kept->axis == m_axis && kept->lo.size() == keptSize && kept->hi.size() == keptSize;
   m_tookKept = useKept;
   const AxisExtent extent(p, m_axis, useKept ? kept : nullptr);
   auto releaseKept = [&] {
@@ -100,13 +104,17 @@ bool SlabSearch::plan(const ProxyArrays& p, const std::vector<std::uint32_t>& bi
   // Each box's first and last layer, packed in 32 bits by the first pass for the two after it (in place,
   // each pass over the boxes is a walk over Bullet's proxies in memory), when layers fit 16 bits. Over kept
   // extents they are written on the box's own kept min (read just before), which becomes the layer list:
-  // the kept extents and the layers are never held side by side.
+  // the kept extents and the layers are never held side by side. Kept by slot (a BoxSurvey's), the list is
+  // then indexed by slot too.
   const bool packLayers = layers <= kPackedLayers;
+  const bool layersBySlot = useKept && kept->bySlot;
+  auto layerIndex = [&](std::size_t i) -> std::size_t { return layersBySlot ? binned[i] : i; };
   if (packLayers && !useKept) resizeExact(m_boxLayers, n);
   std::uint32_t* packed = !packLayers ? nullptr : useKept ? kept->lo.data() : m_boxLayers.data();
   auto layersOf = [&](std::size_t i) {
     if (packLayers)
-      return std::pair<std::uint32_t, std::uint32_t>(m_boxLayers[i] & 0xFFFFu, m_boxLayers[i] >> 16);
+      return std::pair<std::uint32_t, std::uint32_t>(m_boxLayers[layerIndex(i)] & 0xFFFFu,
+                                                     m_boxLayers[layerIndex(i)] >> 16);
     return std::pair<std::uint32_t, std::uint32_t>(layerOf(extent.lo(i, binned[i])),
                                                    layerOf(extent.hi(i, binned[i])));
   };
@@ -136,7 +144,7 @@ bool SlabSearch::plan(const ProxyArrays& p, const std::vector<std::uint32_t>& bi
     for (std::size_t i = c * layerChunk, end = std::min(n, i + layerChunk); i < end; ++i) {
       const std::uint32_t first = layerOf(extent.lo(i, binned[i]));
       ++count[first];
-      if (packed) packed[i] = first | layerOf(extent.hi(i, binned[i])) << 16;
+      if (packed) packed[layerIndex(i)] = first | layerOf(extent.hi(i, binned[i])) << 16;
     }
   });
   if (packed && useKept) {

@@ -41,8 +41,9 @@ class SlabSearch {
   /// Cuts grid `g` of the `binned` slots into slabs of about `slabBoxes` boxes each (0: the scene's count
   /// over kSlabsAimed, and at least kMinSlabBoxes), and lists each binned slot in every slab it reaches.
   /// Returns false, with nothing planned, when fewer than `minSlabs` slabs come out. `kept`, when its axis
-  /// is the one the slabs cut (axis()), gives the binned boxes' extents along it, which are then not read
-  /// from `p`; they are freed (or taken over) as soon as the plan no longer needs them.
+  /// is the one the slabs cut (axis()), gives the binned boxes' extents along it (by binned index, or by
+  /// slot for all of `p`'s slots), which are then not read from `p`; they are freed (or taken over) as soon
+  /// as the plan no longer needs them.
   bool plan(const ProxyArrays& p, const std::vector<std::uint32_t>& binned, const Grid& g,
             std::uint32_t slabBoxes, std::uint32_t minSlabs, AxisExtents* kept = nullptr);
   /// The axis the last plan cut (the one with most cells), also after release(): a guess for the next.

@@ -9,6 +9,7 @@
 
 #include <LinearMath/btAabbUtil2.h>
 #include <tbb/blocked_range.h>
+#include <tbb/enumerable_thread_specific.h>
 #include <tbb/parallel_for.h>
 #include <tbb/parallel_reduce.h>
 
@@ -18,12 +19,14 @@
 #include <cmath>
 #include <cstdio>
 #include <iostream>
+#include <limits>
 #include <mutex>
 #include <stdexcept>
 #include <string>
 #include <type_traits>
 #include <vector>
 
+#include "broadphase/grid_choice.h"
 #include "broadphase/grid_pair_finder.h"
 #include "broadphase/pair_diff.h"
 #include "broadphase/query_grid.h"
@@ -72,6 +75,8 @@ struct GridProxy : btBroadphaseProxy {
 /// GridBroadphaseTuning::boxesInPlace reads the proxies' boxes as floats (BoxRecords), so it needs Bullet
 /// built in single precision; otherwise every finder gets float copies.
 constexpr bool kProxyBoxesAreFloats = std::is_same<btScalar, float>::value;
+/// The bounds of no box, for the survey's running min and max.
+constexpr float kFloatMax = std::numeric_limits<float>::max();
 
 /// The finder's view of the slots, filled before each search and released after it: a flags byte and a
 /// moved byte per slot and, for a finder that does not read the boxes from the proxies
@@ -155,6 +160,8 @@ struct GridBroadphase::Impl {
 
   // Scratch of one step, released at its end.
   ViewBuffer view;
+  BoxSurvey survey;        // made by the scan for the CPU finder when the boxes are read in place
+  bool surveying = false;  // the scan of this step makes it
   std::vector<std::uint64_t> found;
   std::vector<std::uint64_t> refusedNow;
   std::vector<std::uint64_t> removedKeys;  // pairs to remove from the cache (sorted)
@@ -181,10 +188,29 @@ struct GridBroadphase::Impl {
     return std::uint8_t(kProxyActive | ((filterGroup & btBroadphaseProxy::StaticFilter) ? kProxyStatic : 0));
   }
 
+  /// Asks the CPU finder whether it would take a survey of the boxes (BoxSurvey) when they are read in place:
+  /// the scan then makes it, reading each box in the proxy whose filter it reads anyway, and the finder's
+  /// grid choice reads no proxy (at 100K and 1M boxes that walk cost about as much as the scan itself).
+  void prepareSurvey() {
+    surveying = false;
+    float cell = 0.0f;
+    int axis = -1;
+    if (!(kProxyBoxesAreFloats && tuning.boxesInPlace) || liveCount < options().bruteForceBelow ||
+        !cpuFinder->surveyWanted(options(), cell, axis))
+      return;
+    survey.cell = cell;
+    survey.hugeCellLimit = tuning.hugeCellLimit;
+    survey.huge.clear();
+    survey.extents.axis = axis;
+    survey.extents.bySlot = true;
+    if (axis >= 0) survey.extents.lo.resize(slotCount), survey.extents.hi.resize(slotCount);
+    surveying = true;
+  }
+
   /// Takes each live proxy's filter from the proxy (Bullet code may edit it after creation); with `fill`,
   /// also writes the finder's view of every slot (its boxes too when the view has their arrays: this pass
-  /// reads every proxy anyway) and clears the kMoved bits (the view carries them). In parallel: each slot is
-  /// written by one task only. Returns true when a filter changed.
+  /// reads every proxy anyway), makes the survey when one was prepared, and clears the kMoved bits (the view
+  /// carries them). In parallel: each slot is written by one task only. Returns true when a filter changed.
   bool scan(bool fill) {
     // Proxies whose static bit flips here (rare: a filter edited on the proxy).
     std::atomic<std::int64_t> staticDelta{0};
@@ -195,9 +221,21 @@ struct GridBroadphase::Impl {
                           boxes ? view.axis(5) : nullptr};
     std::uint8_t* const flags = view.flags();
     std::uint8_t* const moved = view.moved();
+    // The survey: each task's huge slots and the bounds of its other visible boxes, merged below.
+    struct SurveyPart {
+      std::vector<std::uint32_t> huge;
+      float lo[3] = {kFloatMax, kFloatMax, kFloatMax};
+      float hi[3] = {-kFloatMax, -kFloatMax, -kFloatMax};
+    };
+    tbb::enumerable_thread_specific<SurveyPart> parts;
+    const bool surveyed = fill && surveying;
+    std::uint32_t* const extentLo = surveyed ? survey.extents.lo.data() : nullptr;
+    std::uint32_t* const extentHi = surveyed ? survey.extents.hi.data() : nullptr;
+    const int extentAxis = survey.extents.axis;
     const bool changed = tbb::parallel_reduce(
         tbb::blocked_range<std::uint32_t>(0, slotCount, kScanGrain), false,
         [&](const tbb::blocked_range<std::uint32_t>& r, bool changed) {
+          SurveyPart* const part = surveyed ? &parts.local() : nullptr;
           for (std::uint32_t s = r.begin(); s != r.end(); ++s) {
             std::uint8_t st = state[s];
             if (st & kLive) {
@@ -215,6 +253,19 @@ struct GridBroadphase::Impl {
               if (boxes)
                 for (int a = 0; a < 3; ++a)
                   lo[a][s] = float(p.m_aabbMin[a]), hi[a][s] = float(p.m_aabbMax[a]);
+              if (part && !(st & kNonFinite)) {
+                const BoxCorners c{{float(p.m_aabbMin[0]), float(p.m_aabbMin[1]), float(p.m_aabbMin[2])},
+                                   {float(p.m_aabbMax[0]), float(p.m_aabbMax[1]), float(p.m_aabbMax[2])}};
+                if (extentLo)
+                  extentLo[s] = floatBits(c.lo[extentAxis]), extentHi[s] = floatBits(c.hi[extentAxis]);
+                if (isHuge(c, survey.cell, survey.hugeCellLimit)) {
+                  part->huge.push_back(s);
+                } else {
+                  for (int a = 0; a < 3; ++a)
+                    part->lo[a] = std::min(part->lo[a], c.lo[a]),
+                    part->hi[a] = std::max(part->hi[a], c.hi[a]);
+                }
+              }
             } else if (fill) {
               flags[s] = 0;
               if (boxes)
@@ -230,7 +281,24 @@ struct GridBroadphase::Impl {
         },
         [](bool a, bool b) { return a || b; });
     staticCount = std::uint32_t(std::int64_t(staticCount) + staticDelta.load());
+    if (surveyed) {
+      survey.huge.clear();
+      for (int a = 0; a < 3; ++a) survey.lo[a] = kFloatMax, survey.hi[a] = -kFloatMax;
+      for (const SurveyPart& part : parts) {
+        survey.huge.insert(survey.huge.end(), part.huge.begin(), part.huge.end());
+        for (int a = 0; a < 3; ++a)
+          survey.lo[a] = std::min(survey.lo[a], part.lo[a]),
+          survey.hi[a] = std::max(survey.hi[a], part.hi[a]);
+      }
+      std::sort(survey.huge.begin(), survey.huge.end());
+    }
     return changed;
+  }
+
+  /// Frees the survey (the finder took its extents when it used them).
+  void releaseSurvey() {
+    survey = BoxSurvey{};
+    surveying = false;
   }
 
   /// Where each slot's box lies in its proxy (the caller checks kProxyBoxesAreFloats).
@@ -286,6 +354,7 @@ struct GridBroadphase::Impl {
     }
     v.group = group.data(), v.mask = mask.data(), v.flags = view.flags();
     v.moved = view.moved();
+    if (readsRecords && surveying) v.survey = &survey;
     // The finder carries resting pairs over from our copy of its last result instead of keeping its own.
     v.lastPairs = &current;
     // A proxy hidden or shown again is a life change the finder's incremental path does not see in `moved`.
@@ -625,16 +694,20 @@ void GridBroadphase::calculateOverlappingPairs(btDispatcher* dispatcher) {
   Impl& d = *m_impl;
   GridBroadphaseStats st;
   st.proxies = d.liveCount;
-  // When a box already changed, the scan fills the finder's view as it goes; otherwise it only looks for
-  // filter changes, and the view is filled when it found one.
-  if (d.dirty) d.view.allocate(d.slotCount, d.copyInScan());
-  if (d.scan(d.dirty)) {
+  // When a box already changed, the scan fills the finder's view as it goes (a filter it finds changed is
+  // marked moved there); otherwise it only looks for filter changes, and the view is filled when it found
+  // one. A second filling scan would find the moved marks cleared by the first.
+  const bool filling = d.dirty;
+  if (filling) d.view.allocate(d.slotCount, d.copyInScan()), d.prepareSurvey();
+  if (d.scan(filling) && !filling) {
     d.dirty = true;
     d.view.allocate(d.slotCount, d.copyInScan());
+    d.prepareSurvey();
     d.scan(true);
   }
   st.staticProxies = d.staticCount;
   if (!d.dirty) {
+    d.releaseSurvey();
     st.overlappingPairs = d.stats.overlappingPairs;
     st.memoryBytes = d.stats.memoryBytes;
     st.peakBytes = d.stats.memoryBytes;
@@ -663,13 +736,15 @@ void GridBroadphase::calculateOverlappingPairs(btDispatcher* dispatcher) {
   st.restingProxies = fs.restingProxies;
   st.rebinnedProxies = fs.rebinnedProxies;
   st.cellSize = fs.cellSize;
+  st.boxesSurveyed = fs.surveyTaken;
   st.overlappingPairs = d.found.size();
   // The peak: everything held after the step (this step's pair list included) and the last step's pair list,
   // plus the larger of the search's extra (the view and the finder's high-water mark above what it keeps)
   // and the diff's lists of changes.
   const std::size_t stepBytes =
-      d.view.bytes() + std::max(fs.peakScratchBytes, fs.scratchBytes) - fs.scratchBytes;
+      d.view.bytes() + d.survey.bytes() + std::max(fs.peakScratchBytes, fs.scratchBytes) - fs.scratchBytes;
   d.view.release();
+  d.releaseSurvey();
   d.diffAndUpdateCache(dispatcher, st);
   for (std::uint32_t s : d.pendingFree) {
     d.state[s] = std::uint8_t(d.state[s] & ~kFreed);
