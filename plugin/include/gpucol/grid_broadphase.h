@@ -29,7 +29,7 @@ struct GridBroadphaseTuning {
   /// CPU path: read each box where Bullet's proxy holds it instead of from a copy of every box made for the
   /// search, and search slabs at any size: 24 bytes less per proxy at the peak of a step (about 100 less at
   /// 1M proxies), at the cost of reading the larger, scattered proxies instead of compact arrays (steps took
-  /// 1.06-1.19 times as long at 100K moving proxies; the README measures both). Needs single-precision
+  /// 1.04-1.15 times as long at 100K moving proxies; the README measures both). Needs single-precision
   /// Bullet; ignored otherwise.
   bool boxesInPlace = false;
 };

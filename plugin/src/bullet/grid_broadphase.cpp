@@ -336,7 +336,7 @@ struct GridBroadphase::Impl {
 
   /// The finder's view of the filled buffer (consumes nonFiniteChanged): the boxes in the proxies when
   /// `readsRecords`, else in the view's arrays (the proxies read once, then a copy less than half their size:
-  /// at 100K moving boxes, steps took 1.06-1.19 times as long in place; README), which the scan filled unless
+  /// at 100K moving boxes, steps took 1.04-1.15 times as long in place; README), which the scan filled unless
   /// boxesInPlace met a finder that cannot read them in place.
   ProxyArrays finderView(bool readsRecords) {
     ProxyArrays v;
