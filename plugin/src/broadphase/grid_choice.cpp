@@ -192,7 +192,6 @@ Grid chooseGrid(const ProxyArrays& p, const std::vector<std::uint32_t>& active,
   }
   for (int a = 0; a < 3; ++a) g.origin[a] = bmin[a];
   g.cell = cell;
-  g.sizedCell = sizedCell;
   g.invCell = 1.0f / cell;
   return g;
 }

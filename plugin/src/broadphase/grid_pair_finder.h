@@ -83,10 +83,10 @@ struct BoxRecords {
 /// far apart (a slab's boxes in Bullet's proxies). Walks over every slot in order gained nothing from it.
 constexpr std::size_t kBoxPrefetchAhead = 16;
 
-/// Structure-of-arrays view of every proxy slot, the boxes in six arrays or in the caller's records (the pair
-/// finder reads it, never writes it).
 struct BoxSurvey;  // grid_choice.h
 
+/// Structure-of-arrays view of every proxy slot, the boxes in six arrays or in the caller's records (the pair
+/// finder reads it, never writes it, but for taking a survey's arrays).
 struct ProxyArrays {
   /// Number of slots (live proxies and holes); every array below has this many entries.
   std::uint32_t count = 0;
