@@ -94,6 +94,31 @@ void randomBox(std::mt19937& rng, Box& b, float side) {
   b.hi = c + h;
 }
 
+/// A grid broad phase (the grid from 100 proxies) and Bullet's default dispatcher.
+struct GridWorld {
+  gpucol::Config config = [] {
+    gpucol::Config c;
+    c.bruteForceBelow = 100;
+    return c;
+  }();
+  gpucol::GridBroadphase bp{config};
+  btDefaultCollisionConfiguration configuration;
+  btCollisionDispatcher dispatcher{&configuration};
+};
+
+/// `count` random boxes in a cube of half side `side`, each given a proxy in `bp` (ids are indices), then
+/// one step.
+std::vector<Box> createAndStep(gpucol::GridBroadphase& bp, int count, float side, std::mt19937& rng,
+                               btDispatcher* dispatcher) {
+  std::vector<Box> boxes(std::size_t(count), Box{});
+  for (int i = 0; i < count; ++i) {
+    randomBox(rng, boxes[std::size_t(i)], side);
+    addProxy(bp, boxes, i, dispatcher);
+  }
+  bp.calculateOverlappingPairs(dispatcher);
+  return boxes;
+}
+
 void runSteps(gpucol::GridBroadphase& bp, btOverlappingPairCache* cache, int count, std::uint32_t seed) {
   std::mt19937 rng(seed);
   std::vector<Box> boxes(count);
@@ -294,18 +319,11 @@ TEST(GridBroadphase, BoxesReadInPlaceAreSurveyedByTheScan) {
 TEST(GridBroadphase, FilterEditedInAStepWhereBoxesMovedKeepsTheMoves) {
   // A filter edited on a proxy in a step where boxes also moved: the scan that fills the finder's view marks
   // both kinds of change. A few boxes move, so the finder searches its kept grid for the moved ones only.
-  gpucol::Config config;
-  config.bruteForceBelow = 100;
-  gpucol::GridBroadphase bp(config);
-  btDefaultCollisionConfiguration configuration;
-  btCollisionDispatcher dispatcher(&configuration);
+  GridWorld world;
+  gpucol::GridBroadphase& bp = world.bp;
+  btCollisionDispatcher& dispatcher = world.dispatcher;
   std::mt19937 rng(6);
-  std::vector<Box> boxes(4000);
-  for (std::size_t i = 0; i < boxes.size(); ++i) {
-    randomBox(rng, boxes[i], 20.0f);
-    addProxy(bp, boxes, int(i), &dispatcher);
-  }
-  bp.calculateOverlappingPairs(&dispatcher);
+  std::vector<Box> boxes = createAndStep(bp, 4000, 20.0f, rng, &dispatcher);
   ASSERT_EQ(cachePairs(bp.getOverlappingPairCache()), bruteForce(boxes));
   for (int round = 0; round < 3; ++round) {
     for (std::size_t i = round; i < boxes.size(); i += 50) {
@@ -326,18 +344,11 @@ TEST(GridBroadphase, FiltersEditedOnTheProxyAreTakenUp) {
   // Bullet code may change m_collisionFilterGroup/Mask on a proxy after creating it, without any setAabb:
   // the next step takes the new filters (pairs vanish, static-static pairs go, and come back when
   // restored). 20,000 boxes, so the per-step scan of the filters runs over more than one parallel task.
-  gpucol::Config config;
-  config.bruteForceBelow = 100;
-  gpucol::GridBroadphase bp(config);
-  btDefaultCollisionConfiguration configuration;
-  btCollisionDispatcher dispatcher(&configuration);
+  GridWorld world;
+  gpucol::GridBroadphase& bp = world.bp;
+  btCollisionDispatcher& dispatcher = world.dispatcher;
   std::mt19937 rng(5);
-  std::vector<Box> boxes(20000);
-  for (std::size_t i = 0; i < boxes.size(); ++i) {
-    randomBox(rng, boxes[i], 30.0f);
-    addProxy(bp, boxes, int(i), &dispatcher);
-  }
-  bp.calculateOverlappingPairs(&dispatcher);
+  std::vector<Box> boxes = createAndStep(bp, 20000, 30.0f, rng, &dispatcher);
   const std::set<IdPair> original = bruteForce(boxes);
   ASSERT_EQ(cachePairs(bp.getOverlappingPairCache()), original);
   for (int round = 0; round < 2; ++round) {
