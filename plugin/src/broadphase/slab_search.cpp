@@ -249,9 +249,14 @@ SlabSearchCounts SlabSearch::searchSlab(std::size_t slab, const ProxyArrays& p,
   std::uint32_t dims[3] = {g.dims[0], g.dims[1], g.dims[2]};
   dims[A] = a1 - a0;
   const std::uint32_t cells = dims[0] * dims[1] * dims[2];  // at most the global grid's count (32 bits)
-  auto toSlab = [&](CellRange r) {
-    r.lo[A] = std::max(r.lo[A], a0) - a0;
-    r.hi[A] = std::min(r.hi[A], a1 - 1) - a0;
+  // Built axis by axis rather than by writing r.lo[A] in place: the store at a run-time index and the 16-byte
+  // reload of the range that followed could not be forwarded and stalled the copy of every box.
+  auto toSlab = [&](const CellRange& whole) {
+    CellRange r;
+    for (int i = 0; i < 3; ++i) {
+      r.lo[i] = i == A ? std::max(whole.lo[i], a0) - a0 : whole.lo[i];
+      r.hi[i] = i == A ? std::min(whole.hi[i], a1 - 1) - a0 : whole.hi[i];
+    }
     return r;
   };
   Scratch& t = m_scratch.local();
