@@ -1,7 +1,7 @@
 // gpucol::GridBroadphase: Bullet's side of the grid broad phase. Proxies live in fixed blocks (stable
-// addresses) and are the one place a box is kept between steps; each search copies the live boxes into a
-// structure-of-arrays view for the pair finder (broadphase/grid_pair_finder.h) and drops it afterwards, or,
-// with GridBroadphaseTuning::boxesInPlace, lets the CPU finder read them in the proxies. Each step's sorted
+// addresses) and are the one place a box is kept between steps; the CPU finder reads the boxes in the
+// proxies (GridBroadphaseTuning::boxesInPlace), and for any other finder each search copies the live boxes
+// into a structure-of-arrays view (broadphase/grid_pair_finder.h) and drops it afterwards. Each step's sorted
 // pair list is diffed against the last one so the pair cache only sees additions and removals (DESIGN.md,
 // data flow): the diff lists them, then the cache gets them. That list is also the pair finder's previous
 // result, which it carries resting pairs over from (no second copy is kept).
@@ -335,9 +335,9 @@ struct GridBroadphase::Impl {
   bool copyInScan() const { return !(kProxyBoxesAreFloats && tuning.boxesInPlace); }
 
   /// The finder's view of the filled buffer (consumes nonFiniteChanged): the boxes in the proxies when
-  /// `readsRecords`, else in the view's arrays (the proxies read once, then a copy less than half their size:
-  /// at 100K moving boxes, steps took 1.04-1.15 times as long in place; README), which the scan filled unless
-  /// boxesInPlace met a finder that cannot read them in place.
+  /// `readsRecords`, else in the view's arrays (a copy less than half the proxies' size, which took 24 more
+  /// bytes per proxy at the peak and no less time: README), which the scan filled unless boxesInPlace met a
+  /// finder that cannot read them in place.
   ProxyArrays finderView(bool readsRecords) {
     ProxyArrays v;
     v.count = slotCount;
