@@ -231,8 +231,10 @@ class CpuPairFinder final : public PairFinder {
   void testRuns(const PairFinderOptions& options, const Grid& g);
   void testHuge(const ProxyArrays& p, const Grid& g);
   void gather(std::vector<std::uint64_t>& pairs);
-  bool keepGrid(const ProxyArrays& p, const PairFinderOptions& options);
-  void incremental(const ProxyArrays& p, const PairFinderOptions& options, std::vector<std::uint64_t>& pairs);
+  bool keepGrid(const ProxyArrays& p, const PairFinderOptions& options, std::uint32_t activeCount);
+  void incremental(const ProxyArrays& p, const PairFinderOptions& options, std::uint32_t activeCount,
+                   std::vector<std::uint64_t>& pairs);
+  void listActive(const ProxyArrays& p, std::uint32_t activeCount);
   std::size_t scratchBytes() const;
   bool fewMoved(const ProxyArrays& p) const;
   void releaseScratch();
@@ -304,25 +306,25 @@ void CpuPairFinder::findPairs(const ProxyArrays& proxies, const PairFinderOption
     return;
   }
   pairs.clear();
-  // Stage 0: the active list, ascending, so brute force emits keys already in order.
-  m_active.clear();
-  m_active.reserve(proxies.count);  // exactly: grown by push_back it could hold twice its entries
-  for (std::uint32_t s = 0; s < proxies.count; ++s)
-    if (proxies.flags[s] & kProxyActive) m_active.push_back(s);
-  if (m_active.size() < 2) {
+  // Stage 0: the active proxies, counted; the full searches list them (listActive), the incremental one
+  // (stage 11) needs no list of every proxy.
+  std::uint32_t activeCount = 0;
+  for (std::uint32_t s = 0; s < proxies.count; ++s) activeCount += proxies.flags[s] & kProxyActive;
+  if (activeCount < 2) {
     m_kept = false;
     m_lastPairs.clear();
     return;
   }
-  const std::uint32_t activeCount = std::uint32_t(m_active.size());  // a grid search may free m_active
   // Stage 1: the path.
-  if (m_active.size() < options.bruteForceBelow) {
+  if (activeCount < options.bruteForceBelow) {
     m_kept = false;
     m_lastSizedCell = 0.0f;
+    listActive(proxies, activeCount);
     bruteForce(proxies, options, pairs);
-  } else if (keepGrid(proxies, options)) {
-    incremental(proxies, options, pairs);
+  } else if (keepGrid(proxies, options, activeCount)) {
+    incremental(proxies, options, activeCount, pairs);
   } else {
+    listActive(proxies, activeCount);
     // Stage 11: keep this grid (dense grids only: their cells are looked up directly) after a first search
     // (nothing is known about motion yet: a world starts at rest) or when few proxies changed since the
     // last one (a scene coming to rest). Where most move, the next search is a full one anyway, and keeping
@@ -351,6 +353,15 @@ void CpuPairFinder::findPairs(const ProxyArrays& proxies, const PairFinderOption
   m_stats.scratchBytes = scratchBytes();
 }
 
+void CpuPairFinder::listActive(const ProxyArrays& p, std::uint32_t activeCount) {
+  // Ascending, so brute force emits keys already in order; reserved exactly (grown by push_back it could
+  // hold twice its entries).
+  m_active.clear();
+  m_active.reserve(activeCount);
+  for (std::uint32_t s = 0; s < p.count; ++s)
+    if (p.flags[s] & kProxyActive) m_active.push_back(s);
+}
+
 bool CpuPairFinder::fewMoved(const ProxyArrays& p) const {
   const std::size_t limit = std::size_t(kIncrementalFraction * double(m_active.size()));
   std::size_t moved = 0;
@@ -372,9 +383,13 @@ void CpuPairFinder::releaseScratch() {
   release(m_chunkPairs);
   m_slabs.release();
   if (!m_kept) release(m_cellStart), release(m_sorted), release(m_unchanged), release(m_keptHuge);
+  // While the grid is kept, searches are incremental and name kept boxes through the home order alone; the
+  // slots' places in it are rebuilt by a full search that reuses the order (binSorted).
+  if (m_kept) release(m_homePos);
 }
 
-bool CpuPairFinder::keepGrid(const ProxyArrays& p, const PairFinderOptions& options) {
+bool CpuPairFinder::keepGrid(const ProxyArrays& p, const PairFinderOptions& options,
+                             std::uint32_t activeCount) {
   if (!m_kept || p.moved == nullptr || (m_callerKeepsPairs && p.lastPairs == nullptr) ||
       options.cellSizeRule != m_keptOptions.cellSizeRule ||
       options.hugeCellLimit != m_keptOptions.hugeCellLimit || options.output != m_keptOptions.output ||
@@ -385,7 +400,7 @@ bool CpuPairFinder::keepGrid(const ProxyArrays& p, const PairFinderOptions& opti
   // A slot stays unchanged while it stays active and does not move; new slots start changed.
   if (m_unchanged.size() < p.count) m_unchanged.resize(p.count, 0);
   m_moved.clear();
-  const std::size_t limit = std::size_t(kIncrementalFraction * double(m_active.size()));
+  const std::size_t limit = std::size_t(kIncrementalFraction * double(activeCount));
   for (std::uint32_t s = 0; s < p.count; ++s) {
     if (p.moved[s] || !(p.flags[s] & kProxyActive)) m_unchanged[s] = 0;
     if ((p.flags[s] & kProxyActive) && !m_unchanged[s]) {
@@ -400,18 +415,13 @@ bool CpuPairFinder::keepGrid(const ProxyArrays& p, const PairFinderOptions& opti
 }
 
 void CpuPairFinder::incremental(const ProxyArrays& p, const PairFinderOptions& options,
-                                std::vector<std::uint64_t>& pairs) {
+                                std::uint32_t activeCount, std::vector<std::uint64_t>& pairs) {
   const Grid& g = m_keptGrid;
   m_stats.usedGrid = true;
   m_stats.incremental = true;
   m_stats.cellSize = g.cell;
   for (int a = 0; a < 3; ++a) m_stats.dims[a] = g.dims[a];
-  m_stats.restingProxies = std::uint32_t(m_active.size() - m_moved.size());
-  // Pairs of two unchanged proxies are carried over: neither box nor filter changed.
-  std::vector<std::uint64_t>& carried = m_keys;  // scratch of the sparse path, free here
-  carried.clear();
-  for (std::uint64_t key : m_callerKeepsPairs ? *p.lastPairs : m_lastPairs)
-    if (m_unchanged[std::uint32_t(key >> 32)] && m_unchanged[std::uint32_t(key)]) carried.push_back(key);
+  m_stats.restingProxies = std::uint32_t(activeCount - m_moved.size());
 
   // Moved proxies: huge ones (on the kept cell size) test against every active proxy; the others are
   // binned on the kept grid, looked up in its cells (stage 9's rule reports each pair in one cell) and
@@ -429,8 +439,8 @@ void CpuPairFinder::incremental(const ProxyArrays& p, const PairFinderOptions& o
       const std::uint32_t sm = m_moved[i];
       const LocalBox a = boxOf(p, sm);
       if (movedHuge[i]) {
-        for (std::uint32_t s : m_active) {
-          if (s == sm) continue;
+        for (std::uint32_t s = 0; s < p.count; ++s) {
+          if (s == sm || !(p.flags[s] & kProxyActive)) continue;
           if (!m_unchanged[s]) {
             // Another moved proxy: a huge one's pair belongs to the lower slot's row; a binned one's to ours.
             const std::size_t j =
@@ -488,8 +498,25 @@ void CpuPairFinder::incremental(const ProxyArrays& p, const PairFinderOptions& o
   m_stats.candidates = candidates;
   gather(m_movedKeys);  // the new pairs (m_movedKeys is free again)
   sortPairs(m_movedKeys, m_sortScratch, slotBitsFor(p.count));
-  pairs.resize(carried.size() + m_movedKeys.size());
-  std::merge(carried.begin(), carried.end(), m_movedKeys.begin(), m_movedKeys.end(), pairs.begin());
+  // Pairs of two unchanged proxies are carried over (neither box nor filter changed), straight into `pairs`,
+  // sized exactly, and the new pairs merged in from the back: no second list of the carried pairs.
+  const std::vector<std::uint64_t>& last = m_callerKeepsPairs ? *p.lastPairs : m_lastPairs;
+  auto resting = [&](std::uint64_t key) {
+    return m_unchanged[std::uint32_t(key >> 32)] && m_unchanged[std::uint32_t(key)];
+  };
+  const std::size_t carried = std::size_t(std::count_if(last.begin(), last.end(), resting));
+  pairs.reserve(carried + m_movedKeys.size());
+  for (std::uint64_t key : last)
+    if (resting(key)) pairs.push_back(key);
+  std::size_t fromCarried = carried, fromNew = m_movedKeys.size();
+  pairs.resize(carried + fromNew);
+  for (std::size_t to = pairs.size(); fromNew > 0;) {
+    // A pair is never both carried and new (a new one has a moved proxy).
+    if (fromCarried > 0 && pairs[fromCarried - 1] > m_movedKeys[fromNew - 1])
+      pairs[--to] = pairs[--fromCarried];
+    else
+      pairs[--to] = m_movedKeys[--fromNew];
+  }
 }
 
 void CpuPairFinder::bruteForce(const ProxyArrays& p, const PairFinderOptions& options,
@@ -571,7 +598,7 @@ void CpuPairFinder::binSorted(const ProxyArrays& p, const Grid& g) {
     std::vector<std::uint64_t>().swap(m_homeKeys);  // scratch of a rare path: not kept
     m_homeOrderAge = 0;
   }
-  if (m_homeOrderAge == 0) {
+  if (m_homeOrderAge == 0 || m_homePos.empty()) {
     m_homePos.resize(p.count);
     tbb::parallel_for(tbb::blocked_range<std::size_t>(0, n, 4096),
                       [&](const tbb::blocked_range<std::size_t>& r) {
