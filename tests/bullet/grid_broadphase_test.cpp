@@ -256,6 +256,43 @@ TEST(GridBroadphase, BoxesCopiedForTheSearchGiveTheSamePairsAsInPlace) {
   expectInPlaceSamePairsLowerPeak(config, 4000, 40.0f, 4, 20, 0);
 }
 
+/// Issue 4's memory target: at most 100 bytes per proxy plus 8 per pair at the peak of a step
+/// (GridBroadphaseStats::peakBytes), with the default tuning, once every box moves each step and once 1% do
+/// (stage 11 on the kept grid). A sparse cloud, about 0.5 pairs per proxy. Copying the boxes for the search
+/// (boxesInPlace false) misses it by about 20 bytes. Not asserted: the first step and the step that keeps the
+/// grid for stage 11 search the grid whole, and peaked at 158 and 170 here (README).
+TEST(GridBroadphase, PeakOfAStepStaysWithin100BytesPerProxyPlus8PerPair) {
+  // Each thread that takes a slab holds its own scratch: one thread makes the peaks repeatable.
+  tbb::global_control oneThread(tbb::global_control::max_allowed_parallelism, 1);
+  btDefaultCollisionConfiguration configuration;
+  btCollisionDispatcher dispatcher(&configuration);
+  gpucol::GridBroadphase bp;  // Config and tuning defaults
+  const int count = 40000;
+  std::mt19937 rng(17);
+  std::vector<Box> boxes = createAndStep(bp, count, 48.0f, rng, &dispatcher);
+  auto peakPerProxy = [&] {
+    return (double(bp.stats().peakBytes) - 8.0 * double(bp.stats().overlappingPairs)) / double(count);
+  };
+  auto moveAndStep = [&](int every) {
+    const btVector3 d(0.01f, 0.0f, 0.0f);
+    for (int i = 0; i < count; i += every) {
+      Box& b = boxes[std::size_t(i)];
+      b.lo += d, b.hi += d;
+      bp.setAabb(b.proxy, b.lo, b.hi, &dispatcher);
+    }
+    bp.calculateOverlappingPairs(&dispatcher);
+  };
+  for (int t = 0; t < 3; ++t) moveAndStep(1);
+  ASSERT_TRUE(bp.stats().usedGrid);
+  ASSERT_EQ(bp.stats().rebinnedProxies, std::uint32_t(count));
+  ASSERT_GT(bp.stats().overlappingPairs, std::uint64_t(count / 4));
+  EXPECT_LE(peakPerProxy(), 100.0) << "every box moving";
+  moveAndStep(100);  // the step that keeps the grid for stage 11
+  for (int t = 0; t < 3; ++t) moveAndStep(100);
+  ASSERT_EQ(bp.stats().restingProxies, std::uint32_t(count - count / 100));
+  EXPECT_LE(peakPerProxy(), 100.0) << "1% of the boxes moving";
+}
+
 /// In place, the step's scan of the proxies surveys the boxes for the grid choice (BoxSurvey): every box
 /// moves each step, some vanish and appear (slots reused), a few are huge, one box is NaN for a while, a
 /// filter is edited on a proxy (the scan then runs twice) and at one step every box grows tenfold (the
