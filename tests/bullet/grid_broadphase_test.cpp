@@ -259,8 +259,8 @@ TEST(GridBroadphase, BoxesCopiedForTheSearchGiveTheSamePairsAsInPlace) {
 /// Issue 4's memory target: at most 100 bytes per proxy plus 8 per pair at the peak of a step
 /// (GridBroadphaseStats::peakBytes), with the default tuning, once every box moves each step and once 1% do
 /// (stage 11 on the kept grid). A sparse cloud, about 0.5 pairs per proxy. Copying the boxes for the search
-/// (boxesInPlace false) misses it by about 20 bytes. Not asserted: the first step and the step that keeps the
-/// grid for stage 11 search the grid whole, and peaked at 158 and 170 here (README).
+/// (boxesInPlace false) adds 24 bytes per proxy at the peak (README) and fails it. Not asserted: the first
+/// step and the step that keeps the grid for stage 11 search the grid whole, and peaked at 158 and 170 here.
 TEST(GridBroadphase, PeakOfAStepStaysWithin100BytesPerProxyPlus8PerPair) {
   // Each thread that takes a slab holds its own scratch: one thread makes the peaks repeatable.
   tbb::global_control oneThread(tbb::global_control::max_allowed_parallelism, 1);
