@@ -330,6 +330,13 @@ TEST(GridPairFinder, GridChoiceTakesTheCallersSurvey) {
   std::vector<std::uint64_t> pairs;
   finder->findPairs(s.recordView(), o, pairs);
   ASSERT_EQ(pairs, reference);
+  EXPECT_FALSE(finder->surveyWanted(o, cell, axis)) << "a first search keeps its grid for few moves";
+  // Every box moved: a full search, which keeps no grid.
+  const std::vector<std::uint8_t> moved(s.flags.size(), 1);
+  gpucol::ProxyArrays allMoved = s.recordView();
+  allMoved.moved = moved.data();
+  finder->findPairs(allMoved, o, pairs);
+  ASSERT_EQ(pairs, reference);
   const std::uint32_t hugeWalked = finder->stats().hugeProxies;
   EXPECT_GE(hugeWalked, 10u);
   ASSERT_TRUE(finder->surveyWanted(o, cell, axis));
@@ -350,7 +357,7 @@ TEST(GridPairFinder, GridChoiceTakesTheCallersSurvey) {
   for (const Case& c : cases) {
     gpucol::BoxSurvey survey = surveyOf(s, cell * c.cellFactor, o.hugeCellLimit, c.axis);
     if (c.clearHuge) survey.huge.clear();
-    gpucol::ProxyArrays v = s.recordView();
+    gpucol::ProxyArrays v = allMoved;
     v.survey = &survey;
     finder->findPairs(v, o, pairs);
     ASSERT_EQ(pairs, reference) << c.what;
@@ -443,8 +450,9 @@ TEST(GridPairFinder, AddAndRemoveBetweenSearches) {
 /// box moves; the pairs must equal brute force and the unchanged proxies must be counted as resting.
 /// With `callerKeepsPairs`, the caller hands the finder its previous result (ProxyArrays::lastPairs), as
 /// GridBroadphase does (with the boxes in records, as it does too), except at one step, which must then be a
-/// full search.
-void restingScenario(bool callerKeepsPairs) {
+/// full search. `tiling`: Auto cuts the full searches into slabs and bins the kept grid after them; Off keeps
+/// the whole-grid search's own cells and entries.
+void restingScenario(bool callerKeepsPairs, gpucol::SlabTiling tiling) {
   Scene s = uniformCloud(6000, 20.0f, 0.7f, 12);
   for (std::size_t i = 0; i < s.flags.size(); i += 5) s.flags[i] |= gpucol::kProxyStatic;
   s.add(0, -20.5f, 0, 25.0f, 0.5f, 25.0f, gpucol::kProxyActive | gpucol::kProxyStatic);  // huge static ground
@@ -456,6 +464,7 @@ void restingScenario(bool callerKeepsPairs) {
   auto finder = gpucol::makeCpuPairFinder();
   gpucol::PairFinderOptions o;
   o.bruteForceBelow = 0;
+  o.slabTiling = tiling;
   int incrementalSteps = 0;
   constexpr int kWithoutLastPairs = 9;  // with callerKeepsPairs: the step that does not hand them over
   std::vector<std::uint64_t> last;
@@ -479,6 +488,7 @@ void restingScenario(bool callerKeepsPairs) {
     EXPECT_EQ(st.restingProxies + st.rebinnedProxies, active) << "step " << t;
     if (t == 0) {
       EXPECT_FALSE(st.incremental) << "the first search has no grid to keep";
+      EXPECT_EQ(st.slabs > 0, tiling == gpucol::SlabTiling::Auto);
     }
     if (st.incremental) {
       ++incrementalSteps;
@@ -535,11 +545,17 @@ void restingScenario(bool callerKeepsPairs) {
 }
 
 TEST(GridPairFinder, RestingProxiesAreNotRebinnedAndPairsStayExact) {
-  restingScenario(false);
+  for (auto tiling : {gpucol::SlabTiling::Auto, gpucol::SlabTiling::Off}) {
+    SCOPED_TRACE(tiling == gpucol::SlabTiling::Auto ? "slabs" : "whole grid");
+    restingScenario(false, tiling);
+  }
 }
 
 TEST(GridPairFinder, RestingPairsCarriedOverFromTheCallersCopy) {
-  restingScenario(true);
+  for (auto tiling : {gpucol::SlabTiling::Auto, gpucol::SlabTiling::Off}) {
+    SCOPED_TRACE(tiling == gpucol::SlabTiling::Auto ? "slabs" : "whole grid");
+    restingScenario(true, tiling);
+  }
 }
 
 TEST(GridPairFinder, SparseGridPath) {
@@ -553,44 +569,99 @@ TEST(GridPairFinder, SparseGridPath) {
   expectMatchesBruteForce(s, "sparse");
 }
 
-/// SlabTiling::Auto: a first search keeps its grid for stage 11 (searched whole); a search where most proxies
-/// moved is cut into slabs, with the same pairs and the same (cell, box) entries; a search where few moved
-/// uses the kept grid again. Huge boxes cross many slabs, some through their cells, some one by one.
-TEST(GridPairFinder, SlabSearchWhenMostProxiesMove) {
+/// Stage 11 finds a moved box's pairs with unchanged boxes through the kept grid's entries alone, so every
+/// binned box must be listed, under its own name, in every cell it overlaps. Each round a fresh finder keeps
+/// the grid of its first search and then one tenth of the boxes are marked moved (without moving, so brute
+/// force stays the reference); over ten rounds every box is looked up from the other nine tenths, through
+/// the grid binned after the slabs and through the whole-grid search's own.
+TEST(GridPairFinder, KeptGridListsEveryBoxInEveryCellItOverlaps) {
+  Scene s = uniformCloud(5000, 16.0f, 0.9f, 41);
+  s.add(0, 0, 0, 4, 4, 4);  // a huge box (kept aside, tested one by one)
+  const std::vector<std::uint64_t> reference = gpucol::findPairsBruteForce(s.view());
+  ASSERT_GE(reference.size(), 3000u);
+  for (auto tiling : {gpucol::SlabTiling::Auto, gpucol::SlabTiling::Off}) {
+    gpucol::PairFinderOptions o;
+    o.bruteForceBelow = 0;
+    o.slabTiling = tiling;
+    for (std::size_t round = 0; round < 10; ++round) {
+      SCOPED_TRACE(std::string(tiling == gpucol::SlabTiling::Auto ? "slabs" : "whole grid") + ", round " +
+                   std::to_string(round));
+      auto finder = gpucol::makeCpuPairFinder();
+      gpucol::ProxyArrays view = s.view();
+      std::vector<std::uint64_t> pairs;
+      finder->findPairs(view, o, pairs);
+      EXPECT_EQ(finder->stats().slabs > 0, tiling == gpucol::SlabTiling::Auto);
+      std::vector<std::uint8_t> moved(s.flags.size(), 0);
+      for (std::size_t i = round; i < moved.size(); i += 10) moved[i] = 1;
+      view.moved = moved.data();
+      finder->findPairs(view, o, pairs);
+      ASSERT_TRUE(finder->stats().incremental);
+      ASSERT_EQ(pairs, reference);
+    }
+  }
+}
+
+/// SlabTiling::Auto cuts full searches into slabs, with the same pairs and the same (cell, box) entries as
+/// the whole grid (Off), and bins the grid of a first search, or of one where few proxies moved, after the
+/// slabs for stage 11, whose next search then uses it. Huge boxes cross many slabs, some through their
+/// cells, some one by one.
+TEST(GridPairFinder, SlabSearchAndTheGridKeptAfterIt) {
   Scene s = uniformCloud(12000, 22.0f, 0.6f, 13);
   s.add(0, -23, 0, 30, 1, 30);  // a ground box crossing every slab: tested one by one
   s.add(0, 0, 0, 5, 5, 5);      // a box of a few hundred cells: tested through its cells
   s.add(10, 5, -8, 1, 25, 1);   // a pillar along the slab axis
   std::vector<std::uint8_t> moved(s.flags.size(), 1);
   auto finder = gpucol::makeCpuPairFinder();
-  gpucol::PairFinderOptions o;
-  o.bruteForceBelow = 0;
+  gpucol::PairFinderOptions o, whole;
+  o.bruteForceBelow = whole.bruteForceBelow = 0;
+  whole.slabTiling = gpucol::SlabTiling::Off;
   std::vector<std::uint64_t> pairs;
   gpucol::ProxyArrays view = s.view();
-  finder->findPairs(view, o, pairs);
-  EXPECT_EQ(finder->stats().slabs, 0u) << "a first search keeps its grid";
-  const std::uint64_t wholeKeys = finder->stats().keys;
-  ASSERT_EQ(pairs, gpucol::findPairsBruteForce(view));
-
-  view.moved = moved.data();
-  finder->findPairs(view, o, pairs);
+  auto wholeFinder = gpucol::makeCpuPairFinder();
+  wholeFinder->findPairs(view, whole, pairs);
+  EXPECT_EQ(wholeFinder->stats().slabs, 0u);
+  auto search = [&](const char* what) {
+    SCOPED_TRACE(what);
+    finder->findPairs(view, o, pairs);
+    ASSERT_EQ(pairs, gpucol::findPairsBruteForce(view));
+  };
+  search("first");
   EXPECT_GE(finder->stats().slabs, 8u);
   EXPECT_GE(finder->stats().hugeProxies, 3u);
-  EXPECT_EQ(finder->stats().keys, wholeKeys) << "each (cell, box) entry lies in one slab";
-  ASSERT_EQ(pairs, gpucol::findPairsBruteForce(view));
-
+  EXPECT_EQ(finder->stats().keys, wholeFinder->stats().keys) << "each (cell, box) entry lies in one slab";
+  EXPECT_FALSE(finder->stats().incremental);
+  // A step where few proxies move. The first search kept its grid: only the moved are binned.
+  view.moved = moved.data();
   std::fill(moved.begin(), moved.end(), std::uint8_t(0));
-  for (std::size_t i = 0; i < moved.size(); i += 50) {
-    s.minY[i] += 0.2f, s.maxY[i] += 0.2f;
-    moved[i] = 1;
-  }
-  finder->findPairs(view, o, pairs);
-  EXPECT_EQ(finder->stats().slabs, 0u) << "few moved: the grid of this search is kept";
-  ASSERT_EQ(pairs, gpucol::findPairsBruteForce(view));
+  auto moveFew = [&](std::size_t first) {
+    for (std::size_t i = first; i < moved.size(); i += 50) {
+      s.minY[i] += 0.2f, s.maxY[i] += 0.2f;
+      moved[i] = 1;
+    }
+  };
+  moveFew(0);
+  search("few moved after the first");
+  EXPECT_TRUE(finder->stats().incremental);
+  EXPECT_EQ(finder->stats().slabs, 0u);
+  // Most move: a slab search that keeps nothing.
+  std::fill(moved.begin(), moved.end(), std::uint8_t(1));
+  search("all moved");
+  EXPECT_GE(finder->stats().slabs, 8u);
+  EXPECT_FALSE(finder->stats().incremental);
+  // Few moved since: a slab search whose grid is kept, then the kept grid serves.
+  std::fill(moved.begin(), moved.end(), std::uint8_t(0));
+  moveFew(7);
+  search("few moved after all moved");
+  EXPECT_GE(finder->stats().slabs, 8u);
+  EXPECT_FALSE(finder->stats().incremental);
+  std::fill(moved.begin(), moved.end(), std::uint8_t(0));
+  moveFew(13);
+  search("few moved again");
+  EXPECT_TRUE(finder->stats().incremental);
 }
 
 /// Beyond kMaxSlabBoxes (2^18) binned boxes Auto searches the grid whole and AnySize still in slabs, with the
-/// same pairs; both keep the grid of a first search whole for stage 11.
+/// same pairs, in a first search (whose grid both keep for stage 11) and in one where all moved.
 TEST(GridPairFinder, SlabSearchAtAnySize) {
   const Scene s = uniformCloud(270000, 90.0f, 0.6f, 17);
   std::vector<std::uint8_t> moved(s.flags.size(), 1);
@@ -602,14 +673,17 @@ TEST(GridPairFinder, SlabSearchAtAnySize) {
     o.slabTiling = tiling;
     std::vector<std::uint64_t>& pairs = tiling == gpucol::SlabTiling::Auto ? whole : slabs;
     view.moved = nullptr;
-    finder->findPairs(view, o, pairs);
-    EXPECT_EQ(finder->stats().slabs, 0u) << "a first search keeps its grid";
-    view.moved = moved.data();
-    finder->findPairs(view, o, pairs);
-    if (tiling == gpucol::SlabTiling::Auto)
-      EXPECT_EQ(finder->stats().slabs, 0u);
-    else
-      EXPECT_GE(finder->stats().slabs, 8u);
+    for (int step = 0; step < 2; ++step) {
+      std::vector<std::uint64_t> found;
+      finder->findPairs(view, o, found);
+      if (tiling == gpucol::SlabTiling::Auto)
+        EXPECT_EQ(finder->stats().slabs, 0u);
+      else
+        EXPECT_GE(finder->stats().slabs, 8u);
+      if (step == 0) pairs = found;
+      EXPECT_EQ(found, pairs) << "step " << step;
+      view.moved = moved.data();
+    }
   }
   ASSERT_GE(whole.size(), 10000u);
   EXPECT_EQ(slabs, whole);

@@ -227,6 +227,7 @@ class CpuPairFinder final : public PairFinder {
   void grid(const ProxyArrays& p, const PairFinderOptions& options, bool keepGrid,
             std::vector<std::uint64_t>& pairs);
   bool searchSlabs(const ProxyArrays& p, const PairFinderOptions& options, bool keepGrid, const Grid& g);
+  void binKeptGrid(const ProxyArrays& p, const Grid& g);
   void binSorted(const ProxyArrays& p, const Grid& g);
   void testRuns(const PairFinderOptions& options, const Grid& g);
   void testHuge(const ProxyArrays& p, const Grid& g);
@@ -238,6 +239,7 @@ class CpuPairFinder final : public PairFinder {
   std::size_t scratchBytes() const;
   bool fewMoved(const ProxyArrays& p) const;
   void releaseScratch();
+  void dropKeptGrid();
   /// Raises the high-water mark of this search's memory to what is allocated now (called where a phase has
   /// all its memory, before it frees some).
   void notePeak() { m_peakBytes = std::max(m_peakBytes, scratchBytes()); }
@@ -269,7 +271,8 @@ class CpuPairFinder final : public PairFinder {
   std::vector<std::uint32_t> m_moved;         // active slots changed since the kept search
   std::vector<std::uint64_t> m_movedKeys;     // (cell << 32) | index into m_moved, binned moved proxies
   std::vector<std::uint64_t> m_sortScratch;   // second buffer of the pair radix sort
-  LargeArrayVector<std::uint32_t> m_sorted;   // m_box indices by cell (dense grid: with kHomeEntry)
+  LargeArrayVector<std::uint32_t> m_sorted;   // m_box indices by cell (dense grid: with kHomeEntry; a grid
+                                              // kept after a slab search: m_homeOrder indices, no bit)
   LargeArrayVector<std::uint32_t> m_runCell;  // runs of >= 2 entries: cell index
   LargeArrayVector<std::uint32_t> m_runStart;  // first entry in m_sorted
   LargeArrayVector<std::uint32_t> m_runLength;
@@ -310,18 +313,18 @@ void CpuPairFinder::findPairs(const ProxyArrays& proxies, const PairFinderOption
   // (stage 11) needs no list of every proxy.
   std::uint32_t activeCount = 0;
   for (std::uint32_t s = 0; s < proxies.count; ++s) activeCount += proxies.flags[s] & kProxyActive;
+  // Stage 1: the path. A search that does not take the kept grid (stage 11) drops it first: it is not held
+  // beside the search's own memory.
+  const bool incrementalSearch = activeCount >= std::max<std::uint32_t>(2, options.bruteForceBelow) &&
+                                 keepGrid(proxies, options, activeCount);
+  if (!incrementalSearch) m_kept = false, dropKeptGrid();
   if (activeCount < 2) {
-    m_kept = false;
-    m_lastPairs.clear();
-    return;
-  }
-  // Stage 1: the path.
-  if (activeCount < options.bruteForceBelow) {
-    m_kept = false;
+    // No pair to find.
+  } else if (activeCount < options.bruteForceBelow) {
     m_lastSizedCell = 0.0f;
     listActive(proxies, activeCount);
     bruteForce(proxies, options, pairs);
-  } else if (keepGrid(proxies, options, activeCount)) {
+  } else if (incrementalSearch) {
     incremental(proxies, options, activeCount, pairs);
   } else {
     listActive(proxies, activeCount);
@@ -386,6 +389,13 @@ void CpuPairFinder::releaseScratch() {
   // While the grid is kept, searches are incremental and name kept boxes through the home order alone; the
   // slots' places in it are rebuilt by a full search that reuses the order (binSorted).
   if (m_kept) release(m_homePos);
+}
+
+void CpuPairFinder::dropKeptGrid() {
+  auto release = [](auto& v) { std::decay_t<decltype(v)>().swap(v); };
+  release(m_cellStart), release(m_sorted), release(m_unchanged), release(m_keptHuge), release(m_lastPairs);
+  // The home order stays for the whole-grid search's locality (binSorted) while it may still be reused.
+  if (m_homeOrderAge >= kHomeOrderSteps) release(m_homeOrder), release(m_homePos);
 }
 
 bool CpuPairFinder::keepGrid(const ProxyArrays& p, const PairFinderOptions& options,
@@ -889,16 +899,15 @@ void CpuPairFinder::gather(std::vector<std::uint64_t>& pairs) {
 }
 
 /// Whether the options let a search be done in slabs before its grid is known (searchSlabs has the rest).
-bool slabsMayServe(const PairFinderOptions& options, bool keepGrid) {
-  return options.slabTiling != SlabTiling::Off && options.output == PairOutput::Compacted &&
-         (!keepGrid || options.slabTiling == SlabTiling::Always);
+bool slabsMayServe(const PairFinderOptions& options) {
+  return options.slabTiling != SlabTiling::Off && options.output == PairOutput::Compacted;
 }
 
 bool CpuPairFinder::surveyWanted(const PairFinderOptions& options, float& cell, int& axis) const {
   // A kept grid serves the next search when few proxies move (stage 11), which reads no box but the moved.
   if (!(m_lastSizedCell > 0.0f) || m_kept || options.cellSizeRule != CellSizeRule::Size) return false;
   cell = m_lastSizedCell;
-  axis = slabsMayServe(options, false) ? m_slabs.axis() : -1;
+  axis = slabsMayServe(options) ? m_slabs.axis() : -1;
   return true;
 }
 
@@ -909,7 +918,7 @@ void CpuPairFinder::grid(const ProxyArrays& p, const PairFinderOptions& options,
   StageClock clock;
   // Read in place, every pass over the boxes walks Bullet's proxies: the grid choice keeps their extents
   // along the slab axis of the last plan (axes rarely change between steps) for this step's plan.
-  m_keptExtents.axis = p.minX == nullptr && slabsMayServe(options, keepGrid) ? m_slabs.axis() : -1;
+  m_keptExtents.axis = p.minX == nullptr && slabsMayServe(options) ? m_slabs.axis() : -1;
   m_keptExtents.bySlot = false;
   // Beyond chooseGrid, only a kept grid needs the active list (m_unchanged); the binned and huge lists hold
   // every active slot. Without one, the binned list is written over the active list.
@@ -953,20 +962,34 @@ void CpuPairFinder::grid(const ProxyArrays& p, const PairFinderOptions& options,
   // Stage 10: one order whatever the chunking, threads or device.
   sortPairs(pairs, m_sortScratch, slotBitsFor(p.count));
   m_stats.sortMs = clock.lap();
+  if (slabs && keepGrid) {
+    notePeak();
+    std::vector<std::uint64_t>().swap(m_sortScratch);
+    binKeptGrid(p, g);
+    m_stats.binMs += clock.lap();
+  }
 }
 
 bool CpuPairFinder::searchSlabs(const ProxyArrays& p, const PairFinderOptions& options, bool keepGrid,
                                 const Grid& g) {
-  // The whole-grid search serves what slabs cannot: the bit mask (indexed by global candidate numbers), a
-  // grid kept for stage 11, and sparse grids (a slab of a sparse grid would have mostly empty cells).
-  if (!slabsMayServe(options, keepGrid) || m_binned.empty() || g.cells() > denseCellLimit(m_binned.size()))
+  // The whole-grid search serves what slabs cannot: the bit mask (indexed by global candidate numbers) and
+  // sparse grids (a slab of a sparse grid would have mostly empty cells).
+  if (!slabsMayServe(options) || m_binned.empty() || g.cells() > denseCellLimit(m_binned.size()))
     return false;
   const bool always = options.slabTiling == SlabTiling::Always;
   if (options.slabTiling == SlabTiling::Auto && m_binned.size() > kMaxSlabBoxes) return false;
   StageClock clock;
+  // A home order that the whole-grid search would not reuse (binSorted) is not held beside the slabs.
+  const auto releaseHomeOrder = [&] {
+    for (auto* v : {&m_homeOrder, &m_homePos}) std::vector<std::uint32_t>().swap(*v);
+  };
+  if (m_homeOrder.size() != m_binned.size() || m_homeOrderAge >= kHomeOrderSteps) releaseHomeOrder();
   if (!m_slabs.plan(p, m_binned, g, options.slabBoxes, always ? 1 : kMinSlabs, &m_keptExtents)) return false;
+  // The home order serves the whole-grid search's locality only; a slab search does not keep it up to date.
+  releaseHomeOrder();
   notePeak();
-  std::vector<std::uint32_t>().swap(m_binned);  // the slab lists hold every binned box
+  // The slab lists hold every binned box; a grid kept for stage 11 is binned from the list after the search.
+  if (!keepGrid) std::vector<std::uint32_t>().swap(m_binned);
   m_stats.binMs = clock.lap();
   const std::size_t first = takeChunks(m_slabs.outputs(m_huge.size()));
   const SlabSearchCounts counts = m_slabs.search(p, m_huge, g, m_chunkPairs, first);
@@ -977,10 +1000,27 @@ bool CpuPairFinder::searchSlabs(const ProxyArrays& p, const PairFinderOptions& o
   m_stats.candidates += counts.candidates;
   notePeak();
   m_slabs.release();  // only the per-slab pair lists are left to gather
-  // The home order serves the whole-grid search's locality only; a slab search does not keep it up to date.
-  std::vector<std::uint32_t>().swap(m_homeOrder);
-  std::vector<std::uint32_t>().swap(m_homePos);
   return true;
+}
+
+void CpuPairFinder::binKeptGrid(const ProxyArrays& p, const Grid& g) {
+  // Stage 11 after a slab search, whose cells are gone: the kept grid's cells and entries alone (no box
+  // copies, runs or packed ranges: the incremental search reads boxes where they are), by a counting sort of
+  // the binned boxes. Its entries name them by their place in the binned list, which becomes the home
+  // order; that order is by slot, not by home cell, so the next whole-grid search renews it. A grid of more
+  // entries than 32-bit positions reach is not kept (the slabs found its pairs; the next search is a full
+  // one).
+  if (m_stats.keys > std::numeric_limits<std::uint32_t>::max() || m_binned.size() > kEntryBox) return;
+  m_homeOrder.swap(m_binned);
+  std::vector<std::uint32_t>().swap(m_binned);
+  m_homeOrderAge = kHomeOrderSteps;
+  m_sorted.resize(m_stats.keys);  // each (cell, box) entry was counted by the one slab holding its cell
+  countingSort(
+      m_homeOrder.size(), g.cells(), m_cellStart,
+      [&](std::size_t i, auto&& f) { forEachCell(cellRange(boxOf(p, m_homeOrder[i]), g), g, f); },
+      [&](std::size_t i, std::uint32_t to, std::uint32_t) { m_sorted[to] = std::uint32_t(i); });
+  m_denseBuilt = true;
+  notePeak();
 }
 
 std::size_t CpuPairFinder::scratchBytes() const {

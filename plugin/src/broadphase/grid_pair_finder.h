@@ -32,8 +32,8 @@
 // 10. Output: set bits in a bit mask over the candidates (§3.4) or append to per-chunk lists (compacted);
 //     either way the pair keys are gathered and sorted, so the order never depends on threads or device.
 //
-// The CPU finder runs stages 3-9 of a full search slab by slab when most proxies moved (slab_search.h, with
-// the same pairs); the stages above describe the whole-grid search that the OpenCL finder mirrors. Its stage
+// The CPU finder runs stages 3-9 of a full search slab by slab (slab_search.h, with the same pairs); the
+// stages above describe the whole-grid search that the OpenCL finder mirrors. Its stage
 // 3 and the grid's bounds may come from the caller's own pass over the boxes (ProxyArrays::survey).
 //
 // 11. Resting proxies (both finders, "skip what a scene does not need"; the OpenCL one keeps its grid on the
@@ -164,11 +164,11 @@ enum class PairOutput { BitMask, Compacted };
 enum class MappingSqrt { Double, Newton };
 
 /// Whether the CPU finder searches a dense grid slab by slab (slab_search.h); results are identical.
-/// Auto: full searches whose grid is not kept for stage 11 (most proxies moved), with compacted output, of at
-/// most kMaxSlabBoxes binned boxes, when the grid cuts into at least kMinSlabs slabs. AnySize: as Auto
-/// with no limit on the boxes (less memory at the peak than the whole-grid search, which was faster at 1M
-/// boxes; GridBroadphaseTuning::boxesInPlace). Always: every full search of a dense grid with compacted
-/// output (tests). Off: never (benchmarks compare).
+/// Auto: full searches with compacted output, of at most kMaxSlabBoxes binned boxes, when the grid cuts into
+/// at least kMinSlabs slabs; a grid kept for stage 11 is then binned after the search (its cells and entries
+/// only). AnySize: as Auto with no limit on the boxes (less memory at the peak than the whole-grid search,
+/// which was faster at 1M boxes; GridBroadphaseTuning::boxesInPlace). Always: every full search of a dense
+/// grid with compacted output (tests). Off: never (benchmarks compare).
 enum class SlabTiling { Auto, AnySize, Always, Off };
 
 /// Knobs of one pair search.

@@ -14,7 +14,7 @@
 // The whole-grid search numbers every candidate and finds its pair through the mapping function (paper
 // §3.2), which is what spreads cells over GPU threads. A slab's thread walks its cells' candidates in
 // order, so it needs no numbering. The bit-mask output (§3.4) is indexed by that numbering, so it always
-// uses the whole-grid search, and so does a search whose grid is kept for stage 11.
+// uses the whole-grid search. A grid kept for stage 11 is binned whole by the finder after the slabs.
 #include <tbb/enumerable_thread_specific.h>
 
 #include <cstddef>
