@@ -660,6 +660,36 @@ TEST(GridPairFinder, SlabSearchAndTheGridKeptAfterIt) {
   EXPECT_TRUE(finder->stats().incremental);
 }
 
+/// SlabTiling::Auto and AnySize cut a scene too small for 8 slabs of 256 boxes into as many as it fills (one
+/// below 512 boxes), and leave a big scene that gives fewer than 8 (all boxes at one spot: one cell, one
+/// slab) to the whole-grid search, which spreads that cell's candidates over threads.
+TEST(GridPairFinder, SmallScenesInAsManySlabsAsTheyFill) {
+  struct Case {
+    const char* what;
+    Scene scene;
+    std::uint32_t minSlabs, maxSlabs;
+  };
+  Scene pile;
+  for (int i = 0; i < 3000; ++i) pile.add(1.0f, 2.0f, 3.0f, 0.5f, 0.5f, 0.5f);
+  const Case cases[] = {{"300 boxes", uniformCloud(300, 8.0f, 0.8f, 51), 1, 1000},
+                        {"1000 boxes", uniformCloud(1000, 12.0f, 0.8f, 52), 3, 1000},
+                        {"3000 at one spot", pile, 0, 0}};
+  for (const Case& c : cases)
+    for (auto tiling : {gpucol::SlabTiling::Auto, gpucol::SlabTiling::AnySize}) {
+      auto finder = gpucol::makeCpuPairFinder();
+      gpucol::PairFinderOptions o;
+      o.slabTiling = tiling;
+      std::vector<std::uint64_t> pairs;
+      finder->findPairs(c.scene.view(), o, pairs);
+      const std::vector<std::uint64_t> reference = gpucol::findPairsBruteForce(c.scene.view());
+      ASSERT_GE(reference.size(), 50u) << c.what;
+      EXPECT_EQ(pairs, reference) << c.what;
+      EXPECT_TRUE(finder->stats().usedGrid) << c.what;
+      EXPECT_GE(finder->stats().slabs, c.minSlabs) << c.what;
+      EXPECT_LE(finder->stats().slabs, c.maxSlabs) << c.what;
+    }
+}
+
 /// Beyond kMaxSlabBoxes (2^18) binned boxes Auto searches the grid whole and AnySize still in slabs, with the
 /// same pairs, in a first search (whose grid both keep for stage 11) and in one where all moved.
 TEST(GridPairFinder, SlabSearchAtAnySize) {

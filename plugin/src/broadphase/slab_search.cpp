@@ -16,8 +16,6 @@ namespace {
 /// Slabs a scene is cut into when every slab holds its share (more slabs: less working memory per thread
 /// and better balance, more boxes listed twice where they cross a slab boundary).
 constexpr std::uint64_t kSlabsAimed = 32;
-/// Boxes per slab at least (smaller slabs cost more in per-slab setup than they save).
-constexpr std::uint64_t kMinSlabBoxes = 256;
 /// A slab is also closed once it has this many cells per box aimed at, so a sparse stretch of the grid
 /// does not make one slab's cell array large.
 constexpr std::uint64_t kCellsPerSlabBox = 8;

@@ -38,6 +38,9 @@ struct SlabSearchCounts {
 /// Plans and runs slab searches; keeps its working memory between them until release().
 class SlabSearch {
  public:
+  /// Boxes per slab at least (smaller slabs cost more in per-slab setup than they save).
+  static constexpr std::uint64_t kMinSlabBoxes = 256;
+
   /// Cuts grid `g` of the `binned` slots into slabs of about `slabBoxes` boxes each (0: the scene's count
   /// over kSlabsAimed, and at least kMinSlabBoxes), and lists each binned slot in every slab it reaches.
   /// Returns false, with nothing planned, when fewer than `minSlabs` slabs come out. `kept`, when its axis
