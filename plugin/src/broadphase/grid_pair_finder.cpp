@@ -228,8 +228,8 @@ class CpuPairFinder final : public PairFinder {
   void bruteForce(const ProxyArrays& p, const PairFinderOptions& options, std::vector<std::uint64_t>& pairs);
   void grid(const ProxyArrays& p, const PairFinderOptions& options, bool keepGrid,
             std::vector<std::uint64_t>& pairs);
-  bool searchSlabs(const ProxyArrays& p, const PairFinderOptions& options, bool keepGrid, const Grid& g);
-  void binKeptGrid(const ProxyArrays& p, const Grid& g);
+  bool searchSlabs(const ProxyArrays& p, const PairFinderOptions& options, const Grid& g);
+  void binKeptGrid(const ProxyArrays& p, const Grid& g, std::size_t binnedCount);
   void binSorted(const ProxyArrays& p, const Grid& g);
   void testRuns(const PairFinderOptions& options, const Grid& g);
   void testHuge(const ProxyArrays& p, const Grid& g);
@@ -340,7 +340,7 @@ void CpuPairFinder::findPairs(const ProxyArrays& proxies, const PairFinderOption
     if (m_kept) {
       m_keptOptions = options;
       m_unchanged.assign(proxies.count, 0);
-      for (std::uint32_t s : m_active) m_unchanged[s] = 1;
+      for (std::uint32_t s = 0; s < proxies.count; ++s) m_unchanged[s] = proxies.flags[s] & kProxyActive;
       m_keptHuge = m_huge;
     }
   }
@@ -922,12 +922,11 @@ void CpuPairFinder::grid(const ProxyArrays& p, const PairFinderOptions& options,
   // along the slab axis of the last plan (axes rarely change between steps) for this step's plan.
   m_keptExtents.axis = p.minX == nullptr && slabsMayServe(options) ? m_slabs.axis() : -1;
   m_keptExtents.bySlot = false;
-  // Beyond chooseGrid, only a kept grid needs the active list (m_unchanged); the binned and huge lists hold
-  // every active slot. Without one, the binned list is written over the active list.
-  if (!keepGrid) m_binned.swap(m_active), std::vector<std::uint32_t>().swap(m_active);
+  // The binned and huge lists hold every active slot: the binned list is written over the active list.
+  m_binned.swap(m_active), std::vector<std::uint32_t>().swap(m_active);
   bool surveyTaken = false;
-  const Grid g = chooseGrid(p, keepGrid ? m_active : m_binned, options, m_extent, m_binned, m_huge,
-                            &m_keptExtents, p.survey, &surveyTaken);
+  const Grid g =
+      chooseGrid(p, m_binned, options, m_extent, m_binned, m_huge, &m_keptExtents, p.survey, &surveyTaken);
   m_stats.surveyTaken = surveyTaken;
   // The survey's extents are by slot; the plan takes them as it takes the grid choice's own.
   if (surveyTaken && m_keptExtents.axis >= 0 && p.survey->extents.axis == m_keptExtents.axis)
@@ -936,11 +935,12 @@ void CpuPairFinder::grid(const ProxyArrays& p, const PairFinderOptions& options,
   notePeak();
   std::vector<float>().swap(m_extent);  // chooseGrid's scratch
   m_stats.hugeProxies = std::uint32_t(m_huge.size());
+  const std::size_t binnedCount = m_binned.size();
   m_keptGrid = g;
   m_stats.cellSize = g.cell;
   for (int a = 0; a < 3; ++a) m_stats.dims[a] = g.dims[a];
   m_stats.chooseMs = clock.lap();
-  const bool slabs = searchSlabs(p, options, keepGrid, g);
+  const bool slabs = searchSlabs(p, options, g);
   // Unused when the plan did not take them.
   std::vector<std::uint32_t>().swap(m_keptExtents.lo), std::vector<std::uint32_t>().swap(m_keptExtents.hi);
   if (!slabs) {
@@ -967,13 +967,12 @@ void CpuPairFinder::grid(const ProxyArrays& p, const PairFinderOptions& options,
   if (slabs && keepGrid) {
     notePeak();
     std::vector<std::uint64_t>().swap(m_sortScratch);
-    binKeptGrid(p, g);
+    binKeptGrid(p, g, binnedCount);
     m_stats.binMs += clock.lap();
   }
 }
 
-bool CpuPairFinder::searchSlabs(const ProxyArrays& p, const PairFinderOptions& options, bool keepGrid,
-                                const Grid& g) {
+bool CpuPairFinder::searchSlabs(const ProxyArrays& p, const PairFinderOptions& options, const Grid& g) {
   // The whole-grid search serves what slabs cannot: the bit mask (indexed by global candidate numbers) and
   // sparse grids (a slab of a sparse grid would have mostly empty cells).
   if (!slabsMayServe(options) || m_binned.empty() || g.cells() > denseCellLimit(m_binned.size()))
@@ -993,8 +992,7 @@ bool CpuPairFinder::searchSlabs(const ProxyArrays& p, const PairFinderOptions& o
   // The home order serves the whole-grid search's locality only; a slab search does not keep it up to date.
   releaseHomeOrder();
   notePeak();
-  // The slab lists hold every binned box; a grid kept for stage 11 is binned from the list after the search.
-  if (!keepGrid) std::vector<std::uint32_t>().swap(m_binned);
+  std::vector<std::uint32_t>().swap(m_binned);  // the slab lists hold every binned box
   m_stats.binMs = clock.lap();
   const std::size_t first = takeChunks(m_slabs.outputs(m_huge.size()));
   const SlabSearchCounts counts = m_slabs.search(p, m_huge, g, m_chunkPairs, first);
@@ -1008,16 +1006,22 @@ bool CpuPairFinder::searchSlabs(const ProxyArrays& p, const PairFinderOptions& o
   return true;
 }
 
-void CpuPairFinder::binKeptGrid(const ProxyArrays& p, const Grid& g) {
+void CpuPairFinder::binKeptGrid(const ProxyArrays& p, const Grid& g, std::size_t binnedCount) {
   // Stage 11 after a slab search, whose cells are gone: the kept grid's cells and entries alone (no box
   // copies, runs or packed ranges: the incremental search reads boxes where they are), by a counting sort of
-  // the binned boxes. Its entries name them by their place in the binned list, which becomes the home
+  // the binned boxes. Its entries name them by their place in the binned list, listed again here (the
+  // active slots less the huge ones: the slab lists held them during the search), which becomes the home
   // order; that order is by slot, not by home cell, so the next whole-grid search renews it. A grid of more
   // entries than 32-bit positions reach is not kept (the slabs found its pairs; the next search is a full
   // one).
-  if (m_stats.keys > std::numeric_limits<std::uint32_t>::max() || m_binned.size() > kEntryBox) return;
-  m_homeOrder.swap(m_binned);
-  std::vector<std::uint32_t>().swap(m_binned);
+  if (m_stats.keys > std::numeric_limits<std::uint32_t>::max() || binnedCount > kEntryBox) return;
+  std::vector<std::uint32_t> huge = m_huge;
+  std::sort(huge.begin(), huge.end());
+  m_homeOrder.clear();
+  m_homeOrder.reserve(binnedCount);
+  for (std::uint32_t s = 0; s < p.count; ++s)
+    if ((p.flags[s] & kProxyActive) && !std::binary_search(huge.begin(), huge.end(), s))
+      m_homeOrder.push_back(s);
   m_homeOrderAge = kHomeOrderSteps;
   m_sorted.resize(m_stats.keys);  // each (cell, box) entry was counted by the one slab holding its cell
   countingSort(
