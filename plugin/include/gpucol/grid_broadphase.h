@@ -23,8 +23,8 @@ struct GridBroadphaseTuning {
   std::uint32_t hugeCellLimit = 64;
   /// Let rayTest and aabbTest build and use the query index; false: every query tests every proxy.
   bool queryIndex = true;
-  /// CPU path: search the grid slab by slab when most proxies moved, up to 2^18 proxies (less memory at the
-  /// peak of a step; at any number with boxesInPlace); false: always as a whole (the pairs are the same).
+  /// CPU path: search the grid slab by slab, up to 2^18 proxies (less memory at the peak of a step; at any
+  /// number with boxesInPlace); false: always as a whole (the pairs are the same).
   bool slabSearch = true;
   /// CPU path: read each box where Bullet's proxy holds it instead of from a copy of every box made for the
   /// search, and search slabs at any size: 24 bytes less per proxy at the peak of a step (about 100 less at
@@ -66,10 +66,10 @@ struct GridBroadphaseStats {
   /// Bytes the broad phase holds between steps: the proxies Bullet holds (56 bytes each, in blocks of 256),
   /// the filter and state per slot (9 bytes), free-slot lists, the last step's sorted pair keys (8 bytes
   /// per pair, plus the few the cache's filter refused; the CPU finder carries resting pairs over from
-  /// them), and what the pair finder keeps between searches (the CPU finder: the home-cell order of the
-  /// binned boxes, 8 bytes per proxy; while few proxies move, also the kept grid of stage 11). Allocated
-  /// capacities are counted, not sizes. Bullet's pair cache (btHashedOverlappingPairCache or the user's) is
-  /// not counted: it belongs to Bullet.
+  /// them), and what the pair finder keeps between searches (the CPU finder, after a whole-grid search: the
+  /// home-cell order of the binned boxes, 8 bytes per proxy; while few proxies move, the kept grid of
+  /// stage 11). Allocated capacities are counted, not sizes. Bullet's pair cache
+  /// (btHashedOverlappingPairCache or the user's) is not counted: it belongs to Bullet.
   std::size_t memoryBytes = 0;
   /// Bytes at the peak of the last step: memoryBytes plus the scratch of the step that is released at its
   /// end (the boxes' structure-of-arrays view, the finder's working arrays as they stand at the end of its
