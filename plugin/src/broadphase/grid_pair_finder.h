@@ -33,8 +33,8 @@
 //     either way the pair keys are gathered and sorted, so the order never depends on threads or device.
 //
 // The CPU finder runs stages 3-9 of a full search slab by slab (slab_search.h, with the same pairs); the
-// stages above describe the whole-grid search that the OpenCL finder mirrors. Its stage
-// 3 and the grid's bounds may come from the caller's own pass over the boxes (ProxyArrays::survey).
+// stages above describe the whole-grid search that the OpenCL finder mirrors. Its stage 3 and the grid's
+// bounds may come from the caller's own pass over the boxes (ProxyArrays::survey).
 //
 // 11. Resting proxies (both finders, "skip what a scene does not need"; the OpenCL one keeps its grid on the
 //     device): when ProxyArrays::moved says which slots changed since this finder's previous search and few
