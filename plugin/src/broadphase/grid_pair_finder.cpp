@@ -242,6 +242,11 @@ class CpuPairFinder final : public PairFinder {
   bool fewMoved(const ProxyArrays& p) const;
   void releaseScratch();
   void dropKeptGrid();
+  /// Whether the home order is young enough and of the right length for binSorted to reuse it for `binned`
+  /// boxes (binSorted then checks that they are the same boxes).
+  bool homeOrderFits(std::size_t binned) const {
+    return m_homeOrder.size() == binned && m_homeOrderAge < kHomeOrderSteps;
+  }
   /// Raises the high-water mark of this search's memory to what is allocated now (called where a phase has
   /// all its memory, before it frees some).
   void notePeak() { m_peakBytes = std::max(m_peakBytes, scratchBytes()); }
@@ -576,7 +581,7 @@ void CpuPairFinder::binSorted(const ProxyArrays& p, const Grid& g) {
   // The home order only serves locality (any order gives the same pairs), and boxes move little from one
   // search to the next: the last order is reused while it covers the same binned proxies, and renewed
   // every kHomeOrderSteps searches.
-  bool reuse = m_homeOrder.size() == n && m_homeOrderAge < kHomeOrderSteps;
+  bool reuse = homeOrderFits(n);
   if (reuse) {
     reuse = tbb::parallel_reduce(
         tbb::blocked_range<std::size_t>(0, n, kGrain), true,
@@ -984,7 +989,7 @@ bool CpuPairFinder::searchSlabs(const ProxyArrays& p, const PairFinderOptions& o
   const auto releaseHomeOrder = [&] {
     for (auto* v : {&m_homeOrder, &m_homePos}) std::vector<std::uint32_t>().swap(*v);
   };
-  if (m_homeOrder.size() != m_binned.size() || m_homeOrderAge >= kHomeOrderSteps) releaseHomeOrder();
+  if (!homeOrderFits(m_binned.size())) releaseHomeOrder();
   const std::uint32_t minSlabs = always ? 1
                                         : std::uint32_t(std::clamp<std::uint64_t>(
                                               m_binned.size() / SlabSearch::kMinSlabBoxes, 1, kMinSlabs));
