@@ -660,10 +660,11 @@ TEST(GridPairFinder, SlabSearchAndTheGridKeptAfterIt) {
   EXPECT_TRUE(finder->stats().incremental);
 }
 
-/// SlabTiling::Auto and AnySize cut a scene too small for 8 slabs of 256 boxes into as many as it fills (one
-/// below 512 boxes), and leave a big scene that gives fewer than 8 (all boxes at one spot: one cell, one
-/// slab) to the whole-grid search, which spreads that cell's candidates over threads.
-TEST(GridPairFinder, SmallScenesInAsManySlabsAsTheyFill) {
+/// SlabTiling::Auto and AnySize search a scene too small for 8 slabs of 256 boxes in whatever slabs its grid
+/// gives, as many as it fills or fewer (a grid of 4 layers), and leave a big scene that gives fewer than 8 (all
+/// boxes at one spot: one cell, one slab) to the whole-grid search, which spreads that cell's candidates over
+/// threads.
+TEST(GridPairFinder, SmallScenesInAnySlabsTheirGridGives) {
   struct Case {
     const char* what;
     Scene scene;
@@ -673,6 +674,7 @@ TEST(GridPairFinder, SmallScenesInAsManySlabsAsTheyFill) {
   for (int i = 0; i < 3000; ++i) pile.add(1.0f, 2.0f, 3.0f, 0.5f, 0.5f, 0.5f);
   const Case cases[] = {{"300 boxes", uniformCloud(300, 8.0f, 0.8f, 51), 1, 1000},
                         {"1000 boxes", uniformCloud(1000, 12.0f, 0.8f, 52), 3, 1000},
+                        {"1800 boxes in few layers", uniformCloud(1800, 4.0f, 0.8f, 53), 2, 6},
                         {"3000 at one spot", pile, 0, 0}};
   for (const Case& c : cases)
     for (auto tiling : {gpucol::SlabTiling::Auto, gpucol::SlabTiling::AnySize}) {

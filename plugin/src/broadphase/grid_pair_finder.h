@@ -165,7 +165,7 @@ enum class MappingSqrt { Double, Newton };
 
 /// Whether the CPU finder searches a dense grid slab by slab (slab_search.h); results are identical.
 /// Auto: full searches with compacted output, of at most kMaxSlabBoxes binned boxes, when the grid cuts into
-/// at least kMinSlabs slabs (fewer in a scene too small to fill that many); a grid kept for stage 11 is then
+/// at least kMinSlabs slabs (any number in a scene too small to fill that many); a grid kept for stage 11 is then
 /// binned after the search (its cells and entries only). AnySize: as Auto with no limit on the boxes (less
 /// memory at the peak than the whole-grid search, which was faster at 1M boxes;
 /// GridBroadphaseTuning::boxesInPlace). Always: every full search of a dense grid with compacted output
