@@ -661,9 +661,9 @@ TEST(GridPairFinder, SlabSearchAndTheGridKeptAfterIt) {
 }
 
 /// SlabTiling::Auto and AnySize search a scene too small for 8 slabs of 256 boxes in whatever slabs its grid
-/// gives, as many as it fills or fewer (a grid of 4 layers), and leave a big scene that gives fewer than 8 (all
-/// boxes at one spot: one cell, one slab) to the whole-grid search, which spreads that cell's candidates over
-/// threads.
+/// gives, as many as it fills or fewer (a grid of 4 layers), and leave a big scene that gives fewer than 8
+/// (all boxes at one spot: one cell, one slab) to the whole-grid search, which spreads that cell's candidates
+/// over threads.
 TEST(GridPairFinder, SmallScenesInAnySlabsTheirGridGives) {
   struct Case {
     const char* what;

@@ -72,9 +72,11 @@ struct GridBroadphaseStats {
   /// (btHashedOverlappingPairCache or the user's) is not counted: it belongs to Bullet.
   std::size_t memoryBytes = 0;
   /// Bytes at the peak of the last step: memoryBytes plus the scratch of the step that is released at its
-  /// end (the boxes' structure-of-arrays view, the finder's working arrays as they stand at the end of its
-  /// search, the last step's pair list and the diff's lists of changes until the cache has them); the same
-  /// exclusions.
+  /// end (the boxes' structure-of-arrays view, the finder's working arrays at their high-water mark, the last
+  /// step's pair list and the diff's lists of changes until the cache has them); the same exclusions. This
+  /// step's pair list is counted beside the finder's arrays as far as it was there at that mark (the CPU
+  /// finder's slab search is done before its pairs are gathered), in full for a finder that does not say.
+  /// Never less than what was held when the search began. tests/memory checks it against the heap.
   std::size_t peakBytes = 0;
   /// Wall-clock milliseconds of the pair search, and of the diff with the last step plus the pair cache's
   /// additions and removals.

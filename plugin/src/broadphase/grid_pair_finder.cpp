@@ -128,13 +128,14 @@ inline std::uint32_t atomicAdd(std::uint32_t& counter, std::uint32_t value) {
 }
 
 /// Sorts pair keys (lower slot << 32 | higher slot, both below 2^slotBits) ascending: an LSD radix sort of
-/// the 2 x slotBits significant bits in 11-bit digits, using `scratch` as the second buffer. Each pass is
+/// the 2 x slotBits significant bits in 11-bit digits, using `scratch` as the second buffer and `offsets`
+/// for the digit counts (up to 256 KB; the caller counts and frees both with its scratch). Each pass is
 /// parallel over kSortChunks fixed chunks (a histogram per chunk, then each chunk scatters its keys in order
 /// to its own offsets), so the passes are stable and the result does not depend on threads; the serial form
 /// of the same sort took 5-22 ms at 1M boxes. Faster than a comparison sort here (a pair list is a few keys
 /// per proxy and slots are dense), and the result is the sorted list whatever the input order.
 void sortPairs(std::vector<std::uint64_t>& keys, std::vector<std::uint64_t>& scratch,
-               std::uint32_t slotBits) {
+               std::vector<std::size_t>& offsets, std::uint32_t slotBits) {
   constexpr int kDigitBits = 11;
   constexpr std::size_t kBuckets = std::size_t(1) << kDigitBits;
   const std::size_t n = keys.size();
@@ -153,11 +154,12 @@ void sortPairs(std::vector<std::uint64_t>& keys, std::vector<std::uint64_t>& scr
       keys[i] = ((keys[i] >> 32) << slotBits) | (keys[i] & 0xffffffffu);
   });
   scratch.resize(n);
-  std::vector<std::size_t> offset(chunks * kBuckets);
+  offsets.resize(chunks * kBuckets);
+  std::size_t* const offset = offsets.data();
   const int bits = 2 * int(slotBits);
   for (int shift = 0; shift < bits; shift += kDigitBits) {
     forChunks([&](std::size_t c, std::size_t begin, std::size_t end) {
-      std::size_t* count = offset.data() + c * kBuckets;
+      std::size_t* count = offset + c * kBuckets;
       std::fill(count, count + kBuckets, std::size_t(0));
       for (std::size_t i = begin; i < end; ++i) ++count[(keys[i] >> shift) & (kBuckets - 1)];
     });
@@ -165,7 +167,7 @@ void sortPairs(std::vector<std::uint64_t>& keys, std::vector<std::uint64_t>& scr
     for (std::size_t d = 0; d < kBuckets; ++d)
       for (std::size_t c = 0; c < chunks; ++c) sum += std::exchange(offset[c * kBuckets + d], sum);
     forChunks([&](std::size_t c, std::size_t begin, std::size_t end) {
-      std::size_t* next = offset.data() + c * kBuckets;
+      std::size_t* next = offset + c * kBuckets;
       for (std::size_t i = begin; i < end; ++i)
         scratch[next[(keys[i] >> shift) & (kBuckets - 1)]++] = keys[i];
     });
@@ -249,9 +251,11 @@ class CpuPairFinder final : public PairFinder {
   bool homeOrderFits(std::size_t binned) const {
     return m_homeOrder.size() == binned && m_homeOrderAge < kHomeOrderSteps;
   }
-  /// Raises the high-water mark of this search's memory to what is allocated now (called where a phase has
-  /// all its memory, before it frees some).
-  void notePeak() { m_peakBytes = std::max(m_peakBytes, scratchBytes()); }
+  /// Raises the high-water mark of this search's memory, the output list included, to what is allocated now
+  /// (called where a phase has all its memory, before it frees some).
+  void notePeak() {
+    m_peakBytes = std::max(m_peakBytes, scratchBytes() + (m_output ? m_output->capacity() * 8 : 0));
+  }
 
   PairFinderStats m_stats;
   std::vector<std::uint32_t> m_active;          // active slots, ascending
@@ -280,6 +284,7 @@ class CpuPairFinder final : public PairFinder {
   std::vector<std::uint32_t> m_moved;         // active slots changed since the kept search
   std::vector<std::uint64_t> m_movedKeys;     // (cell << 32) | index into m_moved, binned moved proxies
   std::vector<std::uint64_t> m_sortScratch;   // second buffer of the pair radix sort
+  std::vector<std::size_t> m_sortOffsets;     // its digit counts per chunk
   LargeArrayVector<std::uint32_t> m_sorted;   // m_box indices by cell (dense grid: with kHomeEntry; a grid
                                               // kept after a slab search: m_homeOrder indices, no bit)
   LargeArrayVector<std::uint32_t> m_runCell;  // runs of >= 2 entries: cell index
@@ -294,7 +299,8 @@ class CpuPairFinder final : public PairFinder {
   AxisExtents m_keptExtents;     // in place: the binned boxes' extents along the last slab axis (the plan's)
   float m_lastSizedCell = 0.0f;  // stage 2's cell edge of the last grid search (0: brute force since)
   std::size_t m_peakBytes = 0;   // high-water mark of this search (notePeak)
-  std::size_t m_chunksUsed = 0;  // chunks of m_chunkPairs filled by this search
+  const std::vector<std::uint64_t>* m_output = nullptr;  // findPairs' `pairs`, during the search
+  std::size_t m_chunksUsed = 0;                          // chunks of m_chunkPairs filled by this search
 
   /// Reserves `count` more output chunks and returns the index of the first.
   std::size_t takeChunks(std::size_t count) {
@@ -310,6 +316,7 @@ void CpuPairFinder::findPairs(const ProxyArrays& proxies, const PairFinderOption
   m_stats = PairFinderStats{};
   m_chunksUsed = 0;
   m_peakBytes = 0;
+  m_output = &pairs;
   if (proxies.lastPairs == &pairs) {
     // The caller's copy would be overwritten below: search as if it had given none.
     ProxyArrays own = proxies;
@@ -361,6 +368,8 @@ void CpuPairFinder::findPairs(const ProxyArrays& proxies, const PairFinderOption
   m_stats.rebinnedProxies = activeCount - m_stats.restingProxies;
   notePeak();
   m_stats.peakScratchBytes = m_peakBytes;
+  m_stats.peakIncludesOutput = true;
+  m_output = nullptr;
   releaseScratch();
   m_stats.scratchBytes = scratchBytes();
 }
@@ -390,7 +399,8 @@ void CpuPairFinder::releaseScratch() {
   auto release = [](auto& v) { std::decay_t<decltype(v)>().swap(v); };
   release(m_active), release(m_binned), release(m_huge), release(m_extent), release(m_keys);
   release(m_box), release(m_homeKeys), release(m_packed), release(m_isBinned), release(m_moved);
-  release(m_movedKeys), release(m_sortScratch), release(m_runCell), release(m_runStart);
+  release(m_movedKeys), release(m_sortScratch), release(m_sortOffsets), release(m_runCell);
+  release(m_runStart);
   release(m_runLength), release(m_runPrefix), release(m_blockRuns), release(m_offsets), release(m_bits);
   release(m_chunkPairs);
   m_slabs.release();
@@ -416,20 +426,23 @@ bool CpuPairFinder::keepGrid(const ProxyArrays& p, const PairFinderOptions& opti
     m_kept = false;
     return false;
   }
-  // A slot stays unchanged while it stays active and does not move; new slots start changed.
+  // A slot stays unchanged while it stays active and does not move; new slots start changed. Counted first
+  // and listed only when few enough, at their number: a full search does not hold the list beside the kept
+  // grid it is about to drop.
   if (m_unchanged.size() < p.count) m_unchanged.resize(p.count, 0);
-  m_moved.clear();
   const std::size_t limit = std::size_t(kIncrementalFraction * double(activeCount));
+  std::size_t moved = 0;
   for (std::uint32_t s = 0; s < p.count; ++s) {
     if (p.moved[s] || !(p.flags[s] & kProxyActive)) m_unchanged[s] = 0;
-    if ((p.flags[s] & kProxyActive) && !m_unchanged[s]) {
-      m_moved.push_back(s);
-      if (m_moved.size() > limit) {  // too many: a full search, which rebuilds m_unchanged anyway
-        m_kept = false;
-        return false;
-      }
+    if ((p.flags[s] & kProxyActive) && !m_unchanged[s] && ++moved > limit) {
+      m_kept = false;  // too many: a full search, which rebuilds m_unchanged anyway
+      return false;
     }
   }
+  m_moved.clear();
+  m_moved.reserve(moved);
+  for (std::uint32_t s = 0; s < p.count; ++s)
+    if ((p.flags[s] & kProxyActive) && !m_unchanged[s]) m_moved.push_back(s);
   return true;
 }
 
@@ -516,7 +529,7 @@ void CpuPairFinder::incremental(const ProxyArrays& p, const PairFinderOptions& o
   m_stats.keys = m_movedKeys.size();
   m_stats.candidates = candidates;
   gather(m_movedKeys);  // the new pairs (m_movedKeys is free again)
-  sortPairs(m_movedKeys, m_sortScratch, slotBitsFor(p.count));
+  sortPairs(m_movedKeys, m_sortScratch, m_sortOffsets, slotBitsFor(p.count));
   // Pairs of two unchanged proxies are carried over (neither box nor filter changed), straight into `pairs`,
   // sized exactly, and the new pairs merged in from the back: no second list of the carried pairs.
   const std::vector<std::uint64_t>& last = m_callerKeepsPairs ? *p.lastPairs : m_lastPairs;
@@ -969,11 +982,11 @@ void CpuPairFinder::grid(const ProxyArrays& p, const PairFinderOptions& options,
   std::vector<std::vector<std::uint64_t>>().swap(m_chunkPairs);  // gathered into `pairs`
   m_chunksUsed = 0;
   // Stage 10: one order whatever the chunking, threads or device.
-  sortPairs(pairs, m_sortScratch, slotBitsFor(p.count));
+  sortPairs(pairs, m_sortScratch, m_sortOffsets, slotBitsFor(p.count));
   m_stats.sortMs = clock.lap();
   if (slabs && keepGrid) {
     notePeak();
-    std::vector<std::uint64_t>().swap(m_sortScratch);
+    std::vector<std::uint64_t>().swap(m_sortScratch), std::vector<std::size_t>().swap(m_sortOffsets);
     binKeptGrid(p, g, binnedCount);
     m_stats.binMs += clock.lap();
   }
@@ -1046,7 +1059,8 @@ std::size_t CpuPairFinder::scratchBytes() const {
   bytes += m_box.capacity() * sizeof(LocalBox) + m_homeKeys.capacity() * 8 + m_homeOrder.capacity() * 4 +
            m_homePos.capacity() * 4 + m_isBinned.capacity() + m_packed.capacity() * sizeof(PackedCells);
   bytes += m_unchanged.capacity() + m_keptHuge.capacity() * 4 + m_lastPairs.capacity() * 8 +
-           m_moved.capacity() * 4 + m_movedKeys.capacity() * 8 + m_sortScratch.capacity() * 8;
+           m_moved.capacity() * 4 + m_movedKeys.capacity() * 8 + m_sortScratch.capacity() * 8 +
+           m_sortOffsets.capacity() * sizeof(std::size_t);
   bytes += m_runCell.capacity() * 4 + m_runStart.capacity() * 4 + m_runLength.capacity() * 4;
   bytes += m_runPrefix.capacity() * 8 + m_bits.capacity() * 8 + m_blockRuns.capacity() * 4 +
            m_offsets.capacity() * 4;

@@ -165,9 +165,9 @@ enum class MappingSqrt { Double, Newton };
 
 /// Whether the CPU finder searches a dense grid slab by slab (slab_search.h); results are identical.
 /// Auto: full searches with compacted output, of at most kMaxSlabBoxes binned boxes, when the grid cuts into
-/// at least kMinSlabs slabs (any number in a scene too small to fill that many); a grid kept for stage 11 is then
-/// binned after the search (its cells and entries only). AnySize: as Auto with no limit on the boxes (less
-/// memory at the peak than the whole-grid search, which was faster at 1M boxes;
+/// at least kMinSlabs slabs (any number in a scene too small to fill that many); a grid kept for stage 11 is
+/// then binned after the search (its cells and entries only). AnySize: as Auto with no limit on the boxes
+/// (less memory at the peak than the whole-grid search, which was faster at 1M boxes;
 /// GridBroadphaseTuning::boxesInPlace). Always: every full search of a dense grid with compacted output
 /// (tests). Off: never (benchmarks compare).
 enum class SlabTiling { Auto, AnySize, Always, Off };
@@ -206,9 +206,12 @@ struct PairFinderStats {
   std::uint32_t hugeProxies = 0;
   /// Bytes the finder keeps after the search (until the next one).
   std::size_t scratchBytes = 0;
-  /// Bytes of the finder's memory at the end of the search, before it released its scratch (0: not known;
-  /// then scratchBytes is all there was).
+  /// Bytes of the finder's memory at its high-water mark in the search, before it released its scratch (0:
+  /// not known; then scratchBytes is all there was).
   std::size_t peakScratchBytes = 0;
+  /// True when peakScratchBytes also counts the output list (findPairs' `pairs`) as it stood at that mark:
+  /// the finder's memory and its output together. False: the output is not in it, and may add its whole size.
+  bool peakIncludesOutput = false;
   /// Slabs of a slab search (slab_search.h); 0 when the grid was searched whole.
   std::uint32_t slabs = 0;
   /// True when the slab plan took the binned boxes' extents along its axis from the grid choice's pass (boxes

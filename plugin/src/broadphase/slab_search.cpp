@@ -33,14 +33,24 @@ constexpr int kStartShift = 29;
 constexpr std::uint32_t kAllAxes = 7;
 constexpr std::uint32_t kSlabBox = (1u << kStartShift) - 1;
 /// Resizes v to n elements with a capacity of exactly n when it must grow (resize alone would double it, and
-/// each thread holds its scratch at the largest slab's size until the search ends).
+/// each thread holds its scratch at the largest slab's size until the search ends). The old array is freed
+/// before the new one is allocated, so the two are never held at once.
 template <typename T>
 void resizeExact(std::vector<T>& v, std::size_t n) {
   if (n > v.capacity()) {
-    v.clear();
+    std::vector<T>().swap(v);  // its own statement: the emptied temporary frees the array here
     v.reserve(n);
   }
   v.resize(n);
+}
+/// The same, every element set to `value`.
+template <typename T>
+void assignExact(std::vector<T>& v, std::size_t n, T value) {
+  if (n > v.capacity()) {
+    std::vector<T>().swap(v);
+    v.reserve(n);
+  }
+  v.assign(n, value);
 }
 /// Stage 9 on two entries (or an entry and a huge box's bits) of one cell.
 inline bool ownedByCell(std::uint32_t a, std::uint32_t b) {
@@ -214,9 +224,9 @@ SlabSearchCounts SlabSearch::search(const ProxyArrays& p, const std::vector<std:
         for (std::size_t k = r.begin(); k != r.end(); ++k) {
           // Found into the thread's list, then copied at their exact size: lists grown by push_back hold
           // up to twice their pairs, and all of them are held until the gather.
-          std::vector<std::uint64_t>& found = m_scratch.local().pairs;
-          counts[k] = searchSlab(k, p, huge, g, found);
-          out[first + k].assign(found.begin(), found.end());
+          Scratch& t = m_scratch.local();
+          counts[k] = searchSlab(k, p, huge, g, t);
+          out[first + k].assign(t.pairs.begin(), t.pairs.end());
         }
       },
       tbb::simple_partitioner());
@@ -232,9 +242,12 @@ SlabSearchCounts SlabSearch::search(const ProxyArrays& p, const std::vector<std:
 }
 
 SlabSearchCounts SlabSearch::searchSlab(std::size_t slab, const ProxyArrays& p,
-                                        const std::vector<std::uint32_t>& huge, const Grid& g,
-                                        std::vector<std::uint64_t>& out) {
-  out.clear();
+                                        const std::vector<std::uint32_t>& huge, const Grid& g, Scratch& t) {
+  t.pairs.clear();
+  auto add = [&t](std::uint64_t key) {
+    if (t.pairs.size() == t.pairs.capacity()) growPairs(t);
+    t.pairs.push_back(key);
+  };
   SlabSearchCounts counts;
   const std::size_t begin = m_memberStart[slab], m = m_memberStart[slab + 1] - begin;
   if (m == 0) return counts;
@@ -257,7 +270,6 @@ SlabSearchCounts SlabSearch::searchSlab(std::size_t slab, const ProxyArrays& p,
     }
     return r;
   };
-  Scratch& t = m_scratch.local();
   resizeExact(t.box, m);
   resizeExact(t.cells, m);
   std::uint64_t keys = 0;
@@ -305,7 +317,7 @@ SlabSearchCounts SlabSearch::searchSlab(std::size_t slab, const ProxyArrays& p,
 
   // Stages 4-5: a counting sort of the slab's entries by cell. Counts go up, an inclusive scan turns them
   // into cell ends, and placing counts them back down to each cell's start.
-  t.cellStart.assign(std::size_t(cells) + 1, 0);
+  assignExact(t.cellStart, std::size_t(cells) + 1, 0u);
   std::uint32_t* start = t.cellStart.data();
   for (std::size_t j = 0; j < m; ++j) forCellsOf(j, [&](std::uint32_t c, std::uint32_t) { ++start[c]; });
   for (std::uint32_t c = 1; c <= cells; ++c) start[c] += start[c - 1];
@@ -317,7 +329,7 @@ SlabSearchCounts SlabSearch::searchSlab(std::size_t slab, const ProxyArrays& p,
   // Stages 8-9 per cell of two or more boxes: the cell's ownership from the entries alone, then the overlap
   // and the filter.
   auto emit = [&](const LocalBox& a, const LocalBox& b) {
-    if (boxesOverlap(a, b) && passesFilter(a, b)) out.push_back(makePairKey(a.slot, b.slot));
+    if (boxesOverlap(a, b) && passesFilter(a, b)) add(makePairKey(a.slot, b.slot));
   };
   for (std::uint32_t c = 0; c < cells; ++c) {
     const std::uint32_t e0 = start[c], runLength = start[c + 1] - e0;
@@ -328,7 +340,7 @@ SlabSearchCounts SlabSearch::searchSlab(std::size_t slab, const ProxyArrays& p,
     if (runLength >= kLocalRunMin && runLength <= kLocalRunMax) {
       forEachOverlapInRun(runLength, boxAt, [&](std::uint32_t i, std::uint32_t j) {
         if (ownedByCell(run[i], run[j]) && passesFilter(boxAt(i), boxAt(j)))
-          out.push_back(makePairKey(boxAt(i).slot, boxAt(j).slot));
+          add(makePairKey(boxAt(i).slot, boxAt(j).slot));
       });
       continue;
     }
@@ -360,7 +372,7 @@ SlabSearchCounts SlabSearch::searchSlab(std::size_t slab, const ProxyArrays& p,
           if (!ownedByCell(hugeBits, entry)) continue;
           const LocalBox& b = t.box[entry & kSlabBox];
           if (inner ? passesFilter(a, b) : boxesOverlap(a, b) && passesFilter(a, b))
-            out.push_back(makePairKey(a.slot, b.slot));
+            add(makePairKey(a.slot, b.slot));
         }
       });
     } else {
@@ -369,20 +381,33 @@ SlabSearchCounts SlabSearch::searchSlab(std::size_t slab, const ProxyArrays& p,
         const LocalBox& b = t.box[j];
         const std::uint32_t layer = cellOf(std::max(a.lo[A], b.lo[A]), g.origin[A], g.invCell, g.dims[A]);
         if (layer >= a0 && layer < a1 && boxesOverlap(a, b) && passesFilter(a, b))
-          out.push_back(makePairKey(a.slot, b.slot));
+          add(makePairKey(a.slot, b.slot));
       }
     }
   }
   return counts;
 }
 
+std::size_t SlabSearch::bytesOf(const Scratch& t) {
+  return t.box.capacity() * sizeof(LocalBox) + t.cells.capacity() * sizeof(PackedCells) +
+         (t.cellStart.capacity() + t.entries.capacity()) * 4 + t.pairs.capacity() * 8;
+}
+
+void SlabSearch::growPairs(Scratch& t) {
+  constexpr std::size_t kFirstPairs = 256;
+  std::vector<std::uint64_t> bigger;
+  bigger.reserve(std::max(kFirstPairs, 2 * t.pairs.capacity()));
+  t.growthBytes = std::max(t.growthBytes, bytesOf(t) + bigger.capacity() * 8);
+  bigger.assign(t.pairs.begin(), t.pairs.end());
+  t.pairs.swap(bigger);
+}
+
 std::size_t SlabSearch::bytes() const {
   std::size_t bytes =
       (m_firstLayer.capacity() + m_layerSlab.capacity() + m_members.capacity() + m_boxLayers.capacity()) * 4 +
       (m_memberStart.capacity() + m_chunkCount.capacity()) * sizeof(std::size_t);
-  for (const Scratch& t : m_scratch)
-    bytes += t.box.capacity() * sizeof(LocalBox) + t.cells.capacity() * sizeof(PackedCells) +
-             (t.cellStart.capacity() + t.entries.capacity()) * 4 + t.pairs.capacity() * 8;
+  // A thread's scratch only grows during a search, so its largest moment is now or while its list grew.
+  for (const Scratch& t : m_scratch) bytes += std::max(bytesOf(t), t.growthBytes);
   return bytes;
 }
 

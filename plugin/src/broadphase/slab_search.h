@@ -74,10 +74,15 @@ class SlabSearch {
     std::vector<std::uint32_t> cellStart;  // first entry per slab cell (+1 sentinel)
     std::vector<std::uint32_t> entries;    // box indices by cell, kSlabHome on a box's home cell
     std::vector<std::uint64_t> pairs;      // the pairs of the slab being searched
+    std::size_t growthBytes = 0;           // the most it held while its pair list grew (old and new arrays)
   };
 
   SlabSearchCounts searchSlab(std::size_t slab, const ProxyArrays& p, const std::vector<std::uint32_t>& huge,
-                              const Grid& g, std::vector<std::uint64_t>& out);
+                              const Grid& g, Scratch& t);
+  /// Bytes of one thread's working memory (capacities).
+  static std::size_t bytesOf(const Scratch& t);
+  /// Doubles t's pair list by hand, so the moment it holds the old array and the new one is counted.
+  static void growPairs(Scratch& t);
 
   int m_axis = 0;                           // the axis the slabs cut (the one with most cells)
   bool m_tookKept = false;                  // the last plan read the grid choice's kept extents

@@ -719,6 +719,9 @@ void GridBroadphase::calculateOverlappingPairs(btDispatcher* dispatcher) {
   ProxyArrays view = d.finderView(kProxyBoxesAreFloats && d.tuning.boxesInPlace && finder.readsBoxRecords());
   // kMoved is relative to the previous search of the same finder; after a switch of finder, all moved.
   if (&finder != d.lastFinder) view.moved = nullptr;
+  // Nothing is freed before the search: the step holds at least what was held before it, and the view (a
+  // search that starts by dropping a kept grid may never come back up to that).
+  const std::size_t startBytes = d.heldBytes() + d.view.bytes() + d.survey.bytes();
   const auto searchStart = std::chrono::steady_clock::now();
   finder.findPairs(view, d.options(), d.found);
   const auto cacheStart = std::chrono::steady_clock::now();
@@ -740,9 +743,13 @@ void GridBroadphase::calculateOverlappingPairs(btDispatcher* dispatcher) {
   st.overlappingPairs = d.found.size();
   // The peak: everything held after the step (this step's pair list included) and the last step's pair list,
   // plus the larger of the search's extra (the view and the finder's high-water mark above what it keeps)
-  // and the diff's lists of changes.
-  const std::size_t stepBytes =
-      d.view.bytes() + d.survey.bytes() + std::max(fs.peakScratchBytes, fs.scratchBytes) - fs.scratchBytes;
+  // and the diff's lists of changes. A mark that counts this step's list (peakIncludesOutput) says how much
+  // of it was there: the slab search's working memory is gone before the list is gathered.
+  const std::size_t finderMark = std::max(fs.peakScratchBytes, fs.scratchBytes);
+  const std::size_t heldOfMark =
+      fs.scratchBytes +
+      (fs.peakIncludesOutput ? std::min(finderMark - fs.scratchBytes, d.found.capacity() * 8) : 0);
+  const std::size_t stepBytes = d.view.bytes() + d.survey.bytes() + finderMark - heldOfMark;
   d.view.release();
   d.releaseSurvey();
   d.diffAndUpdateCache(dispatcher, st);
@@ -753,8 +760,9 @@ void GridBroadphase::calculateOverlappingPairs(btDispatcher* dispatcher) {
   d.pendingFree.clear();
   d.dirty = false;
   st.memoryBytes = d.heldBytes();
-  st.peakBytes = st.memoryBytes + d.found.capacity() * 8 +
-                 std::max(stepBytes, (d.addedKeys.capacity() + d.removedKeys.capacity()) * 8);
+  st.peakBytes =
+      std::max(startBytes, st.memoryBytes + d.found.capacity() * 8 +
+                               std::max(stepBytes, (d.addedKeys.capacity() + d.removedKeys.capacity()) * 8));
   for (auto* v : {&d.found, &d.addedKeys, &d.removedKeys}) std::vector<std::uint64_t>().swap(*v);
   st.cacheMs =
       std::chrono::duration<double, std::milli>(std::chrono::steady_clock::now() - cacheStart).count();
@@ -776,6 +784,15 @@ void GridBroadphase::Impl::diffAndUpdateCache(btDispatcher* dispatcher, GridBroa
   refusedNow.clear();
   removedKeys.clear();
   addedKeys.clear();
+  // The lists of changes at their size, counted by a first walk of the same two lists (cheap beside the
+  // cache's calls): grown by push_back a list held up to twice its keys, and half as much again while it
+  // grew, which on a first step (every pair new) went unseen by the peak's count (tests/memory).
+  std::size_t onlyFound = 0, onlyCurrent = 0;
+  diffSortedPairs(
+      current, found, [&](std::uint64_t) { ++onlyFound; }, [&](std::uint64_t) { ++onlyCurrent; },
+      [](std::uint64_t) {});
+  addedKeys.reserve(onlyFound + refused.size());
+  removedKeys.reserve(onlyCurrent);
   // `refused` is walked along with the merge: both callbacks that consult it see keys in ascending order.
   std::size_t r = 0;
   auto isRefused = [&](std::uint64_t key) {
