@@ -127,6 +127,9 @@ inline std::uint32_t atomicAdd(std::uint32_t& counter, std::uint32_t value) {
   return __atomic_fetch_add(&counter, value, __ATOMIC_RELAXED);
 }
 
+/// Keys below which sortPairs compares instead (as fast there, and without the radix sort's memory).
+constexpr std::size_t kComparisonSortBelow = 512;
+
 /// Sorts pair keys (lower slot << 32 | higher slot, both below 2^slotBits) ascending: an LSD radix sort of
 /// the 2 x slotBits significant bits in 11-bit digits, using `scratch` as the second buffer and `offsets`
 /// for the digit counts (up to 256 KB; the caller counts and frees both with its scratch). Each pass is
@@ -139,7 +142,11 @@ void sortPairs(std::vector<std::uint64_t>& keys, std::vector<std::uint64_t>& scr
   constexpr int kDigitBits = 11;
   constexpr std::size_t kBuckets = std::size_t(1) << kDigitBits;
   const std::size_t n = keys.size();
-  if (n < 2) return;
+  if (n < kComparisonSortBelow) {
+    // A few keys (the pairs of a handful of moved proxies): no second buffer and no 16 KB digit table.
+    std::sort(keys.begin(), keys.end());
+    return;
+  }
   const std::size_t chunks = std::min<std::size_t>(kSortChunks, (n + kGrain - 1) / kGrain);
   const std::size_t chunk = (n + chunks - 1) / chunks;
   auto forChunks = [&](auto&& f) {
