@@ -32,25 +32,21 @@ constexpr std::size_t kPlanChunks = 64;
 constexpr int kStartShift = 29;
 constexpr std::uint32_t kAllAxes = 7;
 constexpr std::uint32_t kSlabBox = (1u << kStartShift) - 1;
-/// Resizes v to n elements with a capacity of exactly n when it must grow (resize alone would double it, and
-/// each thread holds its scratch at the largest slab's size until the search ends). The old array is freed
-/// before the new one is allocated, so the two are never held at once.
+/// Makes room for n elements in v, with a capacity of exactly n when it must grow (resize alone would double
+/// it, and each thread holds its scratch at the largest slab's size until the search ends). The old array is
+/// freed before the new one is allocated, so the two are never held at once.
 template <typename T>
-void resizeExact(std::vector<T>& v, std::size_t n) {
+void reserveExact(std::vector<T>& v, std::size_t n) {
   if (n > v.capacity()) {
     std::vector<T>().swap(v);  // its own statement: the emptied temporary frees the array here
     v.reserve(n);
   }
-  v.resize(n);
 }
-/// The same, every element set to `value`.
+/// reserveExact, then n elements.
 template <typename T>
-void assignExact(std::vector<T>& v, std::size_t n, T value) {
-  if (n > v.capacity()) {
-    std::vector<T>().swap(v);
-    v.reserve(n);
-  }
-  v.assign(n, value);
+void resizeExact(std::vector<T>& v, std::size_t n) {
+  reserveExact(v, n);
+  v.resize(n);
 }
 /// Stage 9 on two entries (or an entry and a huge box's bits) of one cell.
 inline bool ownedByCell(std::uint32_t a, std::uint32_t b) {
@@ -317,7 +313,8 @@ SlabSearchCounts SlabSearch::searchSlab(std::size_t slab, const ProxyArrays& p,
 
   // Stages 4-5: a counting sort of the slab's entries by cell. Counts go up, an inclusive scan turns them
   // into cell ends, and placing counts them back down to each cell's start.
-  assignExact(t.cellStart, std::size_t(cells) + 1, 0u);
+  reserveExact(t.cellStart, std::size_t(cells) + 1);
+  t.cellStart.assign(std::size_t(cells) + 1, 0);
   std::uint32_t* start = t.cellStart.data();
   for (std::size_t j = 0; j < m; ++j) forCellsOf(j, [&](std::uint32_t c, std::uint32_t) { ++start[c]; });
   for (std::uint32_t c = 1; c <= cells; ++c) start[c] += start[c - 1];
