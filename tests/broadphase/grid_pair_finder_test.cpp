@@ -467,7 +467,7 @@ void restingScenario(bool callerKeepsPairs, gpucol::SlabTiling tiling) {
   o.slabTiling = tiling;
   int incrementalSteps = 0;
   constexpr int kWithoutLastPairs = 9;  // with callerKeepsPairs: the step that does not hand them over
-  std::vector<std::uint64_t> last;
+  gpucol::PackedPairs last;
   for (int t = 0; t < 12; ++t) {
     gpucol::ProxyArrays view = callerKeepsPairs ? s.recordView() : s.view();
     view.moved = moved.data();
@@ -478,7 +478,7 @@ void restingScenario(bool callerKeepsPairs, gpucol::SlabTiling tiling) {
     if (callerKeepsPairs && t == kWithoutLastPairs) {
       EXPECT_FALSE(finder->stats().incremental) << "the finder kept no pairs of its own to carry over";
     }
-    last = pairs;
+    last.assign(pairs);
     std::uint32_t active = 0, changedActive = 0;
     for (std::size_t i = 0; i < s.flags.size(); ++i) {
       active += (s.flags[i] & gpucol::kProxyActive) != 0;

@@ -7,6 +7,7 @@
 #include <random>
 #include <vector>
 
+#include "broadphase/packed_pairs.h"
 #include "broadphase/pair_diff.h"
 
 namespace {
@@ -34,6 +35,26 @@ TEST(PairDiff, MatchesSetDifferencesAndKeepsOrder) {
     ASSERT_EQ(added, expectAdded);
     ASSERT_EQ(removed, expectRemoved);
     ASSERT_EQ(kept, expectKept);
+  }
+}
+
+TEST(PairDiff, CodedLastListGivesTheSameChanges) {
+  // The broad phase diffs its coded last list (PackedPairs) with this step's keys: same calls, same order.
+  std::mt19937_64 rng(5);
+  for (int t = 0; t < 50; ++t) {
+    const auto before = randomSorted(rng, rng() % 20000, 30000);
+    const auto now = randomSorted(rng, rng() % 20000, 30000);
+    gpucol::PackedPairs packed;
+    packed.assign(before);
+    std::vector<std::uint64_t> plain[3], coded[3];
+    gpucol::diffSortedPairs(
+        before, now, [&](std::uint64_t k) { plain[0].push_back(k); },
+        [&](std::uint64_t k) { plain[1].push_back(k); }, [&](std::uint64_t k) { plain[2].push_back(k); });
+    gpucol::diffSortedReaders(
+        gpucol::PackedPairs::Reader(packed), gpucol::SortedKeyReader(now),
+        [&](std::uint64_t k) { coded[0].push_back(k); }, [&](std::uint64_t k) { coded[1].push_back(k); },
+        [&](std::uint64_t k) { coded[2].push_back(k); });
+    for (int i = 0; i < 3; ++i) ASSERT_EQ(coded[i], plain[i]) << "trial " << t << " list " << i;
   }
 }
 

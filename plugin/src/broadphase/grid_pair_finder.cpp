@@ -286,7 +286,7 @@ class CpuPairFinder final : public PairFinder {
   PairFinderOptions m_keptOptions;
   std::vector<std::uint8_t> m_unchanged;      // per slot: active in the kept search and unchanged since
   std::vector<std::uint32_t> m_keptHuge;      // huge proxies of the kept search
-  std::vector<std::uint64_t> m_lastPairs;     // this finder's previous result (unless the caller keeps it)
+  PackedPairs m_lastPairs;                    // this finder's previous result (unless the caller keeps it)
   bool m_callerKeepsPairs = false;            // the kept grid's pairs are the caller's ProxyArrays::lastPairs
   std::vector<std::uint32_t> m_moved;         // active slots changed since the kept search
   std::vector<std::uint64_t> m_movedKeys;     // (cell << 32) | index into m_moved, binned moved proxies
@@ -324,13 +324,6 @@ void CpuPairFinder::findPairs(const ProxyArrays& proxies, const PairFinderOption
   m_chunksUsed = 0;
   m_peakBytes = 0;
   m_output = &pairs;
-  if (proxies.lastPairs == &pairs) {
-    // The caller's copy would be overwritten below: search as if it had given none.
-    ProxyArrays own = proxies;
-    own.lastPairs = nullptr;
-    findPairs(own, options, pairs);
-    return;
-  }
   pairs.clear();
   // Stage 0: the active proxies, counted; the full searches list them (listActive), the incremental one
   // (stage 11) needs no list of every proxy.
@@ -369,9 +362,9 @@ void CpuPairFinder::findPairs(const ProxyArrays& proxies, const PairFinderOption
   // (8 bytes per pair not held twice), else our own.
   m_callerKeepsPairs = m_kept && proxies.lastPairs != nullptr;
   if (m_kept && !m_callerKeepsPairs)
-    m_lastPairs.assign(pairs.begin(), pairs.end());
+    m_lastPairs.assign(pairs);
   else
-    std::vector<std::uint64_t>().swap(m_lastPairs);
+    m_lastPairs.clear();
   m_stats.rebinnedProxies = activeCount - m_stats.restingProxies;
   notePeak();
   m_stats.peakScratchBytes = m_peakBytes;
@@ -539,14 +532,16 @@ void CpuPairFinder::incremental(const ProxyArrays& p, const PairFinderOptions& o
   sortPairs(m_movedKeys, m_sortScratch, m_sortOffsets, slotBitsFor(p.count));
   // Pairs of two unchanged proxies are carried over (neither box nor filter changed), straight into `pairs`,
   // sized exactly, and the new pairs merged in from the back: no second list of the carried pairs.
-  const std::vector<std::uint64_t>& last = m_callerKeepsPairs ? *p.lastPairs : m_lastPairs;
+  const PackedPairs& last = m_callerKeepsPairs ? *p.lastPairs : m_lastPairs;
   auto resting = [&](std::uint64_t key) {
     return m_unchanged[std::uint32_t(key >> 32)] && m_unchanged[std::uint32_t(key)];
   };
-  const std::size_t carried = std::size_t(std::count_if(last.begin(), last.end(), resting));
+  std::size_t carried = 0;
+  last.forEach([&](std::uint64_t key) { carried += resting(key); });
   pairs.reserve(carried + m_movedKeys.size());
-  for (std::uint64_t key : last)
+  last.forEach([&](std::uint64_t key) {
     if (resting(key)) pairs.push_back(key);
+  });
   std::size_t fromCarried = carried, fromNew = m_movedKeys.size();
   pairs.resize(carried + fromNew);
   for (std::size_t to = pairs.size(); fromNew > 0;) {
@@ -1065,7 +1060,7 @@ std::size_t CpuPairFinder::scratchBytes() const {
   bytes += m_cellStart.capacity() * 4 + m_keys.capacity() * 8 + m_sorted.capacity() * 4;
   bytes += m_box.capacity() * sizeof(LocalBox) + m_homeKeys.capacity() * 8 + m_homeOrder.capacity() * 4 +
            m_homePos.capacity() * 4 + m_isBinned.capacity() + m_packed.capacity() * sizeof(PackedCells);
-  bytes += m_unchanged.capacity() + m_keptHuge.capacity() * 4 + m_lastPairs.capacity() * 8 +
+  bytes += m_unchanged.capacity() + m_keptHuge.capacity() * 4 + m_lastPairs.bytes() +
            m_moved.capacity() * 4 + m_movedKeys.capacity() * 8 + m_sortScratch.capacity() * 8 +
            m_sortOffsets.capacity() * sizeof(std::size_t);
   bytes += m_runCell.capacity() * 4 + m_runStart.capacity() * 4 + m_runLength.capacity() * 4;

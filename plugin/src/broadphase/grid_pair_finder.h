@@ -54,6 +54,8 @@
 
 #include "gpucol/config.h"
 
+#include "broadphase/packed_pairs.h"
+
 namespace gpucol {
 
 /// Flag bit of ProxyArrays::flags: the slot holds a live proxy.
@@ -111,12 +113,11 @@ struct ProxyArrays {
   /// Optional: nonzero for a slot whose box, filter or flags changed (or that is new) since the previous
   /// findPairs call on the same finder. nullptr: anything may have changed (a full search).
   const std::uint8_t* moved = nullptr;
-  /// Optional: the sorted pair keys that the same finder returned from its previous findPairs call, kept
+  /// Optional: the pair keys that the same finder returned from its previous findPairs call, kept coded and
   /// unchanged by the caller (GridBroadphase keeps them for its diff with the pair cache). Given, a finder
   /// that carries pairs over (stage 11) reads them here and keeps no copy of its own until the next call;
-  /// a later call without them is then a full search. nullptr: the finder keeps what it needs itself. Never
-  /// the `pairs` argument of the same call (that one is overwritten; it is then treated as not given).
-  const std::vector<std::uint64_t>* lastPairs = nullptr;
+  /// a later call without them is then a full search. nullptr: the finder keeps what it needs itself.
+  const PackedPairs* lastPairs = nullptr;
   /// Optional, in place of minX..maxZ (then nullptr): the boxes in the caller's records. Only a finder whose
   /// readsBoxRecords() is true accepts them.
   BoxRecords records;

@@ -28,6 +28,7 @@
 
 #include "broadphase/grid_choice.h"
 #include "broadphase/grid_pair_finder.h"
+#include "broadphase/packed_pairs.h"
 #include "broadphase/pair_diff.h"
 #include "broadphase/query_grid.h"
 #include "bullet/measured_backend_choice.h"
@@ -141,9 +142,9 @@ struct GridBroadphase::Impl {
   // every size measured, 1K to 1M boxes (README, "Broad phase"), and Auto never starts OpenCL for it.
   MeasuredBackendChoice autoChoice;
   bool autoMeasuring = false;  // the last search was one of autoChoice's measured calls
-  // The finder's result of the last search (sorted keys) and, of those, the ones the cache's filter refused
-  // (sorted): the cache holds `current` less `refused`.
-  std::vector<std::uint64_t> current;
+  // The finder's result of the last search (sorted keys, coded: a pile holds several per proxy) and, of
+  // those, the ones the cache's filter refused (sorted): the cache holds `current` less `refused`.
+  PackedPairs current;
   std::vector<std::uint64_t> refused;
 
   // The query index (broadphase/query_grid.h), built by a query when due and dropped when too many boxes
@@ -533,7 +534,7 @@ struct GridBroadphase::Impl {
                         (blocks.capacity() + blockBytes.capacity()) * sizeof(void*);
     bytes += (group.capacity() + mask.capacity()) * sizeof(std::int32_t) + state.capacity();
     bytes += (freeSlots.capacity() + pendingFree.capacity()) * sizeof(std::uint32_t);
-    bytes += (current.capacity() + refused.capacity()) * sizeof(std::uint64_t);
+    bytes += current.bytes() + refused.capacity() * sizeof(std::uint64_t);
     for (const PairFinder* f : {cpuFinder.get(), openClFinder.get()})
       if (f) bytes += f->stats().scratchBytes;
     return bytes;
@@ -741,9 +742,10 @@ void GridBroadphase::calculateOverlappingPairs(btDispatcher* dispatcher) {
   st.cellSize = fs.cellSize;
   st.boxesSurveyed = fs.surveyTaken;
   st.overlappingPairs = d.found.size();
-  // The peak: everything held after the step (this step's pair list included) and the last step's pair list,
-  // plus the larger of the search's extra (the view and the finder's high-water mark above what it keeps)
-  // and the diff's lists of changes. A mark that counts this step's list (peakIncludesOutput) says how much
+  // The peak: everything held after the step but the coded pair list, this step's list as found, and either
+  // the last step's coded list with the larger of the search's extra (the view and the finder's high-water
+  // mark above what it keeps) and the diff's lists of changes, or (while the found list is coded) this
+  // step's coded list with the diff's lists. A mark that counts this step's list (peakIncludesOutput) says how much
   // of it was there: the slab search's working memory is gone before the list is gathered.
   const std::size_t finderMark = std::max(fs.peakScratchBytes, fs.scratchBytes);
   const std::size_t heldOfMark =
@@ -752,6 +754,7 @@ void GridBroadphase::calculateOverlappingPairs(btDispatcher* dispatcher) {
   const std::size_t stepBytes = d.view.bytes() + d.survey.bytes() + finderMark - heldOfMark;
   d.view.release();
   d.releaseSurvey();
+  const std::size_t lastListBytes = d.current.bytes();
   d.diffAndUpdateCache(dispatcher, st);
   for (std::uint32_t s : d.pendingFree) {
     d.state[s] = std::uint8_t(d.state[s] & ~kFreed);
@@ -760,9 +763,11 @@ void GridBroadphase::calculateOverlappingPairs(btDispatcher* dispatcher) {
   d.pendingFree.clear();
   d.dirty = false;
   st.memoryBytes = d.heldBytes();
-  st.peakBytes =
-      std::max(startBytes, st.memoryBytes + d.found.capacity() * 8 +
-                               std::max(stepBytes, (d.addedKeys.capacity() + d.removedKeys.capacity()) * 8));
+  const std::size_t listBytes = d.current.bytes();
+  const std::size_t changeBytes = (d.addedKeys.capacity() + d.removedKeys.capacity()) * 8;
+  st.peakBytes = std::max(startBytes, st.memoryBytes - listBytes + d.found.capacity() * 8 +
+                                          std::max(lastListBytes + std::max(stepBytes, changeBytes),
+                                                   listBytes + changeBytes));
   for (auto* v : {&d.found, &d.addedKeys, &d.removedKeys}) std::vector<std::uint64_t>().swap(*v);
   st.cacheMs =
       std::chrono::duration<double, std::milli>(std::chrono::steady_clock::now() - cacheStart).count();
@@ -775,8 +780,8 @@ void GridBroadphase::calculateOverlappingPairs(btDispatcher* dispatcher) {
 /// cache's hash-table work: handing each change to the cache as the walk found it cost 25.6/26.5 ms against
 /// 17.3/18.1 at 1M uniform boxes. Pairs only in `current` that the cache holds are removed (those of
 /// destroyed proxies went with destroyProxy already); pairs only in `found`, and refused ones found again
-/// (the cache's filter callback may change its mind), are offered to the cache. Then `found` becomes
-/// `current`, and the old list is `found`, freed by the caller.
+/// (the cache's filter callback may change its mind), are offered to the cache. Then `current` is freed and
+/// coded again from `found`, which the caller frees.
 void GridBroadphase::Impl::diffAndUpdateCache(btDispatcher* dispatcher, GridBroadphaseStats& st) {
   btOverlappingPairCache* cache = pairCache;
   auto proxy0 = [&](std::uint64_t key) { return &proxy(std::uint32_t(key >> 32)); };
@@ -788,9 +793,9 @@ void GridBroadphase::Impl::diffAndUpdateCache(btDispatcher* dispatcher, GridBroa
   // cache's calls): grown by push_back a list held up to twice its keys, and half as much again while it
   // grew, which on a first step (every pair new) went unseen by the peak's count (tests/memory).
   std::size_t onlyFound = 0, onlyCurrent = 0;
-  diffSortedPairs(
-      current, found, [&](std::uint64_t) { ++onlyFound; }, [&](std::uint64_t) { ++onlyCurrent; },
-      [](std::uint64_t) {});
+  diffSortedReaders(
+      PackedPairs::Reader(current), SortedKeyReader(found), [&](std::uint64_t) { ++onlyFound; },
+      [&](std::uint64_t) { ++onlyCurrent; }, [](std::uint64_t) {});
   addedKeys.reserve(onlyFound + refused.size());
   removedKeys.reserve(onlyCurrent);
   // `refused` is walked along with the merge: both callbacks that consult it see keys in ascending order.
@@ -799,8 +804,8 @@ void GridBroadphase::Impl::diffAndUpdateCache(btDispatcher* dispatcher, GridBroa
     while (r < refused.size() && refused[r] < key) ++r;
     return r < refused.size() && refused[r] == key;
   };
-  diffSortedPairs(
-      current, found, [&](std::uint64_t key) { addedKeys.push_back(key); },
+  diffSortedReaders(
+      PackedPairs::Reader(current), SortedKeyReader(found), [&](std::uint64_t key) { addedKeys.push_back(key); },
       [&](std::uint64_t key) {
         if (isRefused(key)) return;  // never in the cache
         if ((state[std::uint32_t(key >> 32)] & kFreed) || (state[std::uint32_t(key)] & kFreed)) return;
@@ -824,7 +829,7 @@ void GridBroadphase::Impl::diffAndUpdateCache(btDispatcher* dispatcher, GridBroa
     ++st.added;
   }
   if (deferred && !removedKeys.empty()) removeDeferred(dispatcher);  // handled in one pass over the cache
-  current.swap(found);
+  current.assign(found);
   refused.swap(refusedNow);
   if (refusedNow.capacity() > 2 * refused.size() + 16) std::vector<std::uint64_t>().swap(refusedNow);
 }
