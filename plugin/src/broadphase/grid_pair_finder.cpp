@@ -18,6 +18,7 @@
 
 #include "broadphase/grid_choice.h"
 #include "broadphase/local_box.h"
+#include "broadphase/pair_buckets.h"
 #include "broadphase/pair_mapping.h"
 #include "broadphase/slab_search.h"
 #include "memory/large_array_allocator.h"
@@ -229,13 +230,24 @@ void countingSort(std::size_t items, std::uint64_t cells, LargeArrayVector<std::
 class CpuPairFinder final : public PairFinder {
  public:
   void findPairs(const ProxyArrays& proxies, const PairFinderOptions& options,
-                 std::vector<std::uint64_t>& pairs) override;
+                 std::vector<std::uint64_t>& pairs) override {
+    search(proxies, options, pairs, nullptr);
+  }
+  void findCodedPairs(const ProxyArrays& proxies, const PairFinderOptions& options, PackedPairs& pairs) override {
+    std::vector<std::uint64_t> keys;
+    search(proxies, options, keys, &pairs);
+  }
+  bool codesPairs() const override { return true; }
   const PairFinderStats& stats() const override { return m_stats; }
   std::string name() const override { return "cpu"; }
   bool readsBoxRecords() const override { return true; }
   bool surveyWanted(const PairFinderOptions& options, float& cell, int& axis) const override;
 
  private:
+  /// The search: the keys into `pairs`, or when `coded` is given into it (`pairs` then a scratch list that
+  /// the slab search does without).
+  void search(const ProxyArrays& proxies, const PairFinderOptions& options, std::vector<std::uint64_t>& pairs,
+              PackedPairs* coded);
   void bruteForce(const ProxyArrays& p, const PairFinderOptions& options, std::vector<std::uint64_t>& pairs);
   void grid(const ProxyArrays& p, const PairFinderOptions& options, bool keepGrid,
             std::vector<std::uint64_t>& pairs);
@@ -261,7 +273,8 @@ class CpuPairFinder final : public PairFinder {
   /// Raises the high-water mark of this search's memory, the output list included, to what is allocated now
   /// (called where a phase has all its memory, before it frees some).
   void notePeak() {
-    m_peakBytes = std::max(m_peakBytes, scratchBytes() + (m_output ? m_output->capacity() * 8 : 0));
+    m_peakBytes = std::max(m_peakBytes, scratchBytes() + (m_output ? m_output->capacity() * 8 : 0) +
+                                            (m_codedOutput ? m_codedOutput->bytes() : 0));
   }
 
   PairFinderStats m_stats;
@@ -307,6 +320,9 @@ class CpuPairFinder final : public PairFinder {
   float m_lastSizedCell = 0.0f;  // stage 2's cell edge of the last grid search (0: brute force since)
   std::size_t m_peakBytes = 0;   // high-water mark of this search (notePeak)
   const std::vector<std::uint64_t>* m_output = nullptr;  // findPairs' `pairs`, during the search
+  PackedPairs* m_codedOutput = nullptr;                  // findCodedPairs' `pairs`, during the search
+  bool m_coded = false;                                  // the search coded its keys into m_codedOutput
+  PairBuckets m_buckets;  // the slab search's pairs by bucket when coded (pair_buckets.h)
   std::size_t m_chunksUsed = 0;                          // chunks of m_chunkPairs filled by this search
 
   /// Reserves `count` more output chunks and returns the index of the first.
@@ -318,13 +334,16 @@ class CpuPairFinder final : public PairFinder {
   }
 };
 
-void CpuPairFinder::findPairs(const ProxyArrays& proxies, const PairFinderOptions& options,
-                              std::vector<std::uint64_t>& pairs) {
+void CpuPairFinder::search(const ProxyArrays& proxies, const PairFinderOptions& options,
+                           std::vector<std::uint64_t>& pairs, PackedPairs* coded) {
   m_stats = PairFinderStats{};
   m_chunksUsed = 0;
   m_peakBytes = 0;
   m_output = &pairs;
+  m_codedOutput = coded;
+  m_coded = false;
   pairs.clear();
+  if (coded) coded->clear();
   // Stage 0: the active proxies, counted; the full searches list them (listActive), the incremental one
   // (stage 11) needs no list of every proxy.
   std::uint32_t activeCount = 0;
@@ -358,18 +377,30 @@ void CpuPairFinder::findPairs(const ProxyArrays& proxies, const PairFinderOption
       m_keptHuge = m_huge;
     }
   }
+  if (coded && !m_coded) {
+    // Found as a list (every path but the slab search's): coded, then the list freed.
+    notePeak();
+    coded->assign(pairs);
+    notePeak();
+    std::vector<std::uint64_t>().swap(pairs);
+  }
   // The pairs carried over by the next incremental search: the caller's copy when it says it keeps one
-  // (8 bytes per pair not held twice), else our own.
+  // (not held twice), else our own.
   m_callerKeepsPairs = m_kept && proxies.lastPairs != nullptr;
-  if (m_kept && !m_callerKeepsPairs)
-    m_lastPairs.assign(pairs);
-  else
+  if (m_kept && !m_callerKeepsPairs) {
+    if (coded)
+      m_lastPairs = *coded;
+    else
+      m_lastPairs.assign(pairs);
+  } else {
     m_lastPairs.clear();
+  }
   m_stats.rebinnedProxies = activeCount - m_stats.restingProxies;
   notePeak();
   m_stats.peakScratchBytes = m_peakBytes;
   m_stats.peakIncludesOutput = true;
   m_output = nullptr;
+  m_codedOutput = nullptr;
   releaseScratch();
   m_stats.scratchBytes = scratchBytes();
 }
@@ -979,12 +1010,19 @@ void CpuPairFinder::grid(const ProxyArrays& p, const PairFinderOptions& options,
   } else {
     clock.lap();  // the slab search timed its own parts
   }
-  gather(pairs);
-  notePeak();
-  std::vector<std::vector<std::uint64_t>>().swap(m_chunkPairs);  // gathered into `pairs`
-  m_chunksUsed = 0;
-  // Stage 10: one order whatever the chunking, threads or device.
-  sortPairs(pairs, m_sortScratch, m_sortOffsets, slotBitsFor(p.count));
+  if (m_coded) {
+    // Stage 10 by bucket: sorted and coded straight from the slabs' buckets.
+    m_buckets.packInto(*m_codedOutput);
+    notePeak();
+    m_buckets.release();
+  } else {
+    gather(pairs);
+    notePeak();
+    std::vector<std::vector<std::uint64_t>>().swap(m_chunkPairs);  // gathered into `pairs`
+    m_chunksUsed = 0;
+    // Stage 10: one order whatever the chunking, threads or device.
+    sortPairs(pairs, m_sortScratch, m_sortOffsets, slotBitsFor(p.count));
+  }
   m_stats.sortMs = clock.lap();
   if (slabs && keepGrid) {
     notePeak();
@@ -1015,8 +1053,12 @@ bool CpuPairFinder::searchSlabs(const ProxyArrays& p, const PairFinderOptions& o
   notePeak();
   std::vector<std::uint32_t>().swap(m_binned);  // the slab lists hold every binned box
   m_stats.binMs = clock.lap();
-  const std::size_t first = takeChunks(m_slabs.outputs(m_huge.size()));
-  const SlabSearchCounts counts = m_slabs.search(p, m_huge, g, m_chunkPairs, first);
+  // Coded output: each slab's pairs go into the buckets as the slab is done, not into a list of its own.
+  m_coded = m_codedOutput != nullptr && PairBuckets::fits(p.count);
+  if (m_coded) m_buckets.reset(p.count, m_slabs.outputs(m_huge.size()));
+  const std::size_t first = m_coded ? 0 : takeChunks(m_slabs.outputs(m_huge.size()));
+  const SlabSearchCounts counts =
+      m_slabs.search(p, m_huge, g, m_chunkPairs, first, m_coded ? &m_buckets : nullptr);
   m_stats.testMs = clock.lap();
   m_stats.slabs = std::uint32_t(m_slabs.slabs());
   m_stats.slabAxisKept = m_slabs.tookKeptExtents();
@@ -1067,6 +1109,7 @@ std::size_t CpuPairFinder::scratchBytes() const {
   bytes += m_runPrefix.capacity() * 8 + m_bits.capacity() * 8 + m_blockRuns.capacity() * 4 +
            m_offsets.capacity() * 4;
   for (const auto& c : m_chunkPairs) bytes += c.capacity() * 8;
+  bytes += m_buckets.bytes();
   return bytes + (m_keptExtents.lo.capacity() + m_keptExtents.hi.capacity()) * 4 + m_slabs.bytes();
 }
 
@@ -1076,6 +1119,13 @@ PairFinderFactory& openClFactory() {
 }
 
 }  // namespace
+
+void PairFinder::findCodedPairs(const ProxyArrays& proxies, const PairFinderOptions& options,
+                                PackedPairs& pairs) {
+  std::vector<std::uint64_t> keys;
+  findPairs(proxies, options, keys);
+  pairs.assign(keys);
+}
 
 std::unique_ptr<PairFinder> makeCpuPairFinder() {
   return std::make_unique<CpuPairFinder>();

@@ -240,6 +240,12 @@ class PairFinder {
   /// Replaces `pairs` with the sorted, duplicate-free pair keys of `proxies`.
   virtual void findPairs(const ProxyArrays& proxies, const PairFinderOptions& options,
                          std::vector<std::uint64_t>& pairs) = 0;
+  /// findPairs with the keys coded (PackedPairs, what GridBroadphase keeps). A finder whose codesPairs() is
+  /// true never holds them all as 8-byte keys where it can help it; the others' default codes findPairs'
+  /// list.
+  virtual void findCodedPairs(const ProxyArrays& proxies, const PairFinderOptions& options, PackedPairs& pairs);
+  /// True when findCodedPairs is the finder's own (its stats then count the coded list as its output).
+  virtual bool codesPairs() const { return false; }
   /// Statistics of the last findPairs call.
   virtual const PairFinderStats& stats() const = 0;
   /// Short name for logs and benchmarks ("cpu", "opencl").

@@ -6,37 +6,6 @@
 #include <utility>
 
 namespace gpucol {
-namespace {
-
-std::size_t varintBytes(std::uint64_t v) {
-  std::size_t n = 1;
-  while (v >= 0x80) v >>= 7, ++n;
-  return n;
-}
-
-std::uint8_t* writeVarint(std::uint8_t* out, std::uint64_t v) {
-  while (v >= 0x80) *out++ = std::uint8_t(v | 0x80), v >>= 7;
-  *out++ = std::uint8_t(v);
-  return out;
-}
-
-/// Calls code(v) for the varints of keys[1, n) after keys[0] (the coding in packed_pairs.h).
-template <typename Code>
-void forEachCode(const std::uint64_t* keys, std::size_t n, Code&& code) {
-  std::uint32_t a = std::uint32_t(keys[0] >> 32), b = std::uint32_t(keys[0]);
-  for (std::size_t i = 1; i < n; ++i) {
-    const std::uint32_t ka = std::uint32_t(keys[i] >> 32), kb = std::uint32_t(keys[i]);
-    if (ka == a) {
-      code(std::uint64_t(std::uint32_t(kb - b - 1)) << 1);
-    } else {
-      code((std::uint64_t(std::uint32_t(kb - ka - 1)) << 1) | 1);
-      code(std::uint64_t(std::uint32_t(ka - a - 1)));
-    }
-    a = ka, b = kb;
-  }
-}
-
-}  // namespace
 
 std::size_t PackedPairs::bytes() const {
   std::size_t bytes = m_segments.capacity() * sizeof(Segment);
@@ -55,22 +24,25 @@ void PackedPairs::swap(PackedPairs& other) noexcept {
 }
 
 void PackedPairs::assign(const std::uint64_t* keys, std::size_t n) {
-  clear();  // the old code is not held beside the new
-  const std::size_t count = (n + kSegmentKeys - 1) / kSegmentKeys;
-  m_segments.resize(count);
-  m_size = n;
-  tbb::parallel_for(std::size_t(0), count, [&](std::size_t i) {
+  resetSegments((n + kSegmentKeys - 1) / kSegmentKeys);
+  tbb::parallel_for(std::size_t(0), m_segments.size(), [&](std::size_t i) {
     const std::uint64_t* first = keys + i * kSegmentKeys;
-    const std::size_t keysHere = std::min(kSegmentKeys, n - i * kSegmentKeys);
-    Segment& s = m_segments[i];
-    s.first = first[0];
-    s.count = std::uint32_t(keysHere);
-    std::size_t size = 0;
-    forEachCode(first, keysHere, [&](std::uint64_t v) { size += varintBytes(v); });
-    s.code.resize(size);  // exactly: a vector sized from empty allocates what it is asked for
-    std::uint8_t* out = s.code.data();
-    forEachCode(first, keysHere, [&](std::uint64_t v) { out = writeVarint(out, v); });
+    setSegment(i, std::min(kSegmentKeys, n - i * kSegmentKeys), [first](std::size_t k) { return first[k]; });
   });
+  finishSegments();
+}
+
+void PackedPairs::resetSegments(std::size_t count) {
+  clear();  // the old code is not held beside the new
+  m_segments.resize(count);
+}
+
+void PackedPairs::finishSegments() {
+  m_segments.erase(std::remove_if(m_segments.begin(), m_segments.end(),
+                                  [](const Segment& s) { return s.count == 0; }),
+                   m_segments.end());
+  m_size = 0;
+  for (const Segment& s : m_segments) m_size += s.count;
 }
 
 PackedPairs::Reader::Reader(const PackedPairs& pairs, std::size_t segment)

@@ -12,6 +12,7 @@
 // so any ascending, duplicate-free keys round-trip (pair keys have a < b, which keeps the codes short).
 #include <cstddef>
 #include <cstdint>
+#include <stdexcept>
 #include <vector>
 
 namespace gpucol {
@@ -34,6 +35,16 @@ class PackedPairs {
   /// its size (counted first), segments coded in parallel.
   void assign(const std::uint64_t* keys, std::size_t n);
   void assign(const std::vector<std::uint64_t>& keys) { assign(keys.data(), keys.size()); }
+
+  /// Frees the contents and makes `count` empty segments for setSegment.
+  void resetSegments(std::size_t count);
+  /// Codes segment `i` from the n ascending keys keyAt(0), ..., keyAt(n - 1), all above those of the segments
+  /// before it and below those after it, at its size (counted first). Distinct segments may be set in
+  /// parallel. A segment left empty is dropped by finishSegments.
+  template <typename KeyAt>
+  void setSegment(std::size_t i, std::size_t n, KeyAt&& keyAt);
+  /// After setSegment: drops the empty segments and counts the keys.
+  void finishSegments();
 
   std::size_t segments() const { return m_segments.size(); }
   /// First key of segment `i`.
@@ -86,6 +97,34 @@ class PackedPairs {
   std::vector<std::uint64_t> toVector() const;
 
  private:
+  static std::size_t varintBytes(std::uint64_t v) {
+    std::size_t n = 1;
+    while (v >= 0x80) v >>= 7, ++n;
+    return n;
+  }
+  static std::uint8_t* writeVarint(std::uint8_t* out, std::uint64_t v) {
+    while (v >= 0x80) *out++ = std::uint8_t(v | 0x80), v >>= 7;
+    *out++ = std::uint8_t(v);
+    return out;
+  }
+  /// Calls code(v) for the varints of keys 1..n-1 after key 0 (the coding above).
+  template <typename KeyAt, typename Code>
+  static void forEachCode(std::size_t n, KeyAt& keyAt, Code&& code) {
+    const std::uint64_t k0 = keyAt(0);
+    std::uint32_t a = std::uint32_t(k0 >> 32), b = std::uint32_t(k0);
+    for (std::size_t i = 1; i < n; ++i) {
+      const std::uint64_t k = keyAt(i);
+      const std::uint32_t ka = std::uint32_t(k >> 32), kb = std::uint32_t(k);
+      if (ka == a) {
+        code(std::uint64_t(std::uint32_t(kb - b - 1)) << 1);
+      } else {
+        code((std::uint64_t(std::uint32_t(kb - ka - 1)) << 1) | 1);
+        code(std::uint64_t(std::uint32_t(ka - a - 1)));
+      }
+      a = ka, b = kb;
+    }
+  }
+
   struct Segment {
     std::uint64_t first = 0;
     std::uint32_t count = 0;          // keys, the first included
@@ -94,5 +133,21 @@ class PackedPairs {
   std::vector<Segment> m_segments;
   std::size_t m_size = 0;
 };
+
+template <typename KeyAt>
+void PackedPairs::setSegment(std::size_t i, std::size_t n, KeyAt&& keyAt) {
+  Segment& s = m_segments[i];
+  std::vector<std::uint8_t>().swap(s.code);
+  s.count = 0;
+  if (n == 0) return;
+  if (n > 0xffffffffu) throw std::length_error("gpucol::PackedPairs: more than 2^32 - 1 keys in one segment");
+  s.first = keyAt(0);
+  s.count = std::uint32_t(n);
+  std::size_t size = 0;
+  forEachCode(n, keyAt, [&](std::uint64_t v) { size += varintBytes(v); });
+  s.code.resize(size);  // exactly: a vector sized from empty allocates what it is asked for
+  std::uint8_t* out = s.code.data();
+  forEachCode(n, keyAt, [&](std::uint64_t v) { out = writeVarint(out, v); });
+}
 
 }  // namespace gpucol

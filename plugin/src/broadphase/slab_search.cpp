@@ -209,7 +209,7 @@ bool SlabSearch::plan(const ProxyArrays& p, const std::vector<std::uint32_t>& bi
 
 SlabSearchCounts SlabSearch::search(const ProxyArrays& p, const std::vector<std::uint32_t>& huge,
                                     const Grid& g, std::vector<std::vector<std::uint64_t>>& out,
-                                    std::size_t first) {
+                                    std::size_t first, PairBuckets* buckets) {
   std::vector<std::uint32_t>().swap(m_boxLayers);  // the plan's (kept until now for the caller's peak)
   const std::size_t slabCount = slabs();
   std::vector<SlabSearchCounts> counts(slabCount + huge.size());
@@ -222,15 +222,19 @@ SlabSearchCounts SlabSearch::search(const ProxyArrays& p, const std::vector<std:
           // up to twice their pairs, and all of them are held until the gather.
           Scratch& t = m_scratch.local();
           counts[k] = searchSlab(k, p, huge, g, t);
-          out[first + k].assign(t.pairs.begin(), t.pairs.end());
+          if (buckets)
+            buckets->addPiece(k, t.pairs);
+          else
+            out[first + k].assign(t.pairs.begin(), t.pairs.end());
         }
       },
       tbb::simple_partitioner());
   // Stage 3: huge boxes among themselves, each pair from the earlier one in `huge`.
   tbb::parallel_for(std::size_t(0), huge.size(), [&](std::size_t i) {
-    auto& list = out[first + slabCount + i];
+    auto& list = buckets ? m_scratch.local().pairs : out[first + slabCount + i];
     list.clear();
     counts[slabCount + i].candidates = hugeAgainstLaterHuge(p, huge, i, list);
+    if (buckets) buckets->addPiece(slabCount + i, list);
   });
   SlabSearchCounts total;
   for (const SlabSearchCounts& c : counts) total.keys += c.keys, total.candidates += c.candidates;

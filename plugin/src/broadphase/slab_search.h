@@ -24,6 +24,7 @@
 #include "broadphase/grid_choice.h"
 #include "broadphase/grid_pair_finder.h"
 #include "broadphase/local_box.h"
+#include "broadphase/pair_buckets.h"
 
 namespace gpucol {
 
@@ -58,9 +59,11 @@ class SlabSearch {
   /// Output lists search() fills: one per slab, one per huge box.
   std::size_t outputs(std::size_t hugeCount) const { return slabs() + hugeCount; }
   /// Finds the planned boxes' pairs and those of the `huge` slots with each other and with binned boxes, into
-  /// out[first], ..., out[first + outputs(huge.size()) - 1] (unsorted keys, each pair once).
+  /// out[first], ..., out[first + outputs(huge.size()) - 1] (unsorted keys, each pair once), or when
+  /// `buckets` is given into its pieces 0, ..., outputs(huge.size()) - 1 (out is then not touched).
   SlabSearchCounts search(const ProxyArrays& p, const std::vector<std::uint32_t>& huge, const Grid& g,
-                          std::vector<std::vector<std::uint64_t>>& out, std::size_t first);
+                          std::vector<std::vector<std::uint64_t>>& out, std::size_t first,
+                          PairBuckets* buckets = nullptr);
   /// Bytes of working memory held (capacities).
   std::size_t bytes() const;
   /// Frees all working memory.

@@ -163,7 +163,8 @@ struct GridBroadphase::Impl {
   ViewBuffer view;
   BoxSurvey survey;        // made by the scan for the CPU finder when the boxes are read in place
   bool surveying = false;  // the scan of this step makes it
-  std::vector<std::uint64_t> found;
+  std::vector<std::uint64_t> found;  // this step's keys from a finder that does not code them
+  PackedPairs foundCoded;            // this step's keys, coded
   std::vector<std::uint64_t> refusedNow;
   std::vector<std::uint64_t> removedKeys;  // pairs to remove from the cache (sorted)
   std::vector<std::uint64_t> addedKeys;    // pairs to offer to the cache (sorted)
@@ -724,7 +725,10 @@ void GridBroadphase::calculateOverlappingPairs(btDispatcher* dispatcher) {
   // search that starts by dropping a kept grid may never come back up to that).
   const std::size_t startBytes = d.heldBytes() + d.view.bytes() + d.survey.bytes();
   const auto searchStart = std::chrono::steady_clock::now();
-  finder.findPairs(view, d.options(), d.found);
+  if (finder.codesPairs())
+    finder.findCodedPairs(view, d.options(), d.foundCoded);
+  else
+    finder.findPairs(view, d.options(), d.found);
   const auto cacheStart = std::chrono::steady_clock::now();
   st.searchMs = std::chrono::duration<double, std::milli>(cacheStart - searchStart).count();
   if (d.autoMeasuring) {
@@ -741,20 +745,23 @@ void GridBroadphase::calculateOverlappingPairs(btDispatcher* dispatcher) {
   st.rebinnedProxies = fs.rebinnedProxies;
   st.cellSize = fs.cellSize;
   st.boxesSurveyed = fs.surveyTaken;
-  st.overlappingPairs = d.found.size();
-  // The peak: everything held after the step but the coded pair list, this step's list as found, and either
-  // the last step's coded list with the larger of the search's extra (the view and the finder's high-water
-  // mark above what it keeps) and the diff's lists of changes, or (while the found list is coded) this
-  // step's coded list with the diff's lists. A mark that counts this step's list (peakIncludesOutput) says how much
-  // of it was there: the slab search's working memory is gone before the list is gathered.
+  // The search's extra: the view and the finder's high-water mark above what it keeps and its output as it
+  // stands now (a mark that counts its output, peakIncludesOutput, says how much of it was there: the slab
+  // search's working memory is gone before the list is gathered).
+  const std::size_t outputBytes = finder.codesPairs() ? d.foundCoded.bytes() : d.found.capacity() * 8;
   const std::size_t finderMark = std::max(fs.peakScratchBytes, fs.scratchBytes);
   const std::size_t heldOfMark =
-      fs.scratchBytes +
-      (fs.peakIncludesOutput ? std::min(finderMark - fs.scratchBytes, d.found.capacity() * 8) : 0);
+      fs.scratchBytes + (fs.peakIncludesOutput ? std::min(finderMark - fs.scratchBytes, outputBytes) : 0);
   const std::size_t stepBytes = d.view.bytes() + d.survey.bytes() + finderMark - heldOfMark;
   d.view.release();
   d.releaseSurvey();
-  const std::size_t lastListBytes = d.current.bytes();
+  const std::size_t foundBytes = d.found.capacity() * 8;
+  if (!finder.codesPairs()) {
+    d.foundCoded.assign(d.found);
+    std::vector<std::uint64_t>().swap(d.found);
+  }
+  st.overlappingPairs = d.foundCoded.size();
+  const std::size_t lastListBytes = d.current.bytes(), listBytes = d.foundCoded.bytes();
   d.diffAndUpdateCache(dispatcher, st);
   for (std::uint32_t s : d.pendingFree) {
     d.state[s] = std::uint8_t(d.state[s] & ~kFreed);
@@ -763,25 +770,27 @@ void GridBroadphase::calculateOverlappingPairs(btDispatcher* dispatcher) {
   d.pendingFree.clear();
   d.dirty = false;
   st.memoryBytes = d.heldBytes();
-  const std::size_t listBytes = d.current.bytes();
+  // The peak: what is held after the step but its pair list, with the last step's list and either the
+  // search's extra and output, or (a finder that does not code) this step's list as found and coded, or
+  // both coded lists and the diff's lists of changes.
   const std::size_t changeBytes = (d.addedKeys.capacity() + d.removedKeys.capacity()) * 8;
-  st.peakBytes = std::max(startBytes, st.memoryBytes - listBytes + d.found.capacity() * 8 +
-                                          std::max(lastListBytes + std::max(stepBytes, changeBytes),
-                                                   listBytes + changeBytes));
-  for (auto* v : {&d.found, &d.addedKeys, &d.removedKeys}) std::vector<std::uint64_t>().swap(*v);
+  const std::size_t before = st.memoryBytes - listBytes + lastListBytes;
+  st.peakBytes = std::max({startBytes, before + outputBytes + stepBytes, before + foundBytes + listBytes,
+                           before + listBytes + changeBytes});
+  for (auto* v : {&d.addedKeys, &d.removedKeys}) std::vector<std::uint64_t>().swap(*v);
   st.cacheMs =
       std::chrono::duration<double, std::milli>(std::chrono::steady_clock::now() - cacheStart).count();
   d.stats = st;
 }
 
-/// The diff of the last pair list (`current`) with this step's (`found`) in one merge walk that only lists
+/// The diff of the last pair list (`current`) with this step's (`foundCoded`) in one merge walk that only lists
 /// the changes, then the cache's calls, removals first and additions after, each in key order (the cache's
 /// pair array then never holds both). Listing first keeps the walk over the two pair lists apart from the
 /// cache's hash-table work: handing each change to the cache as the walk found it cost 25.6/26.5 ms against
 /// 17.3/18.1 at 1M uniform boxes. Pairs only in `current` that the cache holds are removed (those of
-/// destroyed proxies went with destroyProxy already); pairs only in `found`, and refused ones found again
-/// (the cache's filter callback may change its mind), are offered to the cache. Then `current` is freed and
-/// coded again from `found`, which the caller frees.
+/// destroyed proxies went with destroyProxy already); pairs only in `foundCoded`, and refused ones found
+/// again (the cache's filter callback may change its mind), are offered to the cache. Then `foundCoded`
+/// becomes `current`, and the last list is freed.
 void GridBroadphase::Impl::diffAndUpdateCache(btDispatcher* dispatcher, GridBroadphaseStats& st) {
   btOverlappingPairCache* cache = pairCache;
   auto proxy0 = [&](std::uint64_t key) { return &proxy(std::uint32_t(key >> 32)); };
@@ -794,7 +803,7 @@ void GridBroadphase::Impl::diffAndUpdateCache(btDispatcher* dispatcher, GridBroa
   // grew, which on a first step (every pair new) went unseen by the peak's count (tests/memory).
   std::size_t onlyFound = 0, onlyCurrent = 0;
   diffSortedReaders(
-      PackedPairs::Reader(current), SortedKeyReader(found), [&](std::uint64_t) { ++onlyFound; },
+      PackedPairs::Reader(current), PackedPairs::Reader(foundCoded), [&](std::uint64_t) { ++onlyFound; },
       [&](std::uint64_t) { ++onlyCurrent; }, [](std::uint64_t) {});
   addedKeys.reserve(onlyFound + refused.size());
   removedKeys.reserve(onlyCurrent);
@@ -805,7 +814,8 @@ void GridBroadphase::Impl::diffAndUpdateCache(btDispatcher* dispatcher, GridBroa
     return r < refused.size() && refused[r] == key;
   };
   diffSortedReaders(
-      PackedPairs::Reader(current), SortedKeyReader(found), [&](std::uint64_t key) { addedKeys.push_back(key); },
+      PackedPairs::Reader(current), PackedPairs::Reader(foundCoded),
+      [&](std::uint64_t key) { addedKeys.push_back(key); },
       [&](std::uint64_t key) {
         if (isRefused(key)) return;  // never in the cache
         if ((state[std::uint32_t(key >> 32)] & kFreed) || (state[std::uint32_t(key)] & kFreed)) return;
@@ -829,7 +839,8 @@ void GridBroadphase::Impl::diffAndUpdateCache(btDispatcher* dispatcher, GridBroa
     ++st.added;
   }
   if (deferred && !removedKeys.empty()) removeDeferred(dispatcher);  // handled in one pass over the cache
-  current.assign(found);
+  current.swap(foundCoded);
+  foundCoded.clear();
   refused.swap(refusedNow);
   if (refusedNow.capacity() > 2 * refused.size() + 16) std::vector<std::uint64_t>().swap(refusedNow);
 }

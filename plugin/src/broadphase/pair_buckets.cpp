@@ -1,0 +1,131 @@
+#include "broadphase/pair_buckets.h"
+
+#include <tbb/parallel_for.h>
+
+#include <algorithm>
+#include <array>
+
+namespace gpucol {
+namespace {
+
+/// Bits that number the slots below `count` (at least 1).
+std::uint32_t bitsFor(std::uint32_t count) {
+  std::uint32_t bits = 1;
+  while (bits < 32 && (std::uint64_t(1) << bits) < count) ++bits;
+  return bits;
+}
+
+/// The lower slot's bits left in an entry beside the higher slot's `slotBits` (the rest name the bucket).
+std::uint32_t shiftFor(std::uint32_t slotBits) {
+  return slotBits > 8 ? slotBits - 8 : 0;
+}
+
+/// Frees `v` when it cannot hold `n`, then sizes it to `n` (a grown vector could hold twice what it needs).
+void sizeExactly(std::vector<std::uint32_t>& v, std::size_t n) {
+  if (v.capacity() < n) std::vector<std::uint32_t>().swap(v), v.reserve(n);
+  v.resize(n);
+}
+
+/// Sorts e[0, n) of `bits` significant bits: an LSD radix sort in passes of at most 11 bits through `s`
+/// (a bucket is a few thousand entries; a comparison sort of them all took longer).
+void sortEntries(std::uint32_t* e, std::uint32_t* s, std::size_t n, std::uint32_t bits) {
+  if (n < 64) {
+    std::sort(e, e + n);
+    return;
+  }
+  const std::uint32_t passes = (bits + 10) / 11, digit = (bits + passes - 1) / passes;
+  const std::uint32_t mask = (1u << digit) - 1;
+  std::array<std::size_t, 2048> count;
+  std::uint32_t* from = e;
+  std::uint32_t* to = s;
+  for (std::uint32_t p = 0; p < passes; ++p) {
+    const std::uint32_t shift = p * digit;
+    std::fill(count.begin(), count.begin() + mask + 1, std::size_t(0));
+    for (std::size_t i = 0; i < n; ++i) ++count[(from[i] >> shift) & mask];
+    std::size_t sum = 0;
+    for (std::uint32_t d = 0; d <= mask; ++d) sum += std::exchange(count[d], sum);
+    for (std::size_t i = 0; i < n; ++i) to[count[(from[i] >> shift) & mask]++] = from[i];
+    std::swap(from, to);
+  }
+  if (from != e) std::copy(from, from + n, e);
+}
+
+}  // namespace
+
+bool PairBuckets::fits(std::uint32_t slotCount) {
+  const std::uint32_t slotBits = bitsFor(slotCount);
+  return shiftFor(slotBits) + slotBits <= 32;
+}
+
+void PairBuckets::reset(std::uint32_t slotCount, std::size_t pieces) {
+  release();
+  m_slotBits = bitsFor(slotCount);
+  m_shift = shiftFor(m_slotBits);
+  m_buckets = slotCount == 0 ? 1 : ((slotCount - 1) >> m_shift) + 1;
+  m_pieces.resize(pieces);
+}
+
+void PairBuckets::addPiece(std::size_t i, const std::vector<std::uint64_t>& keys) {
+  Piece& piece = m_pieces[i];
+  if (keys.empty()) return;
+  // A counting sort by bucket, into entries allocated at their number.
+  piece.bucketStart.assign(m_buckets + 1, 0);
+  for (std::uint64_t key : keys) ++piece.bucketStart[(key >> 32 >> m_shift) + 1];
+  for (std::uint32_t b = 0; b < m_buckets; ++b) piece.bucketStart[b + 1] += piece.bucketStart[b];
+  std::vector<std::uint32_t> next(piece.bucketStart.begin(), piece.bucketStart.end() - 1);
+  piece.entries.resize(keys.size());
+  const std::uint64_t lowMask = (std::uint64_t(1) << m_shift) - 1;
+  for (std::uint64_t key : keys) {
+    const std::uint64_t a = key >> 32;
+    piece.entries[next[a >> m_shift]++] =
+        std::uint32_t(((a & lowMask) << m_slotBits) | (key & 0xffffffffu));
+  }
+}
+
+void PairBuckets::packInto(PackedPairs& out) {
+  out.resetSegments(m_buckets);
+  const std::uint32_t entryBits = m_shift + m_slotBits;
+  const std::uint64_t slotMask = (std::uint64_t(1) << m_slotBits) - 1;
+  tbb::parallel_for(std::uint32_t(0), m_buckets, [&](std::uint32_t bucket) {
+    std::size_t n = 0;
+    for (const Piece& piece : m_pieces)
+      if (!piece.entries.empty()) n += piece.bucketStart[bucket + 1] - piece.bucketStart[bucket];
+    if (n == 0) return;
+    Buffers& buffers = m_buffers.local();
+    sizeExactly(buffers.entries, n);
+    sizeExactly(buffers.scratch, n);
+    std::uint32_t* e = buffers.entries.data();
+    for (const Piece& piece : m_pieces) {
+      if (piece.entries.empty()) continue;
+      const std::uint32_t* from = piece.entries.data();
+      e = std::copy(from + piece.bucketStart[bucket], from + piece.bucketStart[bucket + 1], e);
+    }
+    sortEntries(buffers.entries.data(), buffers.scratch.data(), n, entryBits);
+    const std::uint64_t base = std::uint64_t(bucket) << m_shift;
+    const std::uint32_t* sorted = buffers.entries.data();
+    out.setSegment(bucket, n, [&](std::size_t k) {
+      return ((base | (sorted[k] >> m_slotBits)) << 32) | (sorted[k] & slotMask);
+    });
+  });
+  out.finishSegments();
+}
+
+std::size_t PairBuckets::size() const {
+  std::size_t n = 0;
+  for (const Piece& piece : m_pieces) n += piece.entries.size();
+  return n;
+}
+
+std::size_t PairBuckets::bytes() const {
+  std::size_t bytes = m_pieces.capacity() * sizeof(Piece);
+  for (const Piece& piece : m_pieces) bytes += (piece.entries.capacity() + piece.bucketStart.capacity()) * 4;
+  for (const Buffers& buffers : m_buffers) bytes += (buffers.entries.capacity() + buffers.scratch.capacity()) * 4;
+  return bytes;
+}
+
+void PairBuckets::release() {
+  std::vector<Piece>().swap(m_pieces);
+  m_buffers.clear();
+}
+
+}  // namespace gpucol

@@ -1,0 +1,58 @@
+// PairBuckets against a plain sort: pieces of unsorted pair keys come out as one sorted, coded list, for
+// slot counts from a handful (no bucket bits) to 2^20 (32-bit entries exactly).
+#include <gtest/gtest.h>
+
+#include <algorithm>
+#include <cstdint>
+#include <random>
+#include <vector>
+
+#include "broadphase/pair_buckets.h"
+
+namespace {
+
+TEST(PairBuckets, PiecesComeOutSortedAndCoded) {
+  std::mt19937_64 rng(17);
+  for (std::uint32_t slots : {2u, 3u, 200u, 256u, 257u, 5000u, 100000u, 1u << 20}) {
+    for (std::size_t total : {std::size_t(0), std::size_t(1), std::size_t(50), std::size_t(30000)}) {
+      // Distinct pair keys (a < b) over `slots` slots, some slots with long rows (a huge box's pairs).
+      std::vector<std::uint64_t> keys;
+      for (std::size_t i = 0; i < total; ++i) {
+        const std::uint32_t a = i % 7 == 0 ? 0 : std::uint32_t(rng() % (slots - 1));
+        const std::uint32_t b = a + 1 + std::uint32_t(rng() % (slots - 1 - a));
+        keys.push_back((std::uint64_t(a) << 32) | b);
+      }
+      std::sort(keys.begin(), keys.end());
+      keys.erase(std::unique(keys.begin(), keys.end()), keys.end());
+      std::vector<std::uint64_t> shuffled = keys;
+      std::shuffle(shuffled.begin(), shuffled.end(), rng);
+      // Split at random points into pieces, some empty.
+      const std::size_t pieces = 1 + rng() % 9;
+      std::vector<std::size_t> cut{0, shuffled.size()};
+      for (std::size_t p = 1; p < pieces; ++p) cut.push_back(shuffled.empty() ? 0 : rng() % shuffled.size());
+      std::sort(cut.begin(), cut.end());
+      gpucol::PairBuckets buckets;
+      ASSERT_TRUE(gpucol::PairBuckets::fits(slots));
+      buckets.reset(slots, cut.size() - 1);
+      for (std::size_t p = 0; p + 1 < cut.size(); ++p)
+        buckets.addPiece(p, std::vector<std::uint64_t>(shuffled.begin() + std::ptrdiff_t(cut[p]),
+                                                       shuffled.begin() + std::ptrdiff_t(cut[p + 1])));
+      ASSERT_EQ(buckets.size(), keys.size());
+      gpucol::PackedPairs out;
+      buckets.packInto(out);
+      ASSERT_EQ(out.toVector(), keys) << slots << " slots, " << total << " keys";
+      // 4 B per key in the pieces at least, until released.
+      EXPECT_GE(buckets.bytes(), 4 * keys.size());
+      buckets.release();
+      EXPECT_EQ(buckets.bytes(), 0u);
+      EXPECT_EQ(buckets.size(), 0u);
+    }
+  }
+}
+
+TEST(PairBuckets, EntriesFitUpTo2To20Slots) {
+  EXPECT_TRUE(gpucol::PairBuckets::fits(1u << 20));
+  EXPECT_FALSE(gpucol::PairBuckets::fits((1u << 20) + 1));
+}
+
+}  // namespace
