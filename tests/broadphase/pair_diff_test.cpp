@@ -58,6 +58,42 @@ TEST(PairDiff, CodedLastListGivesTheSameChanges) {
   }
 }
 
+TEST(PairDiff, PartsWalkedInParallelGiveTheSameChanges) {
+  // Both lists coded, cut into the found list's segments and walked part by part (in parallel): the parts'
+  // changes, put together in part order, are the plain diff's.
+  std::mt19937_64 rng(9);
+  for (int t = 0; t < 40; ++t) {
+    const std::uint64_t range = t % 2 ? 30000 : 3000000;
+    const auto before = randomSorted(rng, t < 3 ? 0 : rng() % 30000, range);
+    const auto now = randomSorted(rng, t == 1 ? 0 : rng() % 30000, range);
+    gpucol::PackedPairs packedBefore, packedNow;
+    packedBefore.assign(before);
+    packedNow.assign(now);
+    const std::size_t parts = gpucol::diffParts(packedNow);
+    std::vector<std::vector<std::uint64_t>> partChanges(3 * parts);
+    std::vector<std::uint64_t> begins(parts);
+    gpucol::diffCodedInParts(packedBefore, packedNow,
+                             [&](std::size_t part, std::uint64_t begin, auto b, auto n) {
+                               begins[part] = begin;
+                               auto* c = &partChanges[3 * part];
+                               gpucol::diffSortedReaders(
+                                   b, n, [&](std::uint64_t k) { c[0].push_back(k); },
+                                   [&](std::uint64_t k) { c[1].push_back(k); },
+                                   [&](std::uint64_t k) { c[2].push_back(k); });
+                             });
+    std::vector<std::uint64_t> plain[3], joined[3];
+    gpucol::diffSortedPairs(
+        before, now, [&](std::uint64_t k) { plain[0].push_back(k); },
+        [&](std::uint64_t k) { plain[1].push_back(k); }, [&](std::uint64_t k) { plain[2].push_back(k); });
+    for (std::size_t part = 0; part < parts; ++part)
+      for (int i = 0; i < 3; ++i) {
+        for (std::uint64_t k : partChanges[3 * part + i]) ASSERT_GE(k, begins[part]);
+        joined[i].insert(joined[i].end(), partChanges[3 * part + i].begin(), partChanges[3 * part + i].end());
+      }
+    for (int i = 0; i < 3; ++i) ASSERT_EQ(joined[i], plain[i]) << "trial " << t << " list " << i;
+  }
+}
+
 TEST(PairDiff, EmptySides) {
   const std::vector<std::uint64_t> some{1, 5, 9}, none;
   int added = 0, removed = 0, kept = 0;

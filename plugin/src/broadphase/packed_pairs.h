@@ -64,6 +64,12 @@ class PackedPairs {
         return;
       }
       --m_left;
+      const std::uint8_t c = *m_code;
+      if (c < 0x80 && !(c & 1)) {  // the common code: one byte, the same row
+        ++m_code;
+        m_b += 1 + std::uint32_t(c >> 1);
+        return;
+      }
       const std::uint64_t v = readVarint();
       if (v & 1) {
         m_a += 1 + std::uint32_t(readVarint());

@@ -3,8 +3,13 @@
 // that keep an incremental pair cache in sync (DESIGN.md, data flow: diff with last step →
 // addOverlappingPair / removeOverlappingPair). Surviving pairs are not touched, so Bullet keeps their
 // collision algorithms and persistent manifolds.
+#include <tbb/parallel_for.h>
+
+#include <algorithm>
 #include <cstdint>
 #include <vector>
+
+#include "broadphase/packed_pairs.h"
 
 namespace gpucol {
 
@@ -49,6 +54,48 @@ template <typename Added, typename Removed, typename Kept>
 void diffSortedPairs(const std::vector<std::uint64_t>& before, const std::vector<std::uint64_t>& now,
                      Added&& onAdded, Removed&& onRemoved, Kept&& onKept) {
   diffSortedReaders(SortedKeyReader(before), SortedKeyReader(now), onAdded, onRemoved, onKept);
+}
+
+/// A reader that stops at the first key not below `end`.
+template <typename Reader>
+class BoundedReader {
+ public:
+  BoundedReader(Reader reader, std::uint64_t end, bool unbounded) : m_reader(reader), m_end(end), m_unbounded(unbounded) {}
+  bool done() const { return m_reader.done() || (!m_unbounded && m_reader.key() >= m_end); }
+  std::uint64_t key() const { return m_reader.key(); }
+  void next() { m_reader.next(); }
+
+ private:
+  Reader m_reader;
+  std::uint64_t m_end;
+  bool m_unbounded;
+};
+
+/// Parts of the key range that diffCodedInParts walks: one per segment of `now`, or one when it has none.
+inline std::size_t diffParts(const PackedPairs& now) {
+  return std::max<std::size_t>(1, now.segments());
+}
+
+/// The diff of two coded lists cut into diffParts(now) parts of the key range (`now`'s segments), walked in
+/// parallel: walkPart(part, begin, before, now) gets readers over both lists' keys of part `part`, which
+/// starts at key `begin` (the key range's start for part 0) and ends where the next part starts.
+template <typename WalkPart>
+void diffCodedInParts(const PackedPairs& before, const PackedPairs& now, WalkPart&& walkPart) {
+  const std::size_t parts = diffParts(now);
+  tbb::parallel_for(std::size_t(0), parts, [&](std::size_t part) {
+    const std::uint64_t begin = part == 0 ? 0 : now.segmentFirst(part);
+    const bool last = part + 1 >= parts;
+    const std::uint64_t end = last ? 0 : now.segmentFirst(part + 1);
+    // The segment of `before` that holds `begin`: the last one starting at or below it.
+    std::size_t lo = 0, hi = before.segments();
+    while (hi - lo > 1) {
+      const std::size_t mid = (lo + hi) / 2;
+      (before.segmentFirst(mid) <= begin ? lo : hi) = mid;
+    }
+    BoundedReader<PackedPairs::Reader> b(PackedPairs::Reader(before, lo), end, last);
+    while (!b.done() && b.key() < begin) b.next();
+    walkPart(part, begin, b, BoundedReader<PackedPairs::Reader>(PackedPairs::Reader(now, part), end, last));
+  });
 }
 
 }  // namespace gpucol

@@ -798,32 +798,46 @@ void GridBroadphase::Impl::diffAndUpdateCache(btDispatcher* dispatcher, GridBroa
   refusedNow.clear();
   removedKeys.clear();
   addedKeys.clear();
-  // The lists of changes at their size, counted by a first walk of the same two lists (cheap beside the
-  // cache's calls): grown by push_back a list held up to twice its keys, and half as much again while it
-  // grew, which on a first step (every pair new) went unseen by the peak's count (tests/memory).
-  std::size_t onlyFound = 0, onlyCurrent = 0;
-  diffSortedReaders(
-      PackedPairs::Reader(current), PackedPairs::Reader(foundCoded), [&](std::uint64_t) { ++onlyFound; },
-      [&](std::uint64_t) { ++onlyCurrent; }, [](std::uint64_t) {});
-  addedKeys.reserve(onlyFound + refused.size());
-  removedKeys.reserve(onlyCurrent);
-  // `refused` is walked along with the merge: both callbacks that consult it see keys in ascending order.
-  std::size_t r = 0;
-  auto isRefused = [&](std::uint64_t key) {
-    while (r < refused.size() && refused[r] < key) ++r;
-    return r < refused.size() && refused[r] == key;
+  // The changes of each part of the key range (the found list's segments), walked in parallel twice: counted,
+  // then listed into lists allocated at their size (grown by push_back a list held up to twice its keys,
+  // and half as much again while it grew: tests/memory).
+  const std::size_t parts = diffParts(foundCoded);
+  std::vector<std::size_t> addedAt(parts + 1, 0), removedAt(parts + 1, 0);
+  auto walk = [&](bool list) {
+    diffCodedInParts(current, foundCoded, [&](std::size_t part, std::uint64_t begin, auto before, auto now) {
+      std::uint64_t* const added = list ? addedKeys.data() + addedAt[part] : nullptr;
+      std::uint64_t* const removed = list ? removedKeys.data() + removedAt[part] : nullptr;
+      std::size_t addedCount = 0, removedCount = 0;
+      // `refused` is walked along with the merge: both callbacks that consult it see keys in ascending
+      // order.
+      std::size_t r = std::size_t(std::lower_bound(refused.begin(), refused.end(), begin) - refused.begin());
+      auto isRefused = [&](std::uint64_t key) {
+        while (r < refused.size() && refused[r] < key) ++r;
+        return r < refused.size() && refused[r] == key;
+      };
+      auto add = [&](std::uint64_t key) {
+        if (list) added[addedCount] = key;
+        ++addedCount;
+      };
+      diffSortedReaders(
+          before, now, add,
+          [&](std::uint64_t key) {
+            if (isRefused(key)) return;  // never in the cache
+            if ((state[std::uint32_t(key >> 32)] & kFreed) || (state[std::uint32_t(key)] & kFreed)) return;
+            if (list) removed[removedCount] = key;
+            ++removedCount;
+          },
+          [&](std::uint64_t key) {
+            if (!refused.empty() && isRefused(key)) add(key);  // asked again
+          });
+      if (!list) addedAt[part + 1] = addedCount, removedAt[part + 1] = removedCount;
+    });
   };
-  diffSortedReaders(
-      PackedPairs::Reader(current), PackedPairs::Reader(foundCoded),
-      [&](std::uint64_t key) { addedKeys.push_back(key); },
-      [&](std::uint64_t key) {
-        if (isRefused(key)) return;  // never in the cache
-        if ((state[std::uint32_t(key >> 32)] & kFreed) || (state[std::uint32_t(key)] & kFreed)) return;
-        removedKeys.push_back(key);
-      },
-      [&](std::uint64_t key) {
-        if (!refused.empty() && isRefused(key)) addedKeys.push_back(key);  // asked again
-      });
+  walk(false);
+  for (std::size_t p = 0; p < parts; ++p) addedAt[p + 1] += addedAt[p], removedAt[p + 1] += removedAt[p];
+  addedKeys.resize(addedAt[parts]);
+  removedKeys.resize(removedAt[parts]);
+  walk(true);
   st.removed = removedKeys.size();
   const bool deferred = cache->hasDeferredRemoval();
   if (!deferred)
