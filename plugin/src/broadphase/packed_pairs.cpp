@@ -3,6 +3,7 @@
 #include <tbb/parallel_for.h>
 
 #include <algorithm>
+#include <iterator>
 #include <utility>
 
 namespace gpucol {
@@ -41,6 +42,8 @@ void PackedPairs::finishSegments() {
   m_segments.erase(std::remove_if(m_segments.begin(), m_segments.end(),
                                   [](const Segment& s) { return s.count == 0; }),
                    m_segments.end());
+  // The table at its size: made with a slot per bucket, it may have many more than segments left.
+  if (m_segments.capacity() > m_segments.size()) std::vector<Segment>(std::make_move_iterator(m_segments.begin()), std::make_move_iterator(m_segments.end())).swap(m_segments);
   m_size = 0;
   for (const Segment& s : m_segments) m_size += s.count;
 }

@@ -15,9 +15,12 @@ std::uint32_t bitsFor(std::uint32_t count) {
   return bits;
 }
 
-/// The lower slot's bits left in an entry beside the higher slot's `slotBits` (the rest name the bucket).
+/// The lower slot's bits left in an entry beside the higher slot's `slotBits` (the rest name the bucket):
+/// about one bucket per 1,024 slots, at most kMaxBuckets (a small scene in 256 buckets held a segment's
+/// bookkeeping per 4 proxies).
 std::uint32_t shiftFor(std::uint32_t slotBits) {
-  return slotBits > 8 ? slotBits - 8 : 0;
+  const std::uint32_t bucketBits = slotBits > 10 ? std::min<std::uint32_t>(8, slotBits - 10) : 0;
+  return slotBits - bucketBits;
 }
 
 /// Frees `v` when it cannot hold `n`, then sizes it to `n` (a grown vector could hold twice what it needs).
@@ -61,7 +64,7 @@ void PairBuckets::reset(std::uint32_t slotCount, std::size_t pieces) {
   release();
   m_slotBits = bitsFor(slotCount);
   m_shift = shiftFor(m_slotBits);
-  m_buckets = slotCount == 0 ? 1 : ((slotCount - 1) >> m_shift) + 1;
+  m_buckets = slotCount == 0 ? 1 : std::uint32_t((std::uint64_t(slotCount) - 1) >> m_shift) + 1;
   m_pieces.resize(pieces);
 }
 
