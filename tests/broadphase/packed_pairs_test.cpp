@@ -68,6 +68,19 @@ TEST(PackedPairs, RoundTripsAnyAscendingKeys) {
   EXPECT_EQ(packed.toVector(), keys);
 }
 
+TEST(PackedPairs, PlainListsRoundTripAt8BytesAKey) {
+  std::mt19937_64 rng(13);
+  const std::vector<std::uint64_t> keys = randomPairKeys(rng, 3 * PackedPairs::kSegmentKeys + 5, 1u << 20, 1u << 20);
+  PackedPairs plain, coded;
+  plain.assign(keys, true);
+  coded.assign(keys);
+  EXPECT_EQ(plain.toVector(), keys);
+  EXPECT_GE(plain.bytes(), 8 * (keys.size() - plain.segments()));
+  EXPECT_LT(coded.bytes(), plain.bytes());
+  EXPECT_TRUE(PackedPairs::worthCoding(101, 100));
+  EXPECT_FALSE(PackedPairs::worthCoding(100, 100));
+}
+
 TEST(PackedPairs, ReaderStartsAtAnySegment) {
   std::mt19937_64 rng(3);
   const std::vector<std::uint64_t> keys = randomPairKeys(rng, 5 * PackedPairs::kSegmentKeys, 1u << 17, 300);

@@ -13,6 +13,7 @@ namespace {
 
 TEST(PairBuckets, PiecesComeOutSortedAndCoded) {
   std::mt19937_64 rng(17);
+  int trial = 0;
   for (std::uint32_t slots : {2u, 3u, 200u, 256u, 257u, 5000u, 100000u, 1u << 20}) {
     for (std::size_t total : {std::size_t(0), std::size_t(1), std::size_t(50), std::size_t(30000)}) {
       // Distinct pair keys (a < b) over `slots` slots, some slots with long rows (a huge box's pairs).
@@ -39,7 +40,8 @@ TEST(PairBuckets, PiecesComeOutSortedAndCoded) {
                                                        shuffled.begin() + std::ptrdiff_t(cut[p + 1])));
       ASSERT_EQ(buckets.size(), keys.size());
       gpucol::PackedPairs out;
-      buckets.packInto(out);
+      const bool plain = ++trial % 2 == 0;  // coded or plain segments alike
+      buckets.packInto(out, plain);
       ASSERT_EQ(out.toVector(), keys) << slots << " slots, " << total << " keys";
       // 4 B per key in the pieces at least, until released.
       EXPECT_GE(buckets.bytes(), 4 * keys.size());

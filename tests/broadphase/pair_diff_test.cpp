@@ -67,8 +67,8 @@ TEST(PairDiff, PartsWalkedInParallelGiveTheSameChanges) {
     const auto before = randomSorted(rng, t < 3 ? 0 : rng() % 30000, range);
     const auto now = randomSorted(rng, t == 1 ? 0 : rng() % 30000, range);
     gpucol::PackedPairs packedBefore, packedNow;
-    packedBefore.assign(before);
-    packedNow.assign(now);
+    packedBefore.assign(before, t % 3 == 0);  // plain and coded lists walk alike
+    packedNow.assign(now, t % 4 == 0);
     const std::size_t parts = gpucol::diffParts(packedNow);
     std::vector<std::vector<std::uint64_t>> partChanges(3 * parts);
     std::vector<std::uint64_t> begins(parts);

@@ -380,7 +380,7 @@ void CpuPairFinder::search(const ProxyArrays& proxies, const PairFinderOptions& 
   if (coded && !m_coded) {
     // Found as a list (every path but the slab search's): coded, then the list freed.
     notePeak();
-    coded->assign(pairs);
+    coded->assign(pairs, !PackedPairs::worthCoding(pairs.size(), proxies.count));
     notePeak();
     std::vector<std::uint64_t>().swap(pairs);
   }
@@ -391,7 +391,7 @@ void CpuPairFinder::search(const ProxyArrays& proxies, const PairFinderOptions& 
     if (coded)
       m_lastPairs = *coded;
     else
-      m_lastPairs.assign(pairs);
+      m_lastPairs.assign(pairs, !PackedPairs::worthCoding(pairs.size(), proxies.count));
   } else {
     m_lastPairs.clear();
   }
@@ -1012,7 +1012,7 @@ void CpuPairFinder::grid(const ProxyArrays& p, const PairFinderOptions& options,
   }
   if (m_coded) {
     // Stage 10 by bucket: sorted and coded straight from the slabs' buckets.
-    m_buckets.packInto(*m_codedOutput);
+    m_buckets.packInto(*m_codedOutput, !PackedPairs::worthCoding(m_buckets.size(), p.count));
     notePeak();
     m_buckets.release();
   } else {

@@ -24,11 +24,12 @@ void PackedPairs::swap(PackedPairs& other) noexcept {
   std::swap(m_size, other.m_size);
 }
 
-void PackedPairs::assign(const std::uint64_t* keys, std::size_t n) {
+void PackedPairs::assign(const std::uint64_t* keys, std::size_t n, bool plain) {
   resetSegments((n + kSegmentKeys - 1) / kSegmentKeys);
   tbb::parallel_for(std::size_t(0), m_segments.size(), [&](std::size_t i) {
     const std::uint64_t* first = keys + i * kSegmentKeys;
-    setSegment(i, std::min(kSegmentKeys, n - i * kSegmentKeys), [first](std::size_t k) { return first[k]; });
+    setSegment(
+        i, std::min(kSegmentKeys, n - i * kSegmentKeys), [first](std::size_t k) { return first[k]; }, plain);
   });
   finishSegments();
 }
@@ -60,6 +61,7 @@ void PackedPairs::Reader::enterSegment() {
   }
   const Segment& s = m_pairs->m_segments[m_segment];
   m_code = s.code.data();
+  m_plain = s.plain;
   m_left = s.count - 1;
   m_a = std::uint32_t(s.first >> 32), m_b = std::uint32_t(s.first);
 }

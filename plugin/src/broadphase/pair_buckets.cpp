@@ -85,7 +85,7 @@ void PairBuckets::addPiece(std::size_t i, const std::vector<std::uint64_t>& keys
   }
 }
 
-void PairBuckets::packInto(PackedPairs& out) {
+void PairBuckets::packInto(PackedPairs& out, bool plain) {
   out.resetSegments(m_buckets);
   const std::uint32_t entryBits = m_shift + m_slotBits;
   const std::uint64_t slotMask = (std::uint64_t(1) << m_slotBits) - 1;
@@ -108,7 +108,7 @@ void PairBuckets::packInto(PackedPairs& out) {
     const std::uint32_t* sorted = buffers.entries.data();
     out.setSegment(bucket, n, [&](std::size_t k) {
       return ((base | (sorted[k] >> m_slotBits)) << 32) | (sorted[k] & slotMask);
-    });
+    }, plain);
   });
   out.finishSegments();
 }

@@ -27,9 +27,9 @@ class PairBuckets {
   /// Splits `keys` (pair keys, any order, none in another piece) into the buckets as piece `i`; distinct
   /// pieces may be added in parallel. `keys` is not changed.
   void addPiece(std::size_t i, const std::vector<std::uint64_t>& keys);
-  /// Sorts each bucket and codes it into `out` as one segment (in parallel over buckets); the pieces stay
+  /// Sorts each bucket and codes it (or, `plain`, copies it) into `out` as one segment (in parallel over buckets); the pieces stay
   /// until release(), so that bytes() then is the high-water mark of the whole.
-  void packInto(PackedPairs& out);
+  void packInto(PackedPairs& out, bool plain = false);
   /// Keys held.
   std::size_t size() const;
   /// Heap bytes held: the pieces and the threads' bucket buffers.

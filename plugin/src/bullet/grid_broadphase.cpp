@@ -757,7 +757,7 @@ void GridBroadphase::calculateOverlappingPairs(btDispatcher* dispatcher) {
   d.releaseSurvey();
   const std::size_t foundBytes = d.found.capacity() * 8;
   if (!finder.codesPairs()) {
-    d.foundCoded.assign(d.found);
+    d.foundCoded.assign(d.found, !PackedPairs::worthCoding(d.found.size(), d.slotCount));
     std::vector<std::uint64_t>().swap(d.found);
   }
   st.overlappingPairs = d.foundCoded.size();
