@@ -380,9 +380,13 @@ void CpuPairFinder::search(const ProxyArrays& proxies, const PairFinderOptions& 
   if (coded && !m_coded) {
     // Found as a list (every path but the slab search's): coded, then the list freed.
     notePeak();
-    coded->assign(pairs, !PackedPairs::worthCoding(pairs.size(), proxies.count));
-    notePeak();
-    std::vector<std::uint64_t>().swap(pairs);
+    if (PackedPairs::worthCoding(pairs.size(), proxies.count)) {
+      coded->assign(pairs);
+      notePeak();
+      std::vector<std::uint64_t>().swap(pairs);
+    } else {
+      coded->adopt(std::move(pairs));  // kept plain: taken over, not copied
+    }
   }
   // The pairs carried over by the next incremental search: the caller's copy when it says it keeps one
   // (not held twice), else our own.

@@ -11,12 +11,12 @@
 // ((b - a - 1) << 1) | 1 followed by a varint of (a - previous a - 1). All in 32-bit wrap-around arithmetic,
 // so any ascending, duplicate-free keys round-trip (pair keys have a < b, which keeps the codes short).
 //
-// A list of no more keys than proxies is kept plain (8 bytes a key, in the same segments): the target allows
+// A list of no more keys than proxies is kept plain (8 bytes a key, one array cut into segments of
+// kSegmentKeys only for the walks; adopt() takes a list over without a copy): the target allows
 // 8 bytes per pair, and decoding a sparse scene's keys (mostly a new row each, in 3-4 bytes) took 6 ns a key,
 // which made the diff of the sleeping scene at 100K proxies 0.12 -> 0.9 ms (worthCoding).
 #include <cstddef>
 #include <cstdint>
-#include <cstring>
 #include <stdexcept>
 #include <vector>
 
@@ -45,6 +45,8 @@ class PackedPairs {
   void assign(const std::vector<std::uint64_t>& keys, bool plain = false) {
     assign(keys.data(), keys.size(), plain);
   }
+  /// Replaces the contents with `keys` (ascending, no repeats), kept plain: the vector is taken over.
+  void adopt(std::vector<std::uint64_t>&& keys);
 
   /// Frees the contents and makes `count` empty segments for setSegment.
   void resetSegments(std::size_t count);
@@ -52,13 +54,17 @@ class PackedPairs {
   /// before it and below those after it, at its size (counted first). Distinct segments may be set in
   /// parallel. A segment left empty is dropped by finishSegments.
   template <typename KeyAt>
-  void setSegment(std::size_t i, std::size_t n, KeyAt&& keyAt, bool plain = false);
+  void setSegment(std::size_t i, std::size_t n, KeyAt&& keyAt);
   /// After setSegment: drops the empty segments and counts the keys.
   void finishSegments();
 
-  std::size_t segments() const { return m_segments.size(); }
+  std::size_t segments() const {
+    return m_plain.empty() ? m_segments.size() : (m_plain.size() + kSegmentKeys - 1) / kSegmentKeys;
+  }
   /// First key of segment `i`.
-  std::uint64_t segmentFirst(std::size_t i) const { return m_segments[i].first; }
+  std::uint64_t segmentFirst(std::size_t i) const {
+    return m_plain.empty() ? m_segments[i].first : m_plain[i * kSegmentKeys];
+  }
 
   /// Forward walk over the keys from the start of a segment.
   class Reader {
@@ -68,19 +74,20 @@ class PackedPairs {
     /// The current key (not done()).
     std::uint64_t key() const { return (std::uint64_t(m_a) << 32) | m_b; }
     void next() {
+      if (m_plainAt) {
+        if (++m_plainAt == m_plainEnd) {
+          m_done = true;
+        } else {
+          m_a = std::uint32_t(*m_plainAt >> 32), m_b = std::uint32_t(*m_plainAt);
+        }
+        return;
+      }
       if (m_left == 0) {
         ++m_segment;
         enterSegment();
         return;
       }
       --m_left;
-      if (m_plain) {
-        std::uint64_t key;
-        std::memcpy(&key, m_code, 8);
-        m_code += 8;
-        m_a = std::uint32_t(key >> 32), m_b = std::uint32_t(key);
-        return;
-      }
       const std::uint8_t c = *m_code;
       if (c < 0x80 && !(c & 1)) {  // the common code: one byte, the same row
         ++m_code;
@@ -108,7 +115,8 @@ class PackedPairs {
     const std::uint8_t* m_code = nullptr;
     std::uint32_t m_left = 0;  // keys of this segment after the current one
     std::uint32_t m_a = 0, m_b = 0;
-    bool m_plain = false;  // this segment's keys are not coded
+    const std::uint64_t* m_plainAt = nullptr;  // a plain list: the current key
+    const std::uint64_t* m_plainEnd = nullptr;
     bool m_done = false;
   };
 
@@ -152,15 +160,15 @@ class PackedPairs {
   struct Segment {
     std::uint64_t first = 0;
     std::uint32_t count = 0;          // keys, the first included
-    bool plain = false;               // the keys after the first are 8 bytes each, not coded
     std::vector<std::uint8_t> code;  // the count - 1 keys after the first
   };
   std::vector<Segment> m_segments;
+  std::vector<std::uint64_t> m_plain;  // the keys of a plain list (then no segments)
   std::size_t m_size = 0;
 };
 
 template <typename KeyAt>
-void PackedPairs::setSegment(std::size_t i, std::size_t n, KeyAt&& keyAt, bool plain) {
+void PackedPairs::setSegment(std::size_t i, std::size_t n, KeyAt&& keyAt) {
   Segment& s = m_segments[i];
   std::vector<std::uint8_t>().swap(s.code);
   s.count = 0;
@@ -168,15 +176,6 @@ void PackedPairs::setSegment(std::size_t i, std::size_t n, KeyAt&& keyAt, bool p
   if (n > 0xffffffffu) throw std::length_error("gpucol::PackedPairs: more than 2^32 - 1 keys in one segment");
   s.first = keyAt(0);
   s.count = std::uint32_t(n);
-  s.plain = plain;
-  if (plain) {
-    s.code.resize((n - 1) * 8);
-    for (std::size_t k = 1; k < n; ++k) {
-      const std::uint64_t key = keyAt(k);
-      std::memcpy(s.code.data() + (k - 1) * 8, &key, 8);
-    }
-    return;
-  }
   std::size_t size = 0;
   forEachCode(n, keyAt, [&](std::uint64_t v) { size += varintBytes(v); });
   s.code.resize(size);  // exactly: a vector sized from empty allocates what it is asked for

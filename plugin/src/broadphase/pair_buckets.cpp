@@ -86,7 +86,20 @@ void PairBuckets::addPiece(std::size_t i, const std::vector<std::uint64_t>& keys
 }
 
 void PairBuckets::packInto(PackedPairs& out, bool plain) {
-  out.resetSegments(m_buckets);
+  out.clear();
+  // A plain list: one array at its size, each bucket sorted into its place.
+  std::vector<std::uint64_t> keys;
+  std::vector<std::size_t> keysAt;
+  if (plain) {
+    keysAt.assign(m_buckets + 1, 0);
+    for (const Piece& piece : m_pieces)
+      if (!piece.entries.empty())
+        for (std::uint32_t b = 0; b < m_buckets; ++b) keysAt[b + 1] += piece.bucketStart[b + 1] - piece.bucketStart[b];
+    for (std::uint32_t b = 0; b < m_buckets; ++b) keysAt[b + 1] += keysAt[b];
+    keys.resize(keysAt[m_buckets]);
+  } else {
+    out.resetSegments(m_buckets);
+  }
   const std::uint32_t entryBits = m_shift + m_slotBits;
   const std::uint64_t slotMask = (std::uint64_t(1) << m_slotBits) - 1;
   tbb::parallel_for(std::uint32_t(0), m_buckets, [&](std::uint32_t bucket) {
@@ -106,11 +119,18 @@ void PairBuckets::packInto(PackedPairs& out, bool plain) {
     sortEntries(buffers.entries.data(), buffers.scratch.data(), n, entryBits);
     const std::uint64_t base = std::uint64_t(bucket) << m_shift;
     const std::uint32_t* sorted = buffers.entries.data();
-    out.setSegment(bucket, n, [&](std::size_t k) {
+    auto keyAt = [&](std::size_t k) {
       return ((base | (sorted[k] >> m_slotBits)) << 32) | (sorted[k] & slotMask);
-    }, plain);
+    };
+    if (plain)
+      for (std::size_t k = 0; k < n; ++k) keys[keysAt[bucket] + k] = keyAt(k);
+    else
+      out.setSegment(bucket, n, keyAt);
   });
-  out.finishSegments();
+  if (plain)
+    out.adopt(std::move(keys));
+  else
+    out.finishSegments();
 }
 
 std::size_t PairBuckets::size() const {

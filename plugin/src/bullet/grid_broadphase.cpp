@@ -755,9 +755,15 @@ void GridBroadphase::calculateOverlappingPairs(btDispatcher* dispatcher) {
   const std::size_t stepBytes = d.view.bytes() + d.survey.bytes() + finderMark - heldOfMark;
   d.view.release();
   d.releaseSurvey();
-  const std::size_t foundBytes = d.found.capacity() * 8;
+  // This step's list as found beside its coded copy (none when it is kept plain: taken over).
+  std::size_t foundBytes = 0;
   if (!finder.codesPairs()) {
-    d.foundCoded.assign(d.found, !PackedPairs::worthCoding(d.found.size(), d.slotCount));
+    if (PackedPairs::worthCoding(d.found.size(), d.slotCount)) {
+      foundBytes = d.found.capacity() * 8;
+      d.foundCoded.assign(d.found);
+    } else {
+      d.foundCoded.adopt(std::move(d.found));
+    }
     std::vector<std::uint64_t>().swap(d.found);
   }
   st.overlappingPairs = d.foundCoded.size();
