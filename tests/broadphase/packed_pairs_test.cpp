@@ -1,13 +1,13 @@
 // PackedPairs round-trips any ascending, duplicate-free keys (pair keys and arbitrary 64-bit ones) across
 // segment boundaries, walks from any segment, counts its heap bytes, and codes a pile's keys short.
+#include "broadphase/packed_pairs.h"
+
 #include <gtest/gtest.h>
 
 #include <algorithm>
 #include <cstdint>
 #include <random>
 #include <vector>
-
-#include "broadphase/packed_pairs.h"
 
 namespace {
 
@@ -70,7 +70,8 @@ TEST(PackedPairs, RoundTripsAnyAscendingKeys) {
 
 TEST(PackedPairs, PlainListsRoundTripAt8BytesAKey) {
   std::mt19937_64 rng(13);
-  const std::vector<std::uint64_t> keys = randomPairKeys(rng, 3 * PackedPairs::kSegmentKeys + 5, 1u << 20, 1u << 20);
+  const std::vector<std::uint64_t> keys =
+      randomPairKeys(rng, 3 * PackedPairs::kSegmentKeys + 5, 1u << 20, 1u << 20);
   PackedPairs plain, coded;
   plain.assign(keys, true);
   coded.assign(keys);

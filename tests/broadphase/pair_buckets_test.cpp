@@ -1,13 +1,13 @@
 // PairBuckets against a plain sort: pieces of unsorted pair keys come out as one sorted, coded list, for
 // slot counts from a handful (no bucket bits) to 2^20 (32-bit entries exactly).
+#include "broadphase/pair_buckets.h"
+
 #include <gtest/gtest.h>
 
 #include <algorithm>
 #include <cstdint>
 #include <random>
 #include <vector>
-
-#include "broadphase/pair_buckets.h"
 
 namespace {
 

@@ -1,4 +1,6 @@
 // diffSortedPairs against std::set arithmetic on random sorted lists.
+#include "broadphase/pair_diff.h"
+
 #include <gtest/gtest.h>
 
 #include <algorithm>
@@ -8,7 +10,6 @@
 #include <vector>
 
 #include "broadphase/packed_pairs.h"
-#include "broadphase/pair_diff.h"
 
 namespace {
 
@@ -27,11 +28,14 @@ TEST(PairDiff, MatchesSetDifferencesAndKeepsOrder) {
     const auto now = randomSorted(rng, rng() % 300, 500);
     std::vector<std::uint64_t> added, removed, kept, expectAdded, expectRemoved, expectKept;
     gpucol::diffSortedPairs(
-        before, now, [&](std::uint64_t k) { added.push_back(k); }, [&](std::uint64_t k) { removed.push_back(k); },
-        [&](std::uint64_t k) { kept.push_back(k); });
-    std::set_difference(now.begin(), now.end(), before.begin(), before.end(), std::back_inserter(expectAdded));
-    std::set_difference(before.begin(), before.end(), now.begin(), now.end(), std::back_inserter(expectRemoved));
-    std::set_intersection(before.begin(), before.end(), now.begin(), now.end(), std::back_inserter(expectKept));
+        before, now, [&](std::uint64_t k) { added.push_back(k); },
+        [&](std::uint64_t k) { removed.push_back(k); }, [&](std::uint64_t k) { kept.push_back(k); });
+    std::set_difference(now.begin(), now.end(), before.begin(), before.end(),
+                        std::back_inserter(expectAdded));
+    std::set_difference(before.begin(), before.end(), now.begin(), now.end(),
+                        std::back_inserter(expectRemoved));
+    std::set_intersection(before.begin(), before.end(), now.begin(), now.end(),
+                          std::back_inserter(expectKept));
     ASSERT_EQ(added, expectAdded);
     ASSERT_EQ(removed, expectRemoved);
     ASSERT_EQ(kept, expectKept);
@@ -72,15 +76,14 @@ TEST(PairDiff, PartsWalkedInParallelGiveTheSameChanges) {
     const std::size_t parts = gpucol::diffParts(packedNow);
     std::vector<std::vector<std::uint64_t>> partChanges(3 * parts);
     std::vector<std::uint64_t> begins(parts);
-    gpucol::diffCodedInParts(packedBefore, packedNow,
-                             [&](std::size_t part, std::uint64_t begin, auto b, auto n) {
-                               begins[part] = begin;
-                               auto* c = &partChanges[3 * part];
-                               gpucol::diffSortedReaders(
-                                   b, n, [&](std::uint64_t k) { c[0].push_back(k); },
-                                   [&](std::uint64_t k) { c[1].push_back(k); },
-                                   [&](std::uint64_t k) { c[2].push_back(k); });
-                             });
+    gpucol::diffCodedInParts(
+        packedBefore, packedNow, [&](std::size_t part, std::uint64_t begin, auto b, auto n) {
+          begins[part] = begin;
+          auto* c = &partChanges[3 * part];
+          gpucol::diffSortedReaders(
+              b, n, [&](std::uint64_t k) { c[0].push_back(k); }, [&](std::uint64_t k) { c[1].push_back(k); },
+              [&](std::uint64_t k) { c[2].push_back(k); });
+        });
     std::vector<std::uint64_t> plain[3], joined[3];
     gpucol::diffSortedPairs(
         before, now, [&](std::uint64_t k) { plain[0].push_back(k); },
@@ -100,7 +103,8 @@ TEST(PairDiff, EmptySides) {
   auto count = [&](const auto& a, const auto& b) {
     added = removed = kept = 0;
     gpucol::diffSortedPairs(
-        a, b, [&](std::uint64_t) { ++added; }, [&](std::uint64_t) { ++removed; }, [&](std::uint64_t) { ++kept; });
+        a, b, [&](std::uint64_t) { ++added; }, [&](std::uint64_t) { ++removed; },
+        [&](std::uint64_t) { ++kept; });
   };
   count(none, some);
   EXPECT_EQ(added, 3);

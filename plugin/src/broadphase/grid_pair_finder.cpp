@@ -233,7 +233,8 @@ class CpuPairFinder final : public PairFinder {
                  std::vector<std::uint64_t>& pairs) override {
     search(proxies, options, pairs, nullptr);
   }
-  void findCodedPairs(const ProxyArrays& proxies, const PairFinderOptions& options, PackedPairs& pairs) override {
+  void findCodedPairs(const ProxyArrays& proxies, const PairFinderOptions& options,
+                      PackedPairs& pairs) override {
     std::vector<std::uint64_t> keys;
     search(proxies, options, keys, &pairs);
   }
@@ -322,8 +323,8 @@ class CpuPairFinder final : public PairFinder {
   const std::vector<std::uint64_t>* m_output = nullptr;  // findPairs' `pairs`, during the search
   PackedPairs* m_codedOutput = nullptr;                  // findCodedPairs' `pairs`, during the search
   bool m_coded = false;                                  // the search coded its keys into m_codedOutput
-  PairBuckets m_buckets;  // the slab search's pairs by bucket when coded (pair_buckets.h)
-  std::size_t m_chunksUsed = 0;                          // chunks of m_chunkPairs filled by this search
+  PairBuckets m_buckets;         // the slab search's pairs by bucket when coded (pair_buckets.h)
+  std::size_t m_chunksUsed = 0;  // chunks of m_chunkPairs filled by this search
 
   /// Reserves `count` more output chunks and returns the index of the first.
   std::size_t takeChunks(std::size_t count) {
@@ -1106,8 +1107,8 @@ std::size_t CpuPairFinder::scratchBytes() const {
   bytes += m_cellStart.capacity() * 4 + m_keys.capacity() * 8 + m_sorted.capacity() * 4;
   bytes += m_box.capacity() * sizeof(LocalBox) + m_homeKeys.capacity() * 8 + m_homeOrder.capacity() * 4 +
            m_homePos.capacity() * 4 + m_isBinned.capacity() + m_packed.capacity() * sizeof(PackedCells);
-  bytes += m_unchanged.capacity() + m_keptHuge.capacity() * 4 + m_lastPairs.bytes() +
-           m_moved.capacity() * 4 + m_movedKeys.capacity() * 8 + m_sortScratch.capacity() * 8 +
+  bytes += m_unchanged.capacity() + m_keptHuge.capacity() * 4 + m_lastPairs.bytes() + m_moved.capacity() * 4 +
+           m_movedKeys.capacity() * 8 + m_sortScratch.capacity() * 8 +
            m_sortOffsets.capacity() * sizeof(std::size_t);
   bytes += m_runCell.capacity() * 4 + m_runStart.capacity() * 4 + m_runLength.capacity() * 4;
   bytes += m_runPrefix.capacity() * 8 + m_bits.capacity() * 8 + m_blockRuns.capacity() * 4 +

@@ -52,9 +52,8 @@
 #include <string>
 #include <vector>
 
-#include "gpucol/config.h"
-
 #include "broadphase/packed_pairs.h"
+#include "gpucol/config.h"
 
 namespace gpucol {
 
@@ -243,7 +242,8 @@ class PairFinder {
   /// findPairs with the keys coded (PackedPairs, what GridBroadphase keeps). A finder whose codesPairs() is
   /// true never holds them all as 8-byte keys where it can help it; the others' default codes findPairs'
   /// list.
-  virtual void findCodedPairs(const ProxyArrays& proxies, const PairFinderOptions& options, PackedPairs& pairs);
+  virtual void findCodedPairs(const ProxyArrays& proxies, const PairFinderOptions& options,
+                              PackedPairs& pairs);
   /// True when findCodedPairs is the finder's own (its stats then count the coded list as its output).
   virtual bool codesPairs() const { return false; }
   /// Statistics of the last findPairs call.

@@ -36,8 +36,7 @@ void PackedPairs::assign(const std::uint64_t* keys, std::size_t n, bool plain) {
   resetSegments((n + kSegmentKeys - 1) / kSegmentKeys);
   tbb::parallel_for(std::size_t(0), m_segments.size(), [&](std::size_t i) {
     const std::uint64_t* first = keys + i * kSegmentKeys;
-    setSegment(
-        i, std::min(kSegmentKeys, n - i * kSegmentKeys), [first](std::size_t k) { return first[k]; });
+    setSegment(i, std::min(kSegmentKeys, n - i * kSegmentKeys), [first](std::size_t k) { return first[k]; });
   });
   finishSegments();
 }
@@ -54,11 +53,14 @@ void PackedPairs::resetSegments(std::size_t count) {
 }
 
 void PackedPairs::finishSegments() {
-  m_segments.erase(std::remove_if(m_segments.begin(), m_segments.end(),
-                                  [](const Segment& s) { return s.count == 0; }),
-                   m_segments.end());
+  m_segments.erase(
+      std::remove_if(m_segments.begin(), m_segments.end(), [](const Segment& s) { return s.count == 0; }),
+      m_segments.end());
   // The table at its size: made with a slot per bucket, it may have many more than segments left.
-  if (m_segments.capacity() > m_segments.size()) std::vector<Segment>(std::make_move_iterator(m_segments.begin()), std::make_move_iterator(m_segments.end())).swap(m_segments);
+  if (m_segments.capacity() > m_segments.size())
+    std::vector<Segment>(std::make_move_iterator(m_segments.begin()),
+                         std::make_move_iterator(m_segments.end()))
+        .swap(m_segments);
   m_size = 0;
   for (const Segment& s : m_segments) m_size += s.count;
 }

@@ -159,7 +159,7 @@ class PackedPairs {
 
   struct Segment {
     std::uint64_t first = 0;
-    std::uint32_t count = 0;          // keys, the first included
+    std::uint32_t count = 0;         // keys, the first included
     std::vector<std::uint8_t> code;  // the count - 1 keys after the first
   };
   std::vector<Segment> m_segments;

@@ -80,8 +80,7 @@ void PairBuckets::addPiece(std::size_t i, const std::vector<std::uint64_t>& keys
   const std::uint64_t lowMask = (std::uint64_t(1) << m_shift) - 1;
   for (std::uint64_t key : keys) {
     const std::uint64_t a = key >> 32;
-    piece.entries[next[a >> m_shift]++] =
-        std::uint32_t(((a & lowMask) << m_slotBits) | (key & 0xffffffffu));
+    piece.entries[next[a >> m_shift]++] = std::uint32_t(((a & lowMask) << m_slotBits) | (key & 0xffffffffu));
   }
 }
 
@@ -94,7 +93,8 @@ void PairBuckets::packInto(PackedPairs& out, bool plain) {
     keysAt.assign(m_buckets + 1, 0);
     for (const Piece& piece : m_pieces)
       if (!piece.entries.empty())
-        for (std::uint32_t b = 0; b < m_buckets; ++b) keysAt[b + 1] += piece.bucketStart[b + 1] - piece.bucketStart[b];
+        for (std::uint32_t b = 0; b < m_buckets; ++b)
+          keysAt[b + 1] += piece.bucketStart[b + 1] - piece.bucketStart[b];
     for (std::uint32_t b = 0; b < m_buckets; ++b) keysAt[b + 1] += keysAt[b];
     keys.resize(keysAt[m_buckets]);
   } else {
@@ -142,7 +142,8 @@ std::size_t PairBuckets::size() const {
 std::size_t PairBuckets::bytes() const {
   std::size_t bytes = m_pieces.capacity() * sizeof(Piece);
   for (const Piece& piece : m_pieces) bytes += (piece.entries.capacity() + piece.bucketStart.capacity()) * 4;
-  for (const Buffers& buffers : m_buffers) bytes += (buffers.entries.capacity() + buffers.scratch.capacity()) * 4;
+  for (const Buffers& buffers : m_buffers)
+    bytes += (buffers.entries.capacity() + buffers.scratch.capacity()) * 4;
   return bytes;
 }
 

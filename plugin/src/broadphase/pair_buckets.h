@@ -27,8 +27,8 @@ class PairBuckets {
   /// Splits `keys` (pair keys, any order, none in another piece) into the buckets as piece `i`; distinct
   /// pieces may be added in parallel. `keys` is not changed.
   void addPiece(std::size_t i, const std::vector<std::uint64_t>& keys);
-  /// Sorts each bucket and codes it (or, `plain`, copies it) into `out` as one segment (in parallel over buckets); the pieces stay
-  /// until release(), so that bytes() then is the high-water mark of the whole.
+  /// Sorts each bucket and codes it (or, `plain`, copies it) into `out` as one segment (in parallel over
+  /// buckets); the pieces stay until release(), so that bytes() then is the high-water mark of the whole.
   void packInto(PackedPairs& out, bool plain = false);
   /// Keys held.
   std::size_t size() const;

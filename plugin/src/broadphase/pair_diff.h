@@ -60,7 +60,8 @@ void diffSortedPairs(const std::vector<std::uint64_t>& before, const std::vector
 template <typename Reader>
 class BoundedReader {
  public:
-  BoundedReader(Reader reader, std::uint64_t end, bool unbounded) : m_reader(reader), m_end(end), m_unbounded(unbounded) {}
+  BoundedReader(Reader reader, std::uint64_t end, bool unbounded)
+      : m_reader(reader), m_end(end), m_unbounded(unbounded) {}
   bool done() const { return m_reader.done() || (!m_unbounded && m_reader.key() >= m_end); }
   std::uint64_t key() const { return m_reader.key(); }
   void next() { m_reader.next(); }
@@ -71,18 +72,21 @@ class BoundedReader {
   bool m_unbounded;
 };
 
+/// Keys of both lists from which diffCodedInParts walks its parts in parallel.
+constexpr std::size_t kParallelDiffKeys = 4 * PackedPairs::kSegmentKeys;
+
 /// Parts of the key range that diffCodedInParts walks: one per segment of `now`, or one when it has none.
 inline std::size_t diffParts(const PackedPairs& now) {
   return std::max<std::size_t>(1, now.segments());
 }
 
 /// The diff of two coded lists cut into diffParts(now) parts of the key range (`now`'s segments), walked in
-/// parallel: walkPart(part, begin, before, now) gets readers over both lists' keys of part `part`, which
-/// starts at key `begin` (the key range's start for part 0) and ends where the next part starts.
+/// parallel (long lists): walkPart(part, begin, before, now) gets readers over both lists' keys of part
+/// `part`, which starts at key `begin` (the key range's start for part 0) and ends where the next starts.
 template <typename WalkPart>
 void diffCodedInParts(const PackedPairs& before, const PackedPairs& now, WalkPart&& walkPart) {
   const std::size_t parts = diffParts(now);
-  tbb::parallel_for(std::size_t(0), parts, [&](std::size_t part) {
+  auto walk = [&](std::size_t part) {
     const std::uint64_t begin = part == 0 ? 0 : now.segmentFirst(part);
     const bool last = part + 1 >= parts;
     const std::uint64_t end = last ? 0 : now.segmentFirst(part + 1);
@@ -95,7 +99,13 @@ void diffCodedInParts(const PackedPairs& before, const PackedPairs& now, WalkPar
     BoundedReader<PackedPairs::Reader> b(PackedPairs::Reader(before, lo), end, last);
     while (!b.done() && b.key() < begin) b.next();
     walkPart(part, begin, b, BoundedReader<PackedPairs::Reader>(PackedPairs::Reader(now, part), end, last));
-  });
+  };
+  // Short lists in one thread: handing their few parts to threads cost more than the walk (sleeping scene).
+  if (before.size() + now.size() < kParallelDiffKeys) {
+    for (std::size_t part = 0; part < parts; ++part) walk(part);
+  } else {
+    tbb::parallel_for(std::size_t(0), parts, walk);
+  }
 }
 
 }  // namespace gpucol
