@@ -192,13 +192,6 @@ inline std::uint64_t denseCellLimit(std::size_t binned) {
   return 8 * std::uint64_t(binned) + 1024;
 }
 
-/// Bits needed for slots below `count` (at least 1).
-inline std::uint32_t slotBitsFor(std::uint32_t count) {
-  std::uint32_t bits = 1;
-  while (bits < 32 && (std::uint64_t(1) << bits) < count) ++bits;
-  return bits;
-}
-
 /// Parallel counting sort of items 0..items-1 into `cells` buckets; `buckets(i, f)` calls f(cell) for each
 /// bucket item i goes into, and place(i, position, bucket) stores item i at its position in the output.
 /// Afterwards start[c]..start[c+1] (start has cells + 1 entries) is bucket c's range of the output. Threads
@@ -1129,7 +1122,10 @@ void PairFinder::findCodedPairs(const ProxyArrays& proxies, const PairFinderOpti
                                 PackedPairs& pairs) {
   std::vector<std::uint64_t> keys;
   findPairs(proxies, options, keys);
-  pairs.assign(keys);
+  if (PackedPairs::worthCoding(keys.size(), proxies.count))
+    pairs.assign(keys);
+  else
+    pairs.adopt(std::move(keys));
 }
 
 std::unique_ptr<PairFinder> makeCpuPairFinder() {

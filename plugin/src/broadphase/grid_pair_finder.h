@@ -241,7 +241,7 @@ class PairFinder {
                          std::vector<std::uint64_t>& pairs) = 0;
   /// findPairs with the keys coded (PackedPairs, what GridBroadphase keeps). A finder whose codesPairs() is
   /// true never holds them all as 8-byte keys where it can help it; the others' default codes findPairs'
-  /// list.
+  /// list, or keeps it plain where PackedPairs::worthCoding says no (as GridBroadphase does).
   virtual void findCodedPairs(const ProxyArrays& proxies, const PairFinderOptions& options,
                               PackedPairs& pairs);
   /// True when findCodedPairs is the finder's own (its stats then count the coded list as its output).

@@ -22,6 +22,13 @@
 
 namespace gpucol {
 
+/// Bits needed for slots below `count` (at least 1): the significant bits of either slot of a pair key.
+inline std::uint32_t slotBitsFor(std::uint32_t count) {
+  std::uint32_t bits = 1;
+  while (bits < 32 && (std::uint64_t(1) << bits) < count) ++bits;
+  return bits;
+}
+
 class PackedPairs {
  public:
   /// Keys per segment (the unit of parallel coding and walking).

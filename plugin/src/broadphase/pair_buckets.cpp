@@ -8,13 +8,6 @@
 namespace gpucol {
 namespace {
 
-/// Bits that number the slots below `count` (at least 1).
-std::uint32_t bitsFor(std::uint32_t count) {
-  std::uint32_t bits = 1;
-  while (bits < 32 && (std::uint64_t(1) << bits) < count) ++bits;
-  return bits;
-}
-
 /// The lower slot's bits left in an entry beside the higher slot's `slotBits` (the rest name the bucket):
 /// about one bucket per 1,024 slots, at most kMaxBuckets (a small scene in 256 buckets held a segment's
 /// bookkeeping per 4 proxies).
@@ -56,13 +49,13 @@ void sortEntries(std::uint32_t* e, std::uint32_t* s, std::size_t n, std::uint32_
 }  // namespace
 
 bool PairBuckets::fits(std::uint32_t slotCount) {
-  const std::uint32_t slotBits = bitsFor(slotCount);
+  const std::uint32_t slotBits = slotBitsFor(slotCount);
   return shiftFor(slotBits) + slotBits <= 32;
 }
 
 void PairBuckets::reset(std::uint32_t slotCount, std::size_t pieces) {
   release();
-  m_slotBits = bitsFor(slotCount);
+  m_slotBits = slotBitsFor(slotCount);
   m_shift = shiftFor(m_slotBits);
   m_buckets = slotCount == 0 ? 1 : std::uint32_t((std::uint64_t(slotCount) - 1) >> m_shift) + 1;
   m_pieces.resize(pieces);
