@@ -76,6 +76,15 @@ TEST(PackedPairs, PlainListsRoundTripAt8BytesAKey) {
   plain.assign(keys, true);
   coded.assign(keys);
   EXPECT_EQ(plain.toVector(), keys);
+  EXPECT_TRUE(plain.isPlain());
+  EXPECT_FALSE(coded.isPlain());
+  EXPECT_TRUE(PackedPairs().isPlain());
+  EXPECT_TRUE(std::equal(keys.begin(), keys.end(), plain.plainKeys()));
+  for (const PackedPairs* list : {&plain, &coded}) {  // forEach walks a plain list's array directly
+    std::vector<std::uint64_t> walked;
+    list->forEach([&](std::uint64_t key) { walked.push_back(key); });
+    EXPECT_EQ(walked, keys);
+  }
   EXPECT_GE(plain.bytes(), 8 * (keys.size() - plain.segments()));
   EXPECT_LT(coded.bytes(), plain.bytes());
   EXPECT_TRUE(PackedPairs::worthCoding(101, 100));

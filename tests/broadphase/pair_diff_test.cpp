@@ -4,9 +4,11 @@
 #include <gtest/gtest.h>
 
 #include <algorithm>
+#include <atomic>
 #include <cstdint>
 #include <iterator>
 #include <random>
+#include <type_traits>
 #include <vector>
 
 #include "broadphase/packed_pairs.h"
@@ -94,6 +96,49 @@ TEST(PairDiff, PartsWalkedInParallelGiveTheSameChanges) {
         joined[i].insert(joined[i].end(), partChanges[3 * part + i].begin(), partChanges[3 * part + i].end());
       }
     for (int i = 0; i < 3; ++i) ASSERT_EQ(joined[i], plain[i]) << "trial " << t << " list " << i;
+  }
+}
+
+TEST(PairDiff, PlainListsSkipSharedRunsAndGiveTheSameChanges) {
+  // Lists that share most keys, as one step's with the last: with IgnoreKept, two plain lists skip their
+  // shared runs four keys at a time; the changes must be the plain walk's, on whole lists and by parts.
+  std::mt19937_64 rng(21);
+  for (int t = 0; t < 60; ++t) {
+    const auto before = randomSorted(rng, rng() % 40000, 1u << 30);
+    std::vector<std::uint64_t> now;
+    const int change = 1 + int(rng() % 200);  // about one key in `change` dropped, one in `change` new
+    for (std::uint64_t k : before) {
+      if (rng() % change == 0) continue;
+      if (rng() % change == 0 && (now.empty() || now.back() < k - 1)) now.push_back(k - 1);
+      now.push_back(k);
+    }
+    if (t % 5 == 0) now.clear();
+    std::vector<std::uint64_t> expect[2], whole[2], joined[2];
+    gpucol::diffSortedPairs(
+        before, now, [&](std::uint64_t k) { expect[0].push_back(k); },
+        [&](std::uint64_t k) { expect[1].push_back(k); }, [](std::uint64_t) {});
+    gpucol::diffSortedPairs(
+        before, now, [&](std::uint64_t k) { whole[0].push_back(k); },
+        [&](std::uint64_t k) { whole[1].push_back(k); }, gpucol::IgnoreKept{});
+    gpucol::PackedPairs plainBefore, plainNow;
+    plainBefore.assign(before, true);
+    plainNow.assign(now, true);
+    std::vector<std::vector<std::uint64_t>> partChanges(2 * gpucol::diffParts(plainNow));
+    std::atomic<std::size_t> rawWalks{0};
+    gpucol::diffCodedInParts(plainBefore, plainNow, [&](std::size_t part, std::uint64_t, auto b, auto n) {
+      if constexpr (std::is_same_v<decltype(b), gpucol::SortedKeyReader>) ++rawWalks;  // not the coded walk
+      auto* c = &partChanges[2 * part];
+      gpucol::diffSortedReaders(
+          b, n, [&](std::uint64_t k) { c[0].push_back(k); }, [&](std::uint64_t k) { c[1].push_back(k); },
+          gpucol::IgnoreKept{});
+    });
+    ASSERT_EQ(rawWalks, partChanges.size() / 2);
+    for (std::size_t j = 0; j < partChanges.size(); ++j)
+      joined[j % 2].insert(joined[j % 2].end(), partChanges[j].begin(), partChanges[j].end());
+    for (int i = 0; i < 2; ++i) {
+      ASSERT_EQ(whole[i], expect[i]) << "trial " << t << " list " << i;
+      ASSERT_EQ(joined[i], expect[i]) << "trial " << t << " list " << i;
+    }
   }
 }
 

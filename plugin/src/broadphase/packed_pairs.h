@@ -65,6 +65,11 @@ class PackedPairs {
   /// After setSegment: drops the empty segments and counts the keys.
   void finishSegments();
 
+  /// Whether the keys are held plain (then plainKeys() has them all, in order); an empty list is plain.
+  bool isPlain() const { return m_segments.empty(); }
+  /// The keys of a plain list (isPlain()), size() of them.
+  const std::uint64_t* plainKeys() const { return m_plain.data(); }
+
   std::size_t segments() const {
     return m_plain.empty() ? m_segments.size() : (m_plain.size() + kSegmentKeys - 1) / kSegmentKeys;
   }
@@ -130,6 +135,10 @@ class PackedPairs {
   /// Calls f(key) for every key, in order.
   template <typename F>
   void forEach(F&& f) const {
+    if (isPlain()) {
+      for (std::uint64_t key : m_plain) f(key);
+      return;
+    }
     for (Reader r(*this); !r.done(); r.next()) f(r.key());
   }
   /// The keys, decoded.

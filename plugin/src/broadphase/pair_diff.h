@@ -7,24 +7,42 @@
 
 #include <algorithm>
 #include <cstdint>
+#include <type_traits>
 #include <vector>
 
 #include "broadphase/packed_pairs.h"
 
 namespace gpucol {
 
-/// Walks a sorted key vector the way PackedPairs::Reader walks a coded list.
+/// Walks sorted keys held plain (a vector, or a range of one) the way PackedPairs::Reader walks a coded list.
 class SortedKeyReader {
  public:
   explicit SortedKeyReader(const std::vector<std::uint64_t>& keys)
       : m_at(keys.data()), m_end(keys.data() + keys.size()) {}
+  SortedKeyReader(const std::uint64_t* begin, const std::uint64_t* end) : m_at(begin), m_end(end) {}
   bool done() const { return m_at == m_end; }
   std::uint64_t key() const { return *m_at; }
   void next() { ++m_at; }
+  /// Moves this reader and `other` past the keys they share from here on (both at equal keys, or done).
+  void skipShared(SortedKeyReader& other) {
+    const std::uint64_t *a = m_at, *b = other.m_at;
+    // Four at a time while they agree: a step keeps most of its pairs, so runs are long.
+    while (m_end - a >= 4 && other.m_end - b >= 4 &&
+           ((a[0] ^ b[0]) | (a[1] ^ b[1]) | (a[2] ^ b[2]) | (a[3] ^ b[3])) == 0)
+      a += 4, b += 4;
+    while (a != m_end && b != other.m_end && *a == *b) ++a, ++b;
+    m_at = a, other.m_at = b;
+  }
 
  private:
   const std::uint64_t* m_at;
   const std::uint64_t* m_end;
+};
+
+/// The onKept of a diff that has nothing to do for kept keys: two plain readers then skip shared runs in a
+/// tight loop (SortedKeyReader::skipShared) instead of one key at a time.
+struct IgnoreKept {
+  void operator()(std::uint64_t) const {}
 };
 
 /// Merges two readers (done/key/next) over sorted, duplicate-free keys in one linear walk, in key order:
@@ -32,6 +50,9 @@ class SortedKeyReader {
 template <typename BeforeReader, typename NowReader, typename Added, typename Removed, typename Kept>
 void diffSortedReaders(BeforeReader before, NowReader now, Added&& onAdded, Removed&& onRemoved,
                        Kept&& onKept) {
+  constexpr bool skipRuns = std::is_same_v<std::decay_t<Kept>, IgnoreKept> &&
+                            std::is_same_v<BeforeReader, SortedKeyReader> &&
+                            std::is_same_v<NowReader, SortedKeyReader>;
   while (!before.done() && !now.done()) {
     const std::uint64_t b = before.key(), n = now.key();
     if (b < n) {
@@ -40,6 +61,8 @@ void diffSortedReaders(BeforeReader before, NowReader now, Added&& onAdded, Remo
     } else if (n < b) {
       onAdded(n);
       now.next();
+    } else if constexpr (skipRuns) {
+      before.skipShared(now);
     } else {
       onKept(n);
       before.next(), now.next();
@@ -83,13 +106,26 @@ inline std::size_t diffParts(const PackedPairs& now) {
 /// The diff of two coded lists cut into diffParts(now) parts of the key range (`now`'s segments), walked in
 /// parallel (long lists): walkPart(part, begin, before, now) gets readers over both lists' keys of part
 /// `part`, which starts at key `begin` (the key range's start for part 0) and ends where the next starts.
+/// The readers are SortedKeyReaders when both lists are plain, else BoundedReaders over coded ones.
 template <typename WalkPart>
 void diffCodedInParts(const PackedPairs& before, const PackedPairs& now, WalkPart&& walkPart) {
   const std::size_t parts = diffParts(now);
+  const bool plain = before.isPlain() && now.isPlain();
   auto walk = [&](std::size_t part) {
     const std::uint64_t begin = part == 0 ? 0 : now.segmentFirst(part);
     const bool last = part + 1 >= parts;
     const std::uint64_t end = last ? 0 : now.segmentFirst(part + 1);
+    if (plain) {
+      // Plain arrays: the part's keys of `before` found by binary search, walked with raw pointers.
+      const std::uint64_t *b = before.plainKeys(), *bEnd = b + before.size();
+      const std::uint64_t *n = now.plainKeys(), *nEnd = n + now.size();
+      const std::uint64_t* from = part == 0 ? b : std::lower_bound(b, bEnd, begin);
+      const std::uint64_t* to = last ? bEnd : std::lower_bound(from, bEnd, end);
+      const std::uint64_t* nowFrom = n + std::min(now.size(), part * PackedPairs::kSegmentKeys);
+      const std::uint64_t* nowTo = last ? nEnd : nowFrom + PackedPairs::kSegmentKeys;
+      walkPart(part, begin, SortedKeyReader(from, to), SortedKeyReader(nowFrom, nowTo));
+      return;
+    }
     // The segment of `before` that holds `begin`: the last one starting at or below it.
     std::size_t lo = 0, hi = before.segments();
     while (hi - lo > 1) {

@@ -825,17 +825,19 @@ void GridBroadphase::Impl::diffAndUpdateCache(btDispatcher* dispatcher, GridBroa
         if (list) added[addedCount] = key;
         ++addedCount;
       };
-      diffSortedReaders(
-          before, now, add,
-          [&](std::uint64_t key) {
-            if (isRefused(key)) return;  // never in the cache
-            if ((state[std::uint32_t(key >> 32)] & kFreed) || (state[std::uint32_t(key)] & kFreed)) return;
-            if (list) removed[removedCount] = key;
-            ++removedCount;
-          },
-          [&](std::uint64_t key) {
-            if (!refused.empty() && isRefused(key)) add(key);  // asked again
-          });
+      auto remove = [&](std::uint64_t key) {
+        if (isRefused(key)) return;  // never in the cache
+        if ((state[std::uint32_t(key >> 32)] & kFreed) || (state[std::uint32_t(key)] & kFreed)) return;
+        if (list) removed[removedCount] = key;
+        ++removedCount;
+      };
+      if (refused.empty()) {
+        diffSortedReaders(before, now, add, remove, IgnoreKept{});  // kept keys skipped in runs
+      } else {
+        diffSortedReaders(before, now, add, remove, [&](std::uint64_t key) {
+          if (isRefused(key)) add(key);  // asked again
+        });
+      }
       if (!list) addedAt[part + 1] = addedCount, removedAt[part + 1] = removedCount;
     });
   };
