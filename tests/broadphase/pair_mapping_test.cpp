@@ -67,8 +67,8 @@ TEST(PairMapping, EveryKForNEquals4096And4097BothRoots) {
   EXPECT_EQ(mismatchesAllKParallel(4097), 0u);
 }
 
-// n = 2^16: all 2^31 - 2^15 pairs with both roots, the exhaustive check issue 4 asks for (16 s on both
-// cores of the 2-core machine, so it stays in the default run).
+// n = 2^16: all 2^31 - 2^15 pairs with both roots, the largest n checked exhaustively (16 s on both cores
+// of the 2-core machine, so it stays in the default run).
 TEST(PairMapping, EveryKForNEquals65536BothRoots) { EXPECT_EQ(mismatchesAllKParallel(65536), 0u); }
 
 TEST(PairMapping, RowBoundariesForManyNUpTo65536) {
