@@ -364,20 +364,19 @@ TEST(GridBroadphase, FilterEditedInAStepWhereBoxesMovedKeepsTheMoves) {
   // both kinds of change. A few boxes move, so the finder searches its kept grid for the moved ones only.
   GridWorld world;
   gpucol::GridBroadphase& bp = world.bp;
-  btCollisionDispatcher& dispatcher = world.dispatcher;
   std::mt19937 rng(6);
-  std::vector<Box> boxes = createAndStep(bp, 4000, 20.0f, rng, &dispatcher);
+  std::vector<Box> boxes = createAndStep(bp, 4000, 20.0f, rng, &world.dispatcher);
   ASSERT_EQ(cachePairs(bp.getOverlappingPairCache()), bruteForce(boxes));
   for (int round = 0; round < 3; ++round) {
     for (std::size_t i = round; i < boxes.size(); i += 50) {
       Box& b = boxes[i];
       randomBox(rng, b, 20.0f);
-      bp.setAabb(b.proxy, b.lo, b.hi, &dispatcher);
+      bp.setAabb(b.proxy, b.lo, b.hi, &world.dispatcher);
     }
     Box& edited = boxes[std::size_t(7 + round)];
     edited.mask = round == 1 ? btBroadphaseProxy::AllFilter : 0;
     edited.proxy->m_collisionFilterMask = edited.mask;
-    bp.calculateOverlappingPairs(&dispatcher);
+    bp.calculateOverlappingPairs(&world.dispatcher);
     EXPECT_EQ(cachePairs(bp.getOverlappingPairCache()), bruteForce(boxes)) << "round " << round;
     EXPECT_GT(bp.stats().restingProxies, 3000u) << "round " << round << ": not the kept grid's search";
   }
@@ -389,9 +388,8 @@ TEST(GridBroadphase, FiltersEditedOnTheProxyAreTakenUp) {
   // restored). 20,000 boxes, so the per-step scan of the filters runs over more than one parallel task.
   GridWorld world;
   gpucol::GridBroadphase& bp = world.bp;
-  btCollisionDispatcher& dispatcher = world.dispatcher;
   std::mt19937 rng(5);
-  std::vector<Box> boxes = createAndStep(bp, 20000, 30.0f, rng, &dispatcher);
+  std::vector<Box> boxes = createAndStep(bp, 20000, 30.0f, rng, &world.dispatcher);
   const std::set<IdPair> original = bruteForce(boxes);
   ASSERT_EQ(cachePairs(bp.getOverlappingPairCache()), original);
   for (int round = 0; round < 2; ++round) {
@@ -403,7 +401,7 @@ TEST(GridBroadphase, FiltersEditedOnTheProxyAreTakenUp) {
       b.proxy->m_collisionFilterGroup = b.group;
       b.proxy->m_collisionFilterMask = b.mask;
     }
-    bp.calculateOverlappingPairs(&dispatcher);
+    bp.calculateOverlappingPairs(&world.dispatcher);
     const std::set<IdPair> expected = bruteForce(boxes);
     EXPECT_EQ(cachePairs(bp.getOverlappingPairCache()), expected) << "round " << round;
     if (round == 0) {
