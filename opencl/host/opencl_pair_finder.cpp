@@ -35,9 +35,9 @@ namespace {
 /// built (measured on PoCL, see the README's broad phase section); beyond it a full search is about as fast.
 constexpr double kIncrementalFraction = 0.125;
 
-/// Stages 4-6 of one list of binned proxies on the device: their (cell, slot) entries sorted by cell, the
-/// runs of equal cells, and the runs' scanned candidate counts. A full search fills one and keeps it for
-/// stage 11; the proxies moved since then get their own.
+/// Stages 4-6 of one list of binned proxies on the device: their slots sorted by cell (keySlots; the cells
+/// themselves in cellKeys on a sparse grid only), the runs of equal cells, and the runs' scanned candidate
+/// counts. A full search fills one and keeps it for stage 11; the proxies moved since then get their own.
 struct Bins {
   DeviceArray slots, counts, cellKeys, keySlots, runHeads, runStart, runCell, runPairs;
   std::uint32_t count = 0;       ///< Binned proxies.
@@ -64,8 +64,8 @@ class OpenClPairFinder final : public PairFinder {
 
  private:
   struct Kernels {
-    cl::Kernel countCells, writeKeys, markRuns, writeRuns, countRunPairs, testCandidates, testHuge, bruteTest,
-        updateProxies, testMoved;
+    cl::Kernel countCells, writeKeys, countCellEntries, placeEntries, markFilledCells, writeFilledCells,
+        markRuns, writeRuns, countRunPairs, testCandidates, testHuge, bruteTest, updateProxies, testMoved;
   };
   Kernels& kernels(bool newton);
   void chooseGrid(const ProxyArrays& p, const PairFinderOptions& options, GpucolGridParams& g);
@@ -129,6 +129,10 @@ OpenClPairFinder::Kernels& OpenClPairFinder::kernels(bool newton) {
                                             newton ? "-DGPUCOL_MAPPING_NEWTON" : "");
     k.countCells = cl::Kernel(program, "grid_count_cells");
     k.writeKeys = cl::Kernel(program, "grid_write_keys");
+    k.countCellEntries = cl::Kernel(program, "grid_count_cell_entries");
+    k.placeEntries = cl::Kernel(program, "grid_place_entries");
+    k.markFilledCells = cl::Kernel(program, "grid_mark_filled_cells");
+    k.writeFilledCells = cl::Kernel(program, "grid_write_filled_cells");
     k.markRuns = cl::Kernel(program, "grid_mark_runs");
     k.writeRuns = cl::Kernel(program, "grid_write_runs");
     k.countRunPairs = cl::Kernel(program, "grid_count_run_pairs");
@@ -224,27 +228,52 @@ void OpenClPairFinder::bin(Kernels& k, const std::vector<std::uint32_t>& slots, 
   const cl_uint zero = 0;
   q.enqueueFillBuffer(m_overflow.ensure(c, 4), zero, 0, 4);
   q.enqueueWriteBuffer(b.slots.ensure(c, b.count * 4), CL_FALSE, 0, b.count * 4, slots.data());
-  // Stage 4: count cells per box, scan, fill (cell, slot) entries.
-  setProxyArgs(k.countCells);
-  setKernelArgs(k.countCells, 9, m_grid.buffer, b.slots.buffer, b.count, b.counts.ensure(c, b.count * 4),
-                m_overflow.buffer);
-  launch(k.countCells, b.count);
-  b.keys = m_scan.exclusiveScan(b.counts.buffer, b.count);
-  setProxyArgs(k.writeKeys);
-  setKernelArgs(k.writeKeys, 9, m_grid.buffer, b.slots.buffer, b.count, b.counts.buffer,
-                b.cellKeys.ensure(c, std::size_t(b.keys) * 8), b.keySlots.ensure(c, std::size_t(b.keys) * 4));
-  launch(k.writeKeys, b.keys == 0 ? 0 : b.count);
-  // Stage 5: stable sort by cell; slots stay ascending inside a cell.
   const std::uint64_t cells = std::uint64_t(grid.dimX) * grid.dimY * grid.dimZ;
-  m_sort.sort(b.cellKeys.buffer, b.keySlots.buffer, b.keys, indexBits(cells));
-  // Stage 6: runs of equal cells, m(m-1)/2 candidates each, scanned.
-  setKernelArgs(k.markRuns, 0, b.cellKeys.buffer, b.keys, b.runHeads.ensure(c, std::size_t(b.keys) * 4));
-  launch(k.markRuns, b.keys);
-  b.runs = m_scan.exclusiveScan(b.runHeads.buffer, b.keys);
-  setKernelArgs(k.writeRuns, 0, b.cellKeys.buffer, b.keys, b.runHeads.buffer, b.runs,
-                b.runStart.ensure(c, (std::size_t(b.runs) + 1) * 4),
-                b.runCell.ensure(c, std::size_t(b.runs) * 4));
-  launch(k.writeRuns, b.keys);
+  if (cells <= denseCellLimit(b.count)) {
+    // Stages 4-6 on a dense grid, as the CPU finder: a counting sort over the cells (each cell's count,
+    // scanned into its first entry, then each entry placed), and the runs are the filled cells. No
+    // (cell, slot) keys are written: this takes the place of a count per box and the radix sort's passes.
+    const cl_uint cellCount = cl_uint(cells);
+    q.enqueueFillBuffer(b.counts.ensure(c, (cells + 1) * 4), zero, 0, (cells + 1) * 4);
+    setProxyArgs(k.countCellEntries);
+    setKernelArgs(k.countCellEntries, 9, m_grid.buffer, b.slots.buffer, b.count, b.counts.buffer);
+    launch(k.countCellEntries, b.count);
+    b.keys = m_scan.exclusiveScan(b.counts.buffer, cells + 1);
+    setProxyArgs(k.placeEntries);
+    setKernelArgs(k.placeEntries, 9, m_grid.buffer, b.slots.buffer, b.count, b.counts.buffer,
+                  b.keySlots.ensure(c, std::size_t(b.keys) * 4));
+    launch(k.placeEntries, b.keys == 0 ? 0 : b.count);
+    setKernelArgs(k.markFilledCells, 0, b.counts.buffer, cellCount, b.runHeads.ensure(c, cells * 4));
+    launch(k.markFilledCells, cells);
+    b.runs = m_scan.exclusiveScan(b.runHeads.buffer, cells);
+    setKernelArgs(k.writeFilledCells, 0, b.counts.buffer, cellCount, b.runHeads.buffer, b.runs,
+                  b.runStart.ensure(c, (std::size_t(b.runs) + 1) * 4),
+                  b.runCell.ensure(c, std::size_t(b.runs) * 4));
+    launch(k.writeFilledCells, cells);
+  } else {
+    // Stage 4: count cells per box, scan, fill (cell, slot) entries.
+    setProxyArgs(k.countCells);
+    setKernelArgs(k.countCells, 9, m_grid.buffer, b.slots.buffer, b.count, b.counts.ensure(c, b.count * 4),
+                  m_overflow.buffer);
+    launch(k.countCells, b.count);
+    b.keys = m_scan.exclusiveScan(b.counts.buffer, b.count);
+    setProxyArgs(k.writeKeys);
+    setKernelArgs(k.writeKeys, 9, m_grid.buffer, b.slots.buffer, b.count, b.counts.buffer,
+                  b.cellKeys.ensure(c, std::size_t(b.keys) * 8),
+                  b.keySlots.ensure(c, std::size_t(b.keys) * 4));
+    launch(k.writeKeys, b.keys == 0 ? 0 : b.count);
+    // Stage 5 on a sparse grid: radix sort by cell.
+    m_sort.sort(b.cellKeys.buffer, b.keySlots.buffer, b.keys, indexBits(cells));
+    // Stage 6: runs of equal cells.
+    setKernelArgs(k.markRuns, 0, b.cellKeys.buffer, b.keys, b.runHeads.ensure(c, std::size_t(b.keys) * 4));
+    launch(k.markRuns, b.keys);
+    b.runs = m_scan.exclusiveScan(b.runHeads.buffer, b.keys);
+    setKernelArgs(k.writeRuns, 0, b.cellKeys.buffer, b.keys, b.runHeads.buffer, b.runs,
+                  b.runStart.ensure(c, (std::size_t(b.runs) + 1) * 4),
+                  b.runCell.ensure(c, std::size_t(b.runs) * 4));
+    launch(k.writeRuns, b.keys);
+  }
+  // Stage 6: m(m-1)/2 candidates per run, scanned.
   setKernelArgs(k.countRunPairs, 0, b.runStart.buffer, b.runs, b.runPairs.ensure(c, std::size_t(b.runs) * 4),
                 m_overflow.buffer);
   launch(k.countRunPairs, b.runs);

@@ -20,11 +20,16 @@
       __global const int *group, __global const int *mask, __global const uchar *flags
 #define PROXY_ARGS minX, minY, minZ, maxX, maxY, maxZ, group, mask, flags
 
-// Stage 8: overlap on all three axes, touching counts; Bullet's group/mask rule; never static–static.
+// Stage 8's filter: Bullet's group/mask rule; never static–static.
+bool filters_accept(__global const int* group, __global const int* mask, __global const uchar* flags,
+                    const uint a, const uint b) {
+  return (group[a] & mask[b]) != 0 && (group[b] & mask[a]) != 0 && (flags[a] & flags[b] & GPUCOL_PROXY_STATIC) == 0u;
+}
+
+// Stage 8: overlap on all three axes, touching counts, and the filter.
 bool accept_pair(PROXY_PARAMS, const uint a, const uint b) {
   return minX[a] <= maxX[b] && minX[b] <= maxX[a] && minY[a] <= maxY[b] && minY[b] <= maxY[a] &&
-         minZ[a] <= maxZ[b] && minZ[b] <= maxZ[a] && (group[a] & mask[b]) != 0 && (group[b] & mask[a]) != 0 &&
-         (flags[a] & flags[b] & GPUCOL_PROXY_STATIC) == 0u;
+         minZ[a] <= maxZ[b] && minZ[b] <= maxZ[a] && filters_accept(group, mask, flags, a, b);
 }
 
 // Stage 4: the cell coordinate, monotone in x (see grid_pair_finder.h).
@@ -37,6 +42,23 @@ uint cell_of(const float x, const float origin, const float invCell, const uint 
     return dim - 1u;
   }
   return min((uint)t, dim - 1u);
+}
+
+// Stage 4: the cells box s covers on each axis, lo[a]..hi[a].
+typedef struct {
+  uint lo[3];
+  uint hi[3];
+} CellRange;
+
+CellRange cell_range(PROXY_PARAMS, const uint s, const GpucolGridParams g) {
+  CellRange r;
+  r.lo[0] = cell_of(minX[s], g.originX, g.invCell, g.dimX);
+  r.hi[0] = cell_of(maxX[s], g.originX, g.invCell, g.dimX);
+  r.lo[1] = cell_of(minY[s], g.originY, g.invCell, g.dimY);
+  r.hi[1] = cell_of(maxY[s], g.originY, g.invCell, g.dimY);
+  r.lo[2] = cell_of(minZ[s], g.originZ, g.invCell, g.dimZ);
+  r.hi[2] = cell_of(maxZ[s], g.originZ, g.invCell, g.dimZ);
+  return r;
 }
 
 // Stage 7: candidate k of n objects -> (a, b); exact whatever square root (pair_mapping.h).
@@ -67,18 +89,17 @@ __kernel void grid_count_cells(PROXY_PARAMS, __global const GpucolGridParams* gr
   }
   const uint s = binned[i];
   const GpucolGridParams g = *grid;
-  const ulong cx = cell_of(maxX[s], g.originX, g.invCell, g.dimX) - cell_of(minX[s], g.originX, g.invCell, g.dimX) + 1u;
-  const ulong cy = cell_of(maxY[s], g.originY, g.invCell, g.dimY) - cell_of(minY[s], g.originY, g.invCell, g.dimY) + 1u;
-  const ulong cz = cell_of(maxZ[s], g.originZ, g.invCell, g.dimZ) - cell_of(minZ[s], g.originZ, g.invCell, g.dimZ) + 1u;
-  const ulong count = cx * cy * cz;
+  const CellRange span = cell_range(PROXY_ARGS, s, g);
+  const ulong count = (ulong)(span.hi[0] - span.lo[0] + 1u) * (span.hi[1] - span.lo[1] + 1u) *
+                      (span.hi[2] - span.lo[2] + 1u);
   if (count > 0xffffffffUL) {
     *overflow = 1u;
   }
   cellCounts[i] = count > 0xffffffffUL ? 0u : (uint)count;
 }
 
-// Stage 4, fill: one (cell, slot) entry per covered cell, at the box's scanned offset. Boxes are in
-// ascending slot order, so a stable sort by cell leaves each cell's slots ascending.
+// Stage 4, fill: one (cell, slot) entry per covered cell, at the box's scanned offset, for the radix sort
+// of a sparse grid (stage 5).
 __kernel void grid_write_keys(PROXY_PARAMS, __global const GpucolGridParams* grid, __global const uint* binned,
                               const uint binnedCount, __global const uint* keyOffsets, __global ulong* cellKeys,
                               __global uint* keySlots) {
@@ -88,19 +109,91 @@ __kernel void grid_write_keys(PROXY_PARAMS, __global const GpucolGridParams* gri
   }
   const uint s = binned[i];
   const GpucolGridParams g = *grid;
-  const uint x0 = cell_of(minX[s], g.originX, g.invCell, g.dimX), x1 = cell_of(maxX[s], g.originX, g.invCell, g.dimX);
-  const uint y0 = cell_of(minY[s], g.originY, g.invCell, g.dimY), y1 = cell_of(maxY[s], g.originY, g.invCell, g.dimY);
-  const uint z0 = cell_of(minZ[s], g.originZ, g.invCell, g.dimZ), z1 = cell_of(maxZ[s], g.originZ, g.invCell, g.dimZ);
+  const CellRange span = cell_range(PROXY_ARGS, s, g);
   uint o = keyOffsets[i];
-  for (uint z = z0; z <= z1; ++z) {
-    for (uint y = y0; y <= y1; ++y) {
+  for (uint z = span.lo[2]; z <= span.hi[2]; ++z) {
+    for (uint y = span.lo[1]; y <= span.hi[1]; ++y) {
       const ulong row = ((ulong)z * g.dimY + y) * g.dimX;
-      for (uint x = x0; x <= x1; ++x) {
+      for (uint x = span.lo[0]; x <= span.hi[0]; ++x) {
         cellKeys[o] = row + x;
         keySlots[o] = s;
         ++o;
       }
     }
+  }
+}
+
+// Stages 4-5 on a dense grid (grid_choice.h, denseCellLimit), count: one atomic increment per binned box
+// of each cell it covers, cell c counted at cellStart[c + 1] (cellStart[0] stays 0). The host scans them;
+// there are about as many cells as boxes, so this costs less than a count per box and the radix sort's
+// passes over every entry.
+__kernel void grid_count_cell_entries(PROXY_PARAMS, __global const GpucolGridParams* grid,
+                                      __global const uint* binned, const uint binnedCount,
+                                      volatile __global uint* cellStart) {
+  const uint i = get_global_id(0);
+  if (i >= binnedCount) {
+    return;
+  }
+  const uint s = binned[i];
+  const GpucolGridParams g = *grid;
+  const CellRange span = cell_range(PROXY_ARGS, s, g);
+  for (uint z = span.lo[2]; z <= span.hi[2]; ++z) {
+    for (uint y = span.lo[1]; y <= span.hi[1]; ++y) {
+      const uint row = (z * g.dimY + y) * g.dimX;  // a dense grid's cells fit 32 bits
+      for (uint x = span.lo[0]; x <= span.hi[0]; ++x) {
+        atomic_inc(&cellStart[row + x + 1u]);
+      }
+    }
+  }
+}
+
+// Stage 5 on a dense grid, place: each entry takes the next place of its cell c at cellStart[c + 1], which
+// the scan left at the cell's first entry and placing leaves at its end, that is at cell c + 1's first:
+// cellStart then holds every cell's first entry and the total. The order inside a cell depends on the
+// threads; the pairs do not (stage 9 orders each pair's slots, stage 10 sorts the pairs).
+__kernel void grid_place_entries(PROXY_PARAMS, __global const GpucolGridParams* grid, __global const uint* binned,
+                                 const uint binnedCount, volatile __global uint* cellStart,
+                                 __global uint* keySlots) {
+  const uint i = get_global_id(0);
+  if (i >= binnedCount) {
+    return;
+  }
+  const uint s = binned[i];
+  const GpucolGridParams g = *grid;
+  const CellRange span = cell_range(PROXY_ARGS, s, g);
+  for (uint z = span.lo[2]; z <= span.hi[2]; ++z) {
+    for (uint y = span.lo[1]; y <= span.hi[1]; ++y) {
+      const uint row = (z * g.dimY + y) * g.dimX;
+      for (uint x = span.lo[0]; x <= span.hi[0]; ++x) {
+        keySlots[atomic_inc(&cellStart[row + x + 1u])] = s;
+      }
+    }
+  }
+}
+
+// Stage 6 on a dense grid: 1 for each cell that holds an entry (a run).
+__kernel void grid_mark_filled_cells(__global const uint* cellStart, const uint cells, __global uint* runHeads) {
+  const uint c = get_global_id(0);
+  if (c < cells) {
+    runHeads[c] = cellStart[c + 1u] > cellStart[c] ? 1u : 0u;
+  }
+}
+
+// Stage 6 on a dense grid: first entry and cell of every run (runIndex = scanned heads); runStart[runCount]
+// = the entries' count.
+__kernel void grid_write_filled_cells(__global const uint* cellStart, const uint cells,
+                                      __global const uint* runIndex, const uint runCount, __global uint* runStart,
+                                      __global uint* runCell) {
+  const uint c = get_global_id(0);
+  if (c >= cells) {
+    return;
+  }
+  if (cellStart[c + 1u] > cellStart[c]) {
+    runStart[runIndex[c]] = cellStart[c];
+    runCell[runIndex[c]] = c;
+  }
+  if (c == 0u) {
+    runStart[runCount] = cellStart[cells];
   }
 }
 
@@ -172,32 +265,41 @@ __kernel void grid_test_candidates(PROXY_PARAMS, __global const GpucolGridParams
   uint m = runStart[run + 1u] - start;
   ulong i = 0, j = 0;
   map_pair(m, begin - runPrefix[run], &i, &j);
-  for (uint k = (uint)begin; k < end; ++k) {
+  uint k = (uint)begin;
+  while (k < end) {
+    // Row i: box a is read once for its candidates (i, j), j < m, that fall in this chunk.
     const uint a = keySlots[start + (uint)i];
-    const uint b = keySlots[start + (uint)j];
-    if (accept_pair(PROXY_ARGS, a, b)) {
-      const uint cx = cell_of(max(minX[a], minX[b]), g.originX, g.invCell, g.dimX);
-      const uint cy = cell_of(max(minY[a], minY[b]), g.originY, g.invCell, g.dimY);
-      const uint cz = cell_of(max(minZ[a], minZ[b]), g.originZ, g.invCell, g.dimZ);
-      if (((ulong)cz * g.dimY + cy) * g.dimX + cx == (ulong)runCell[run]) {
-        append_pair(a, b, slotBits, pairs, capacity, pairCount);
-      }
-    }
-    // Next pair: along the row, then the next row, then the next run that has pairs.
-    if (++j == m) {
-      if (++i + 1u == m) {
-        do {
-          ++run;
-        } while (run + 1u < runCount && runStart[run + 1u] - runStart[run] < 2u);
-        if (run >= runCount) {
-          break;
+    const float aMinX = minX[a], aMinY = minY[a], aMinZ = minZ[a];
+    const float aMaxX = maxX[a], aMaxY = maxY[a], aMaxZ = maxZ[a];
+    const uint rowEnd = (uint)min((ulong)end, (ulong)k + (m - j));
+    for (; k < rowEnd; ++k, ++j) {
+      const uint b = keySlots[start + (uint)j];
+      if (aMinX <= maxX[b] && minX[b] <= aMaxX && aMinY <= maxY[b] && minY[b] <= aMaxY && aMinZ <= maxZ[b] &&
+          minZ[b] <= aMaxZ && filters_accept(group, mask, flags, a, b)) {
+        const uint cx = cell_of(max(aMinX, minX[b]), g.originX, g.invCell, g.dimX);
+        const uint cy = cell_of(max(aMinY, minY[b]), g.originY, g.invCell, g.dimY);
+        const uint cz = cell_of(max(aMinZ, minZ[b]), g.originZ, g.invCell, g.dimZ);
+        if (((ulong)cz * g.dimY + cy) * g.dimX + cx == (ulong)runCell[run]) {
+          append_pair(min(a, b), max(a, b), slotBits, pairs, capacity, pairCount);
         }
-        start = runStart[run];
-        m = runStart[run + 1u] - start;
-        i = 0;
       }
-      j = i + 1u;
     }
+    if (j < m) {
+      break;  // the chunk ends inside the row
+    }
+    // Next row, then the next run that has pairs.
+    if (++i + 1u == m) {
+      do {
+        ++run;
+      } while (run + 1u < runCount && runStart[run + 1u] - runStart[run] < 2u);
+      if (run >= runCount) {
+        break;
+      }
+      start = runStart[run];
+      m = runStart[run + 1u] - start;
+      i = 0;
+    }
+    j = i + 1u;
   }
 }
 
@@ -278,23 +380,21 @@ __kernel void grid_test_moved(PROXY_PARAMS, __global const GpucolGridParams* gri
   }
   const uint sm = moved[i];
   const GpucolGridParams g = *grid;
-  const uint x0 = cell_of(minX[sm], g.originX, g.invCell, g.dimX), x1 = cell_of(maxX[sm], g.originX, g.invCell, g.dimX);
-  const uint y0 = cell_of(minY[sm], g.originY, g.invCell, g.dimY), y1 = cell_of(maxY[sm], g.originY, g.invCell, g.dimY);
-  const uint z0 = cell_of(minZ[sm], g.originZ, g.invCell, g.dimZ), z1 = cell_of(maxZ[sm], g.originZ, g.invCell, g.dimZ);
-  for (uint z = z0; z <= z1; ++z) {
-    for (uint y = y0; y <= y1; ++y) {
+  const CellRange span = cell_range(PROXY_ARGS, sm, g);
+  for (uint z = span.lo[2]; z <= span.hi[2]; ++z) {
+    for (uint y = span.lo[1]; y <= span.hi[1]; ++y) {
       const uint row = (uint)(((ulong)z * g.dimY + y) * g.dimX);
       // First run whose cell is at least the row's first cell of the range.
       uint r = 0u, hi = runCount;
       while (r < hi) {
         const uint mid = r + (hi - r) / 2u;
-        if (runCell[mid] < row + x0) {
+        if (runCell[mid] < row + span.lo[0]) {
           r = mid + 1u;
         } else {
           hi = mid;
         }
       }
-      for (; r < runCount && runCell[r] <= row + x1; ++r) {
+      for (; r < runCount && runCell[r] <= row + span.hi[0]; ++r) {
         const uint c = runCell[r];
         for (uint e = runStart[r]; e < runStart[r + 1u]; ++e) {
           const uint s = keySlots[e];

@@ -6,6 +6,7 @@
 #include <string>
 #include <vector>
 
+#include "broadphase/grid_choice.h"
 #include "broadphase/grid_pair_finder.h"
 #include "opencl_test_device.h"
 
@@ -47,6 +48,19 @@ Scene uniformScene(std::size_t n, float world, float half, std::uint32_t seed, f
 
 /// Runs the OpenCL finder (grid and brute-force paths, both square roots, three launch shapes) and checks it
 /// against the CPU finder (bit for bit, same order) and the double-precision brute force (same set).
+/// Whether a full grid search of `scene` bins into a dense grid (stage 5's counting sort over the cells)
+/// rather than a sparse one (its radix sort).
+bool searchesADenseGrid(const Scene& scene) {
+  std::unique_ptr<PairFinder> finder = makePairFinder(Config{});
+  PairFinderOptions options;
+  options.bruteForceBelow = 0;
+  std::vector<std::uint64_t> pairs;
+  finder->findPairs(scene.view(), options, pairs);
+  const PairFinderStats& s = finder->stats();
+  return std::uint64_t(s.dims[0]) * s.dims[1] * s.dims[2] <=
+         denseCellLimit(s.rebinnedProxies - s.hugeProxies);
+}
+
 void expectMatchesReferences(const Scene& scene, const std::string& what,
                              std::uint32_t bruteForceBelow = 1000) {
   OpenClContext* context = OpenClContext::tryGet();
@@ -85,6 +99,7 @@ TEST(OpenClPairFinder, UniformCloud) {
   expectMatchesReferences(uniformScene(500, 30.0f, 1.5f, 2), "small uniform");
   EXPECT_GT(findPairsBruteForce(uniformScene(3000, 100.0f, 1.5f, 1).view()).size(), 100u)
       << "scene too sparse";
+  EXPECT_TRUE(searchesADenseGrid(uniformScene(3000, 100.0f, 1.5f, 1))) << "the counting sort was not run";
 }
 
 TEST(OpenClPairFinder, ClusteredScene) {
@@ -99,6 +114,7 @@ TEST(OpenClPairFinder, ClusteredScene) {
     }
   }
   expectMatchesReferences(s, "clustered");
+  EXPECT_FALSE(searchesADenseGrid(s)) << "the radix sort of a sparse grid was not run";
 }
 
 TEST(OpenClPairFinder, MixedSizesWithHugeBoxes) {

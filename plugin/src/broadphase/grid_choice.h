@@ -33,6 +33,12 @@ inline std::uint32_t cellOf(float x, float origin, float invCell, std::uint32_t 
   return std::min(std::uint32_t(t), dim - 1);
 }
 
+/// A grid of at most this many cells for `binned` boxes is dense: both finders sort its entries by a
+/// counting sort over its cells (stage 5), since a count per cell then costs about as much as the entries.
+inline std::uint64_t denseCellLimit(std::size_t binned) {
+  return 8 * std::uint64_t(binned) + 1024;
+}
+
 /// Stage 3's test: a box that covers more than `limit` cells of edge `cell` (estimated from its extents,
 /// independent of the grid's origin) is tested against all instead of being binned.
 inline bool isHuge(const BoxCorners& b, float cell, std::uint32_t limit) {

@@ -187,11 +187,6 @@ void sortPairs(std::vector<std::uint64_t>& keys, std::vector<std::uint64_t>& scr
   });
 }
 
-/// A grid of at most this many cells for `binned` boxes is dense: sorted by a counting sort over its cells.
-inline std::uint64_t denseCellLimit(std::size_t binned) {
-  return 8 * std::uint64_t(binned) + 1024;
-}
-
 /// Parallel counting sort of items 0..items-1 into `cells` buckets; `buckets(i, f)` calls f(cell) for each
 /// bucket item i goes into, and place(i, position, bucket) stores item i at its position in the output.
 /// Afterwards start[c]..start[c+1] (start has cells + 1 entries) is bucket c's range of the output. Threads
