@@ -229,10 +229,10 @@ void OpenClPairFinder::bin(Kernels& k, const std::vector<std::uint32_t>& slots, 
   q.enqueueFillBuffer(m_overflow.ensure(c, 4), zero, 0, 4);
   q.enqueueWriteBuffer(b.slots.ensure(c, b.count * 4), CL_FALSE, 0, b.count * 4, slots.data());
   const std::uint64_t cells = std::uint64_t(grid.dimX) * grid.dimY * grid.dimZ;
-  if (cells <= denseCellLimit(b.count)) {
-    // Stages 4-6 on a dense grid, as the CPU finder: a counting sort over the cells (each cell's count,
-    // scanned into its first entry, then each entry placed), and the runs are the filled cells. No
-    // (cell, slot) keys are written: this takes the place of a count per box and the radix sort's passes.
+  if (sortsByCounting(cells, b.count)) {
+    // Stages 4-6 on a dense grid of at most 2^19 cells, as the CPU finder: a counting sort over the cells
+    // (each cell's count, scanned into its first entry, then each entry placed), and the runs are the filled
+    // cells. No (cell, slot) keys are written.
     const cl_uint cellCount = cl_uint(cells);
     q.enqueueFillBuffer(b.counts.ensure(c, (cells + 1) * 4), zero, 0, (cells + 1) * 4);
     setProxyArgs(k.countCellEntries);
@@ -262,7 +262,7 @@ void OpenClPairFinder::bin(Kernels& k, const std::vector<std::uint32_t>& slots, 
                   b.cellKeys.ensure(c, std::size_t(b.keys) * 8),
                   b.keySlots.ensure(c, std::size_t(b.keys) * 4));
     launch(k.writeKeys, b.keys == 0 ? 0 : b.count);
-    // Stage 5 on a sparse grid: radix sort by cell.
+    // Stage 5 on a sparse or large grid: radix sort by cell.
     m_sort.sort(b.cellKeys.buffer, b.keySlots.buffer, b.keys, indexBits(cells));
     // Stage 6: runs of equal cells.
     setKernelArgs(k.markRuns, 0, b.cellKeys.buffer, b.keys, b.runHeads.ensure(c, std::size_t(b.keys) * 4));

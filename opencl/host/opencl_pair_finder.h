@@ -1,10 +1,11 @@
 #pragma once
 
-#include "broadphase/grid_pair_finder.h"
-#include "gpucol/config.h"
-
 #include <cstdint>
 #include <memory>
+
+#include "broadphase/grid_choice.h"
+#include "broadphase/grid_pair_finder.h"
+#include "gpucol/config.h"
 
 namespace gpucol::opencl {
 
@@ -14,6 +15,15 @@ struct OpenClPairFinderTuning {
   /// Candidates each work-item of grid_test_candidates takes; 0: 1 on a GPU, a long run on a CPU device.
   std::uint32_t candidatesPerItem = 0;
 };
+
+/// Stage 5 on the device: whether the finder sorts the entries of a grid of `cells` cells holding `binned`
+/// boxes by a counting sort over the cells (each cell's count, scanned, then each entry placed by an atomic
+/// increment) rather than by the radix sort of (cell, slot) keys. Counting wins on a dense grid while its
+/// counters and entries stay in a CPU device's caches: on PoCL it took less time at 100K and 300K boxes and
+/// 8% more CPU time at 1M (uniform cloud, about 10^6 cells; measurement history).
+inline bool sortsByCounting(std::uint64_t cells, std::size_t binned) {
+  return cells <= denseCellLimit(binned) && cells <= (std::uint64_t(1) << 19);
+}
 
 /// The grid pair finder of plugin/src/broadphase/grid_pair_finder.h on an OpenCL device: the host
 /// chooses the grid (stages 0–3), kernels do the rest (grid_find_pairs.cl, scan.cl, radix_sort.cl).

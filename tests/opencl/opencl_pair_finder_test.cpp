@@ -6,7 +6,6 @@
 #include <string>
 #include <vector>
 
-#include "broadphase/grid_choice.h"
 #include "broadphase/grid_pair_finder.h"
 #include "opencl_test_device.h"
 
@@ -48,9 +47,9 @@ Scene uniformScene(std::size_t n, float world, float half, std::uint32_t seed, f
 
 /// Runs the OpenCL finder (grid and brute-force paths, both square roots, three launch shapes) and checks it
 /// against the CPU finder (bit for bit, same order) and the double-precision brute force (same set).
-/// Whether a full grid search of `scene` bins into a dense grid (stage 5's counting sort over the cells)
-/// rather than a sparse one (its radix sort).
-bool searchesADenseGrid(const Scene& scene) {
+/// Whether a full grid search of `scene` sorts its entries by counting over the cells rather than by the
+/// radix sort (stage 5).
+bool sortsByCountingOn(const Scene& scene) {
   std::unique_ptr<PairFinder> finder = makePairFinder(Config{});
   PairFinderOptions options;
   options.bruteForceBelow = 0;
@@ -99,7 +98,7 @@ TEST(OpenClPairFinder, UniformCloud) {
   expectMatchesReferences(uniformScene(500, 30.0f, 1.5f, 2), "small uniform");
   EXPECT_GT(findPairsBruteForce(uniformScene(3000, 100.0f, 1.5f, 1).view()).size(), 100u)
       << "scene too sparse";
-  EXPECT_TRUE(searchesADenseGrid(uniformScene(3000, 100.0f, 1.5f, 1))) << "the counting sort was not run";
+  EXPECT_TRUE(sortsByCountingOn(uniformScene(3000, 100.0f, 1.5f, 1))) << "the counting sort was not run";
 }
 
 TEST(OpenClPairFinder, ClusteredScene) {
@@ -114,7 +113,7 @@ TEST(OpenClPairFinder, ClusteredScene) {
     }
   }
   expectMatchesReferences(s, "clustered");
-  EXPECT_FALSE(searchesADenseGrid(s)) << "the radix sort of a sparse grid was not run";
+  EXPECT_FALSE(sortsByCountingOn(s)) << "the radix sort of a sparse grid was not run";
 }
 
 TEST(OpenClPairFinder, MixedSizesWithHugeBoxes) {
