@@ -123,10 +123,10 @@ __kernel void grid_write_keys(PROXY_PARAMS, __global const GpucolGridParams* gri
   }
 }
 
-// Stages 4-5 on a dense grid (grid_choice.h, denseCellLimit), count: one atomic increment per binned box
-// of each cell it covers, cell c counted at cellStart[c + 1] (cellStart[0] stays 0). The host scans them;
-// there are about as many cells as boxes, so this costs less than a count per box and the radix sort's
-// passes over every entry.
+// Stages 4-5 on a small dense grid (sortsByCounting in opencl_pair_finder.h), count: one atomic increment
+// per binned box of each cell it covers, cell c counted at cellStart[c + 1] (cellStart[0] stays 0). The host
+// scans them. With about as many cells as boxes, and counters that stay in cache, this costs less than a
+// count per box and the radix sort's passes over every entry.
 __kernel void grid_count_cell_entries(PROXY_PARAMS, __global const GpucolGridParams* grid,
                                       __global const uint* binned, const uint binnedCount,
                                       volatile __global uint* cellStart) {
