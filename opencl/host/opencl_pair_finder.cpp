@@ -64,8 +64,8 @@ class OpenClPairFinder final : public PairFinder {
 
  private:
   struct Kernels {
-    cl::Kernel countCells, writeKeys, countCellEntries, placeEntries, markFilledCells, writeFilledCells,
-        markRuns, writeRuns, countRunPairs, testCandidates, testHuge, bruteTest, updateProxies, testMoved;
+    cl::Kernel countCells, writeKeys, countOrPlaceEntries, markFilledCells, writeFilledCells, markRuns,
+        writeRuns, countRunPairs, testCandidates, testHuge, bruteTest, updateProxies, testMoved;
   };
   Kernels& kernels(bool newton);
   void chooseGrid(const ProxyArrays& p, const PairFinderOptions& options, GpucolGridParams& g);
@@ -129,8 +129,7 @@ OpenClPairFinder::Kernels& OpenClPairFinder::kernels(bool newton) {
                                             newton ? "-DGPUCOL_MAPPING_NEWTON" : "");
     k.countCells = cl::Kernel(program, "grid_count_cells");
     k.writeKeys = cl::Kernel(program, "grid_write_keys");
-    k.countCellEntries = cl::Kernel(program, "grid_count_cell_entries");
-    k.placeEntries = cl::Kernel(program, "grid_place_entries");
+    k.countOrPlaceEntries = cl::Kernel(program, "grid_count_or_place_entries");
     k.markFilledCells = cl::Kernel(program, "grid_mark_filled_cells");
     k.writeFilledCells = cl::Kernel(program, "grid_write_filled_cells");
     k.markRuns = cl::Kernel(program, "grid_mark_runs");
@@ -235,14 +234,14 @@ void OpenClPairFinder::bin(Kernels& k, const std::vector<std::uint32_t>& slots, 
     // cells. No (cell, slot) keys are written.
     const cl_uint cellCount = cl_uint(cells);
     q.enqueueFillBuffer(b.counts.ensure(c, (cells + 1) * 4), zero, 0, (cells + 1) * 4);
-    setProxyArgs(k.countCellEntries);
-    setKernelArgs(k.countCellEntries, 9, m_grid.buffer, b.slots.buffer, b.count, b.counts.buffer);
-    launch(k.countCellEntries, b.count);
+    setProxyArgs(k.countOrPlaceEntries);
+    // Counting writes no entry: any buffer stands for the entries' argument.
+    setKernelArgs(k.countOrPlaceEntries, 9, m_grid.buffer, b.slots.buffer, b.count, b.counts.buffer,
+                  cl_uint(0), b.slots.buffer);
+    launch(k.countOrPlaceEntries, b.count);
     b.keys = m_scan.exclusiveScan(b.counts.buffer, cells + 1);
-    setProxyArgs(k.placeEntries);
-    setKernelArgs(k.placeEntries, 9, m_grid.buffer, b.slots.buffer, b.count, b.counts.buffer,
-                  b.keySlots.ensure(c, std::size_t(b.keys) * 4));
-    launch(k.placeEntries, b.keys == 0 ? 0 : b.count);
+    setKernelArgs(k.countOrPlaceEntries, 13, cl_uint(1), b.keySlots.ensure(c, std::size_t(b.keys) * 4));
+    launch(k.countOrPlaceEntries, b.keys == 0 ? 0 : b.count);
     setKernelArgs(k.markFilledCells, 0, b.counts.buffer, cellCount, b.runHeads.ensure(c, cells * 4));
     launch(k.markFilledCells, cells);
     b.runs = m_scan.exclusiveScan(b.runHeads.buffer, cells);

@@ -123,13 +123,18 @@ __kernel void grid_write_keys(PROXY_PARAMS, __global const GpucolGridParams* gri
   }
 }
 
-// Stages 4-5 on a small dense grid (sortsByCounting in opencl_pair_finder.h), count: one atomic increment
-// per binned box of each cell it covers, cell c counted at cellStart[c + 1] (cellStart[0] stays 0). The host
-// scans them. With about as many cells as boxes, and counters that stay in cache, this costs less than a
-// count per box and the radix sort's passes over every entry.
-__kernel void grid_count_cell_entries(PROXY_PARAMS, __global const GpucolGridParams* grid,
-                                      __global const uint* binned, const uint binnedCount,
-                                      volatile __global uint* cellStart) {
+// Stages 4-5 on a small dense grid (sortsByCounting in opencl_pair_finder.h), the counting sort over the
+// cells, run twice. Counting (place = 0): one atomic increment of cellStart[c + 1] per binned box of each
+// cell c it covers (cellStart[0] stays 0); the host then scans them. Placing (place = 1): each entry takes
+// the next place of its cell at cellStart[c + 1], which the scan left at the cell's first entry and placing
+// leaves at its end, that is at cell c + 1's first: cellStart then holds every cell's first entry and the
+// total. With about as many cells as boxes, and counters that stay in cache, this costs less than a count
+// per box and the radix sort's passes over every entry. The order inside a cell depends on the threads;
+// the pairs do not (stage 9 orders each pair's slots, stage 10 sorts the pairs).
+__kernel void grid_count_or_place_entries(PROXY_PARAMS, __global const GpucolGridParams* grid,
+                                          __global const uint* binned, const uint binnedCount,
+                                          volatile __global uint* cellStart, const uint place,
+                                          __global uint* keySlots) {
   const uint i = get_global_id(0);
   if (i >= binnedCount) {
     return;
@@ -141,31 +146,10 @@ __kernel void grid_count_cell_entries(PROXY_PARAMS, __global const GpucolGridPar
     for (uint y = span.lo[1]; y <= span.hi[1]; ++y) {
       const uint row = (z * g.dimY + y) * g.dimX;  // a dense grid's cells fit 32 bits
       for (uint x = span.lo[0]; x <= span.hi[0]; ++x) {
-        atomic_inc(&cellStart[row + x + 1u]);
-      }
-    }
-  }
-}
-
-// Stage 5 on a dense grid, place: each entry takes the next place of its cell c at cellStart[c + 1], which
-// the scan left at the cell's first entry and placing leaves at its end, that is at cell c + 1's first:
-// cellStart then holds every cell's first entry and the total. The order inside a cell depends on the
-// threads; the pairs do not (stage 9 orders each pair's slots, stage 10 sorts the pairs).
-__kernel void grid_place_entries(PROXY_PARAMS, __global const GpucolGridParams* grid, __global const uint* binned,
-                                 const uint binnedCount, volatile __global uint* cellStart,
-                                 __global uint* keySlots) {
-  const uint i = get_global_id(0);
-  if (i >= binnedCount) {
-    return;
-  }
-  const uint s = binned[i];
-  const GpucolGridParams g = *grid;
-  const CellRange span = cell_range(PROXY_ARGS, s, g);
-  for (uint z = span.lo[2]; z <= span.hi[2]; ++z) {
-    for (uint y = span.lo[1]; y <= span.hi[1]; ++y) {
-      const uint row = (z * g.dimY + y) * g.dimX;
-      for (uint x = span.lo[0]; x <= span.hi[0]; ++x) {
-        keySlots[atomic_inc(&cellStart[row + x + 1u])] = s;
+        const uint at = atomic_inc(&cellStart[row + x + 1u]);
+        if (place) {
+          keySlots[at] = s;
+        }
       }
     }
   }
