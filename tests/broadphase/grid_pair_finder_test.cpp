@@ -96,6 +96,9 @@ void expectMatchesBruteForce(const Scene& scene, const std::string& what, std::u
               o.mappingSqrt = sqrtMode;
               o.slabTiling = tiling;
               o.slabBoxes = 64;
+              // Slabs do not use the mapping function: its two modes take the two ways of reading boxes.
+              o.slabBoxReading = sqrtMode == gpucol::MappingSqrt::Newton ? gpucol::SlabBoxReading::InPlace
+                                                                         : gpucol::SlabBoxReading::Copy;
               o.hugeCellLimit = hugeCellLimit;
               std::vector<std::uint64_t> pairs;
               finder->findPairs(records ? scene.recordView() : scene.view(), o, pairs);
@@ -106,6 +109,10 @@ void expectMatchesBruteForce(const Scene& scene, const std::string& what, std::u
               EXPECT_EQ(finder->stats().usedGrid, below == 0) << what;
               if (tiling == gpucol::SlabTiling::Off || output == gpucol::PairOutput::BitMask) {
                 EXPECT_EQ(finder->stats().slabs, 0u) << what;
+              } else if (finder->stats().slabs > 0) {
+                EXPECT_EQ(finder->stats().slabBoxesInPlace,
+                          o.slabBoxReading == gpucol::SlabBoxReading::InPlace)
+                    << what;
               }
             }
 }
@@ -660,7 +667,7 @@ TEST(GridPairFinder, SlabSearchAndTheGridKeptAfterIt) {
   EXPECT_TRUE(finder->stats().incremental);
 }
 
-/// SlabTiling::Auto and AnySize search a scene too small for 8 slabs of 256 boxes in whatever slabs its grid
+/// SlabTiling::Auto and AnySize search a scene of fewer than 2,048 binned boxes in whatever slabs its grid
 /// gives, as many as it fills or fewer (a grid of 4 layers), and leave a big scene that gives fewer than 8
 /// (all boxes at one spot: one cell, one slab) to the whole-grid search, which spreads that cell's candidates
 /// over threads.
@@ -719,6 +726,45 @@ TEST(GridPairFinder, SlabSearchAtAnySize) {
   }
   ASSERT_GE(whole.size(), 10000u);
   EXPECT_EQ(slabs, whole);
+}
+
+/// SlabBoxReading::Auto reads the boxes in place when the copies of the threads' largest slabs would come to
+/// more than 8 bytes per binned box (a small scene, or a few large slabs), and copies them otherwise; the
+/// pairs are the same either way. Two threads, as on the machine the rule was measured on.
+TEST(GridPairFinder, SlabBoxesReadInPlaceWhereTheirCopiesWouldWeighMost) {
+  tbb::global_control two(tbb::global_control::max_allowed_parallelism, 2);
+  // A cloud long along x, the axis the slabs cut, and a column across it at x = 0 that fills one slab.
+  Scene columnAndCloud;
+  std::mt19937 rng(62);
+  std::uniform_real_distribution<float> along(-90.0f, 90.0f), across(-15.0f, 15.0f);
+  for (int i = 0; i < 6000; ++i) columnAndCloud.add(along(rng), across(rng), across(rng), 0.6f, 0.6f, 0.6f);
+  for (int i = 0; i < 4000; ++i) columnAndCloud.add(0.0f, 0.01f * float(i), 0.0f, 0.6f, 0.6f, 0.6f);
+  struct Case {
+    const char* what;
+    Scene scene;
+    bool inPlace;
+  };
+  const Case cases[] = {{"1,000 boxes", uniformCloud(1000, 12.0f, 0.8f, 61), true},
+                        {"12,000 boxes", uniformCloud(12000, 22.0f, 0.6f, 13), false},
+                        {"a column holding 40% of the boxes", columnAndCloud, true}};
+  for (const Case& c : cases) {
+    SCOPED_TRACE(c.what);
+    const std::vector<std::uint64_t> reference = gpucol::findPairsBruteForce(c.scene.view());
+    ASSERT_GE(reference.size(), 100u);
+    for (auto reading :
+         {gpucol::SlabBoxReading::Auto, gpucol::SlabBoxReading::Copy, gpucol::SlabBoxReading::InPlace}) {
+      auto finder = gpucol::makeCpuPairFinder();
+      gpucol::PairFinderOptions o;
+      o.slabBoxReading = reading;
+      std::vector<std::uint64_t> pairs;
+      finder->findPairs(c.scene.view(), o, pairs);
+      EXPECT_EQ(pairs, reference) << int(reading);
+      ASSERT_GE(finder->stats().slabs, 2u);
+      EXPECT_EQ(finder->stats().slabBoxesInPlace, reading == gpucol::SlabBoxReading::Auto
+                                                      ? c.inPlace
+                                                      : reading == gpucol::SlabBoxReading::InPlace);
+    }
+  }
 }
 
 TEST(GridPairFinder, DeterministicWhateverTheThreadCount) {

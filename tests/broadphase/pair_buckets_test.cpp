@@ -1,5 +1,5 @@
-// PairBuckets against a plain sort: pieces of unsorted pair keys come out as one sorted, coded list, for
-// slot counts from a handful (no bucket bits) to 2^20 (32-bit entries exactly).
+// PairBuckets against a plain sort: pieces of unsorted pair keys, each added in parts, come out as one
+// sorted, coded list, for slot counts from a handful (no bucket bits) to 2^20 (32-bit entries exactly).
 #include "broadphase/pair_buckets.h"
 
 #include <gtest/gtest.h>
@@ -35,9 +35,17 @@ TEST(PairBuckets, PiecesComeOutSortedAndCoded) {
       gpucol::PairBuckets buckets;
       ASSERT_TRUE(gpucol::PairBuckets::fits(slots));
       buckets.reset(slots, cut.size() - 1);
-      for (std::size_t p = 0; p + 1 < cut.size(); ++p)
-        buckets.addPiece(p, std::vector<std::uint64_t>(shuffled.begin() + std::ptrdiff_t(cut[p]),
-                                                       shuffled.begin() + std::ptrdiff_t(cut[p + 1])));
+      // Each piece added in one to three parts (a producer hands its keys over as its list fills).
+      for (std::size_t p = 0; p + 1 < cut.size(); ++p) {
+        const std::size_t parts = 1 + rng() % 3;
+        for (std::size_t k = 0; k < parts; ++k) {
+          const std::size_t length = cut[p + 1] - cut[p];
+          auto at = [&](std::size_t i) {
+            return shuffled.begin() + std::ptrdiff_t(cut[p] + length * i / parts);
+          };
+          buckets.addToPiece(p, std::vector<std::uint64_t>(at(k), at(k + 1)));
+        }
+      }
       ASSERT_EQ(buckets.size(), keys.size());
       gpucol::PackedPairs out;
       const bool plain = ++trial % 2 == 0;  // coded or plain segments alike

@@ -43,11 +43,12 @@ constexpr std::uint32_t kHomeEntry = 1u << 31;
 constexpr std::uint32_t kEntryBox = kHomeEntry - 1;
 /// SlabTiling::Auto cuts a grid into slabs only when at least this many come out, so both cores have work
 /// while the slowest slab finishes. A few large slabs of a big scene (a pile in few cells) are left to the
-/// whole-grid search, which spreads one cell's candidates over threads (stage 7). A scene too small to fill
-/// that many slabs of SlabSearch::kMinSlabBoxes takes any slabs at all: there the whole-grid search's
-/// working memory (about 100 bytes per box) outweighs what its threads gain (mixed sizes at 2,000 boxes, in
-/// few slabs: 174 against 115 bytes per proxy at the peak, and no slower; measurement history).
+/// whole-grid search, which spreads one cell's candidates over threads (stage 7).
 constexpr std::uint32_t kMinSlabs = 8;
+/// ... but a scene of fewer binned boxes takes any slabs at all: there the whole-grid search's working memory
+/// (about 100 bytes per box) outweighs what its threads gain (mixed sizes at 2,000 boxes, in few slabs: 174
+/// against 115 bytes per proxy at the peak, and no slower; measurement history).
+constexpr std::size_t kAnySlabsBelow = 2048;
 /// ... and only up to this many binned boxes. Each slab reads its boxes from the view at slots spread over
 /// the whole scene. At 100K boxes the view stays in cache and the slab search was as fast as the whole-grid
 /// search; at 1M each slab read the view from memory again, and steps took 8-31% longer (measurement
@@ -1038,9 +1039,10 @@ bool CpuPairFinder::searchSlabs(const ProxyArrays& p, const PairFinderOptions& o
     for (auto* v : {&m_homeOrder, &m_homePos}) std::vector<std::uint32_t>().swap(*v);
   };
   if (!homeOrderFits(m_binned.size())) releaseHomeOrder();
-  const bool small = m_binned.size() < std::uint64_t(kMinSlabs) * SlabSearch::kMinSlabBoxes;
+  const bool small = m_binned.size() < kAnySlabsBelow;
   const std::uint32_t minSlabs = always || small ? 1 : kMinSlabs;
-  if (!m_slabs.plan(p, m_binned, g, options.slabBoxes, minSlabs, &m_keptExtents)) return false;
+  if (!m_slabs.plan(p, m_binned, g, options.slabBoxes, minSlabs, options.slabBoxReading, &m_keptExtents))
+    return false;
   // The home order serves the whole-grid search's locality only; a slab search does not keep it up to date.
   releaseHomeOrder();
   notePeak();
@@ -1055,6 +1057,7 @@ bool CpuPairFinder::searchSlabs(const ProxyArrays& p, const PairFinderOptions& o
   m_stats.testMs = clock.lap();
   m_stats.slabs = std::uint32_t(m_slabs.slabs());
   m_stats.slabAxisKept = m_slabs.tookKeptExtents();
+  m_stats.slabBoxesInPlace = m_slabs.readsInPlace();
   m_stats.keys = counts.keys;
   m_stats.candidates += counts.candidates;
   notePeak();

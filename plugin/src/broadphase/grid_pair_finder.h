@@ -165,12 +165,19 @@ enum class MappingSqrt { Double, Newton };
 
 /// Whether the CPU finder searches a dense grid slab by slab (slab_search.h); results are identical.
 /// Auto: full searches with compacted output, of at most kMaxSlabBoxes binned boxes, when the grid cuts into
-/// at least kMinSlabs slabs (any number in a scene too small to fill that many); a grid kept for stage 11 is
-/// then binned after the search (its cells and entries only). AnySize: as Auto with no limit on the boxes
-/// (less memory at the peak than the whole-grid search, which was faster at 1M boxes;
+/// at least kMinSlabs slabs (any number in a scene of fewer than kAnySlabsBelow binned boxes); a grid kept
+/// for stage 11 is then binned after the search (its cells and entries only). AnySize: as Auto with no limit
+/// on the boxes (less memory at the peak than the whole-grid search, which was faster at 1M boxes;
 /// GridBroadphaseTuning::boxesInPlace). Always: every full search of a dense grid with compacted output
 /// (tests). Off: never (benchmarks compare).
 enum class SlabTiling { Auto, AnySize, Always, Off };
+
+/// How a slab search's thread reads the boxes of its slab (slab_search.h); results are identical. Copy: into
+/// an array of LocalBox in slab order (each slab's boxes together; the scene's proxies do not stay in the
+/// cache of a large scene). InPlace: where they are, by slot (no copy). Auto: in place when the copies that
+/// the threads' largest slabs would hold at once come to more than a few bytes per binned box (small scenes,
+/// whose proxies stay in the cache anyway).
+enum class SlabBoxReading { Auto, Copy, InPlace };
 
 /// Knobs of one pair search.
 struct PairFinderOptions {
@@ -188,6 +195,8 @@ struct PairFinderOptions {
   SlabTiling slabTiling = SlabTiling::Auto;
   /// CPU finder: boxes per slab aimed at (0: automatic, slab_search.cpp).
   std::uint32_t slabBoxes = 0;
+  /// CPU finder: how a slab search reads its boxes.
+  SlabBoxReading slabBoxReading = SlabBoxReading::Auto;
 };
 
 /// What one search did (for benchmarks, tests and printStats).
@@ -217,6 +226,8 @@ struct PairFinderStats {
   /// True when the slab plan took the binned boxes' extents along its axis from the grid choice's pass (boxes
   /// read in place, the slab axis as guessed from the last plan) instead of reading the boxes again.
   bool slabAxisKept = false;
+  /// True when the slab search read its boxes in place (SlabBoxReading) instead of copying them.
+  bool slabBoxesInPlace = false;
   /// True when the grid choice took ProxyArrays::survey (no box was read for stage 3 and the bounds).
   bool surveyTaken = false;
   /// True when the search kept the last grid and binned only moved proxies (stage 11).

@@ -10,9 +10,13 @@ namespace {
 
 /// The lower slot's bits left in an entry beside the higher slot's `slotBits` (the rest name the bucket):
 /// about one bucket per 1,024 slots, at most kMaxBuckets (a small scene in 256 buckets held a segment's
-/// bookkeeping per 4 proxies).
+/// bookkeeping per 4 proxies), and at least kMinBuckets: a thread sorts a bucket in two buffers of 4 bytes
+/// per entry, which for a single bucket are 8 bytes for every pair of the scene beside the pieces' 4 (a pile
+/// of 1,000 boxes and 4,250 pairs peaked at 165 bytes per proxy).
 std::uint32_t shiftFor(std::uint32_t slotBits) {
-  const std::uint32_t bucketBits = slotBits > 10 ? std::min<std::uint32_t>(8, slotBits - 10) : 0;
+  constexpr std::uint32_t kMinBucketBits = 3, kMaxBucketBits = 8;
+  const std::uint32_t bucketBits =
+      std::min({kMaxBucketBits, slotBits, std::max(kMinBucketBits, slotBits > 10 ? slotBits - 10 : 0)});
   return slotBits - bucketBits;
 }
 
@@ -61,20 +65,26 @@ void PairBuckets::reset(std::uint32_t slotCount, std::size_t pieces) {
   m_pieces.resize(pieces);
 }
 
-void PairBuckets::addPiece(std::size_t i, const std::vector<std::uint64_t>& keys) {
-  Piece& piece = m_pieces[i];
+void PairBuckets::addToPiece(std::size_t i, const std::vector<std::uint64_t>& keys) {
   if (keys.empty()) return;
+  Part& part = m_pieces[i].emplace_back();
   // A counting sort by bucket, into entries allocated at their number.
-  piece.bucketStart.assign(m_buckets + 1, 0);
-  for (std::uint64_t key : keys) ++piece.bucketStart[(key >> 32 >> m_shift) + 1];
-  for (std::uint32_t b = 0; b < m_buckets; ++b) piece.bucketStart[b + 1] += piece.bucketStart[b];
-  std::vector<std::uint32_t> next(piece.bucketStart.begin(), piece.bucketStart.end() - 1);
-  piece.entries.resize(keys.size());
+  part.bucketStart.assign(m_buckets + 1, 0);
+  for (std::uint64_t key : keys) ++part.bucketStart[(key >> 32 >> m_shift) + 1];
+  for (std::uint32_t b = 0; b < m_buckets; ++b) part.bucketStart[b + 1] += part.bucketStart[b];
+  std::vector<std::uint32_t> next(part.bucketStart.begin(), part.bucketStart.end() - 1);
+  part.entries.resize(keys.size());
   const std::uint64_t lowMask = (std::uint64_t(1) << m_shift) - 1;
   for (std::uint64_t key : keys) {
     const std::uint64_t a = key >> 32;
-    piece.entries[next[a >> m_shift]++] = std::uint32_t(((a & lowMask) << m_slotBits) | (key & 0xffffffffu));
+    part.entries[next[a >> m_shift]++] = std::uint32_t(((a & lowMask) << m_slotBits) | (key & 0xffffffffu));
   }
+}
+
+std::size_t PairBuckets::partKeys() const {
+  // A start per bucket is 4 bytes beside the part's 4 per key: at least 16 keys per bucket.
+  constexpr std::size_t kMinPartKeys = 512, kKeysPerBucket = 16;
+  return std::max(kMinPartKeys, kKeysPerBucket * m_buckets);
 }
 
 void PairBuckets::packInto(PackedPairs& out, bool plain) {
@@ -84,10 +94,10 @@ void PairBuckets::packInto(PackedPairs& out, bool plain) {
   std::vector<std::size_t> keysAt;
   if (plain) {
     keysAt.assign(m_buckets + 1, 0);
-    for (const Piece& piece : m_pieces)
-      if (!piece.entries.empty())
-        for (std::uint32_t b = 0; b < m_buckets; ++b)
-          keysAt[b + 1] += piece.bucketStart[b + 1] - piece.bucketStart[b];
+    forEachPart([&](const Part& part) {
+      for (std::uint32_t b = 0; b < m_buckets; ++b)
+        keysAt[b + 1] += part.bucketStart[b + 1] - part.bucketStart[b];
+    });
     for (std::uint32_t b = 0; b < m_buckets; ++b) keysAt[b + 1] += keysAt[b];
     keys.resize(keysAt[m_buckets]);
   } else {
@@ -97,18 +107,16 @@ void PairBuckets::packInto(PackedPairs& out, bool plain) {
   const std::uint64_t slotMask = (std::uint64_t(1) << m_slotBits) - 1;
   tbb::parallel_for(std::uint32_t(0), m_buckets, [&](std::uint32_t bucket) {
     std::size_t n = 0;
-    for (const Piece& piece : m_pieces)
-      if (!piece.entries.empty()) n += piece.bucketStart[bucket + 1] - piece.bucketStart[bucket];
+    forEachPart([&](const Part& part) { n += part.bucketStart[bucket + 1] - part.bucketStart[bucket]; });
     if (n == 0) return;
     Buffers& buffers = m_buffers.local();
     sizeExactly(buffers.entries, n);
     sizeExactly(buffers.scratch, n);
     std::uint32_t* e = buffers.entries.data();
-    for (const Piece& piece : m_pieces) {
-      if (piece.entries.empty()) continue;
-      const std::uint32_t* from = piece.entries.data();
-      e = std::copy(from + piece.bucketStart[bucket], from + piece.bucketStart[bucket + 1], e);
-    }
+    forEachPart([&](const Part& part) {
+      const std::uint32_t* from = part.entries.data();
+      e = std::copy(from + part.bucketStart[bucket], from + part.bucketStart[bucket + 1], e);
+    });
     sortEntries(buffers.entries.data(), buffers.scratch.data(), n, entryBits);
     const std::uint64_t base = std::uint64_t(bucket) << m_shift;
     const std::uint32_t* sorted = buffers.entries.data();
@@ -128,13 +136,15 @@ void PairBuckets::packInto(PackedPairs& out, bool plain) {
 
 std::size_t PairBuckets::size() const {
   std::size_t n = 0;
-  for (const Piece& piece : m_pieces) n += piece.entries.size();
+  forEachPart([&](const Part& part) { n += part.entries.size(); });
   return n;
 }
 
 std::size_t PairBuckets::bytes() const {
   std::size_t bytes = m_pieces.capacity() * sizeof(Piece);
-  for (const Piece& piece : m_pieces) bytes += (piece.entries.capacity() + piece.bucketStart.capacity()) * 4;
+  for (const Piece& piece : m_pieces) bytes += piece.capacity() * sizeof(Part);
+  forEachPart(
+      [&](const Part& part) { bytes += (part.entries.capacity() + part.bucketStart.capacity()) * 4; });
   for (const Buffers& buffers : m_buffers)
     bytes += (buffers.entries.capacity() + buffers.scratch.capacity()) * 4;
   return bytes;

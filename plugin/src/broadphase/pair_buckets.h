@@ -24,9 +24,12 @@ class PairBuckets {
   static bool fits(std::uint32_t slotCount);
   /// Empties the buckets and makes room for `pieces` lists of keys of slots below `slotCount` (fits()).
   void reset(std::uint32_t slotCount, std::size_t pieces);
-  /// Splits `keys` (pair keys, any order, none in another piece) into the buckets as piece `i`; distinct
-  /// pieces may be added in parallel. `keys` is not changed.
-  void addPiece(std::size_t i, const std::vector<std::uint64_t>& keys);
+  /// Splits `keys` (pair keys, any order, none added before) into the buckets as a part of piece `i`; a piece
+  /// may be added to several times, distinct pieces in parallel. `keys` is not changed.
+  void addToPiece(std::size_t i, const std::vector<std::uint64_t>& keys);
+  /// Keys a part should hold at least, so that its bookkeeping (a start per bucket) stays small beside it:
+  /// a producer may hand its keys over whenever it has this many, instead of growing its list.
+  std::size_t partKeys() const;
   /// Sorts each bucket and codes it (or, `plain`, copies it) into `out` as one segment (in parallel over
   /// buckets); the pieces stay until release(), so that bytes() then is the high-water mark of the whole.
   void packInto(PackedPairs& out, bool plain = false);
@@ -38,10 +41,20 @@ class PairBuckets {
   void release();
 
  private:
-  struct Piece {
+  /// Keys handed over at once by addToPiece.
+  struct Part {
     std::vector<std::uint32_t> entries;      // by bucket: (lower slot's low bits << slotBits) | higher slot
-    std::vector<std::uint32_t> bucketStart;  // first entry of each bucket (+ the end); empty: no entries
+    std::vector<std::uint32_t> bucketStart;  // first entry of each bucket (+ the end)
   };
+  /// A piece's parts in the order added.
+  using Piece = std::vector<Part>;
+
+  /// f(part) for every part of every piece.
+  template <typename F>
+  void forEachPart(F&& f) const {
+    for (const Piece& piece : m_pieces)
+      for (const Part& part : piece) f(part);
+  }
   /// One thread's buffers for the bucket it sorts.
   struct Buffers {
     std::vector<std::uint32_t> entries, scratch;

@@ -2,10 +2,13 @@
 #include "broadphase/slab_search.h"
 
 #include <tbb/blocked_range.h>
+#include <tbb/global_control.h>
 #include <tbb/parallel_for.h>
 #include <tbb/partitioner.h>
+#include <tbb/task_arena.h>
 
 #include <algorithm>
+#include <functional>
 #include <stdexcept>
 #include <string>
 #include <utility>
@@ -32,6 +35,11 @@ constexpr std::size_t kPlanChunks = 64;
 constexpr int kStartShift = 29;
 constexpr std::uint32_t kAllAxes = 7;
 constexpr std::uint32_t kSlabBox = (1u << kStartShift) - 1;
+/// SlabBoxReading::Auto reads the boxes in place when the threads' copies would hold more than this many
+/// bytes per binned box. A copy pays at scale, where a slab's boxes lie far apart in the scene; the scenes
+/// over it are small ones (a few thousand boxes), whose proxies stay in the cache, and in them the copies
+/// took 12-24 of the 100 bytes per proxy a step may hold (README, "At most 100 bytes per proxy").
+constexpr std::size_t kCopyBytesPerBox = 8;
 /// Makes room for n elements in v, with a capacity of exactly n when it must grow (resize alone would double
 /// it, and each thread holds its scratch at the largest slab's size until the search ends). The old array is
 /// freed before the new one is allocated, so the two are never held at once.
@@ -89,8 +97,10 @@ class AxisExtent {
 }  // namespace
 
 bool SlabSearch::plan(const ProxyArrays& p, const std::vector<std::uint32_t>& binned, const Grid& g,
-                      std::uint32_t slabBoxes, std::uint32_t minSlabs, AxisExtents* kept) {
+                      std::uint32_t slabBoxes, std::uint32_t minSlabs, SlabBoxReading reading,
+                      AxisExtents* kept) {
   m_firstLayer.clear();
+  m_inPlace = false;
   const std::size_t n = binned.size();
   m_axis = 0;
   for (int a = 1; a < 3; ++a)
@@ -204,6 +214,19 @@ bool SlabSearch::plan(const ProxyArrays& p, const std::vector<std::uint32_t>& bi
       forSlabsOf(i, [&](std::uint32_t k) { m_members[next[k]++] = binned[i]; });
   });
   releaseKept();
+  // The box copies held at once: each thread's of the largest slab it may take, so at most those of the
+  // largest slabs, one per thread.
+  std::vector<std::size_t> slabSizes(slabCount);
+  for (std::size_t k = 0; k < slabCount; ++k) slabSizes[k] = m_memberStart[k + 1] - m_memberStart[k];
+  const std::size_t threads =
+      std::min({slabCount, std::size_t(std::max(1, tbb::this_task_arena::max_concurrency())),
+                tbb::global_control::active_value(tbb::global_control::max_allowed_parallelism)});
+  std::partial_sort(slabSizes.begin(), slabSizes.begin() + std::ptrdiff_t(threads), slabSizes.end(),
+                    std::greater<>());
+  std::size_t copied = 0;
+  for (std::size_t k = 0; k < threads; ++k) copied += slabSizes[k];
+  m_inPlace = reading == SlabBoxReading::InPlace ||
+              (reading == SlabBoxReading::Auto && copied * sizeof(LocalBox) > kCopyBytesPerBox * n);
   return true;
 }
 
@@ -221,9 +244,9 @@ SlabSearchCounts SlabSearch::search(const ProxyArrays& p, const std::vector<std:
           // Found into the thread's list, then copied at their exact size: lists grown by push_back hold
           // up to twice their pairs, and all of them are held until the gather.
           Scratch& t = m_scratch.local();
-          counts[k] = searchSlab(k, p, huge, g, t);
+          counts[k] = searchSlab(k, p, huge, g, t, buckets);
           if (buckets)
-            buckets->addPiece(k, t.pairs);
+            buckets->addToPiece(k, t.pairs);
           else
             out[first + k].assign(t.pairs.begin(), t.pairs.end());
         }
@@ -234,7 +257,7 @@ SlabSearchCounts SlabSearch::search(const ProxyArrays& p, const std::vector<std:
     auto& list = buckets ? m_scratch.local().pairs : out[first + slabCount + i];
     list.clear();
     counts[slabCount + i].candidates = hugeAgainstLaterHuge(p, huge, i, list);
-    if (buckets) buckets->addPiece(slabCount + i, list);
+    if (buckets) buckets->addToPiece(slabCount + i, list);
   });
   SlabSearchCounts total;
   for (const SlabSearchCounts& c : counts) total.keys += c.keys, total.candidates += c.candidates;
@@ -242,10 +265,20 @@ SlabSearchCounts SlabSearch::search(const ProxyArrays& p, const std::vector<std:
 }
 
 SlabSearchCounts SlabSearch::searchSlab(std::size_t slab, const ProxyArrays& p,
-                                        const std::vector<std::uint32_t>& huge, const Grid& g, Scratch& t) {
+                                        const std::vector<std::uint32_t>& huge, const Grid& g, Scratch& t,
+                                        PairBuckets* buckets) {
   t.pairs.clear();
-  auto add = [&t](std::uint64_t key) {
-    if (t.pairs.size() == t.pairs.capacity()) growPairs(t);
+  // Into buckets, a full list that holds a part's worth is handed over rather than grown: a slab of a pile
+  // has several pairs per box, and a doubling list held 3 bytes per such pair beside the 8 found.
+  auto add = [&](std::uint64_t key) {
+    if (t.pairs.size() == t.pairs.capacity()) {
+      if (buckets && t.pairs.size() >= buckets->partKeys()) {
+        buckets->addToPiece(slab, t.pairs);
+        t.pairs.clear();
+      } else {
+        growPairs(t);
+      }
+    }
     t.pairs.push_back(key);
   };
   SlabSearchCounts counts;
@@ -270,14 +303,16 @@ SlabSearchCounts SlabSearch::searchSlab(std::size_t slab, const ProxyArrays& p,
     }
     return r;
   };
-  resizeExact(t.box, m);
+  const bool inPlace = m_inPlace;
+  if (!inPlace) resizeExact(t.box, m);
   resizeExact(t.cells, m);
   std::uint64_t keys = 0;
   const std::uint32_t* member = m_members.data() + begin;
   for (std::size_t j = 0; j < m; ++j) {
     if (j + kBoxPrefetchAhead < m) p.prefetchBox(member[j + kBoxPrefetchAhead]);
-    t.box[j] = boxOf(p, member[j]);
-    const CellRange r = toSlab(cellRange(t.box[j], g));
+    const LocalBox b = boxOf(p, member[j]);
+    if (!inPlace) t.box[j] = b;
+    const CellRange r = toSlab(cellRange(b, g));
     keys += r.count();
     t.cells[j] = PackedCells::of(r, dims);
   }
@@ -285,108 +320,112 @@ SlabSearchCounts SlabSearch::searchSlab(std::size_t slab, const ProxyArrays& p,
     throw std::runtime_error("gpucol::GridBroadphase: " + std::to_string(keys) +
                              " (cell, proxy) entries exceed the 2^32 entry limit of one grid");
   counts.keys = keys;
-  // A range's first cells in slab coordinates; on the slab axis none when the box starts below the slab.
-  auto firstCells = [&](const CellRange& whole, std::uint32_t first[3]) {
-    for (int i = 0; i < 3; ++i) first[i] = whole.lo[i];
-    first[A] = whole.lo[A] >= a0 ? whole.lo[A] - a0 : std::numeric_limits<std::uint32_t>::max();
-  };
-  auto startBits = [](const std::uint32_t first[3], std::uint32_t x, std::uint32_t y, std::uint32_t z) {
-    return (std::uint32_t(x == first[0]) | std::uint32_t(y == first[1]) << 1 |
-            std::uint32_t(z == first[2]) << 2)
-           << kStartShift;
-  };
-  // f(cell, start bits) for every slab cell of box j, the bits (an entry's top three) saying on which axes
-  // the cell is the box's first.
-  auto forCellsOf = [&](std::size_t j, auto&& f) {
-    const LocalBox& b = t.box[j];
-    if (t.cells[j].fits()) {
-      const std::uint32_t axes =
-          cellOf(b.lo[A], g.origin[A], g.invCell, g.dims[A]) >= a0 ? kAllAxes : kAllAxes & ~(1u << A);
-      t.cells[j].forEach(
-          dims, [&](std::uint32_t c, std::uint32_t firstOn) { f(c, (firstOn & axes) << kStartShift); });
-      return;
-    }
-    const CellRange whole = cellRange(b, g);
-    std::uint32_t first[3];
-    firstCells(whole, first);
-    forEachCellOf(toSlab(whole), dims,
-                  [&](std::uint32_t c, std::uint32_t x, std::uint32_t y, std::uint32_t z) {
-                    f(c, startBits(first, x, y, z));
-                  });
-  };
-
-  // Stages 4-5: a counting sort of the slab's entries by cell. Counts go up, an inclusive scan turns them
-  // into cell ends, and placing counts them back down to each cell's start.
-  reserveExact(t.cellStart, std::size_t(cells) + 1);
-  t.cellStart.assign(std::size_t(cells) + 1, 0);
-  std::uint32_t* start = t.cellStart.data();
-  for (std::size_t j = 0; j < m; ++j) forCellsOf(j, [&](std::uint32_t c, std::uint32_t) { ++start[c]; });
-  for (std::uint32_t c = 1; c <= cells; ++c) start[c] += start[c - 1];
-  resizeExact(t.entries, keys);
-  for (std::size_t j = 0; j < m; ++j)
-    forCellsOf(j,
-               [&](std::uint32_t c, std::uint32_t bits) { t.entries[--start[c]] = std::uint32_t(j) | bits; });
-
-  // Stages 8-9 per cell of two or more boxes: the cell's ownership from the entries alone, then the overlap
-  // and the filter.
-  auto emit = [&](const LocalBox& a, const LocalBox& b) {
-    if (boxesOverlap(a, b) && passesFilter(a, b)) add(makePairKey(a.slot, b.slot));
-  };
-  for (std::uint32_t c = 0; c < cells; ++c) {
-    const std::uint32_t e0 = start[c], runLength = start[c + 1] - e0;
-    if (runLength < 2) continue;
-    counts.candidates += std::uint64_t(runLength) * (runLength - 1) / 2;
-    const std::uint32_t* run = t.entries.data() + e0;
-    auto boxAt = [&](std::uint32_t i) -> const LocalBox& { return t.box[run[i] & kSlabBox]; };
-    if (runLength >= kLocalRunMin && runLength <= kLocalRunMax) {
-      forEachOverlapInRun(runLength, boxAt, [&](std::uint32_t i, std::uint32_t j) {
-        if (ownedByCell(run[i], run[j]) && passesFilter(boxAt(i), boxAt(j)))
-          add(makePairKey(boxAt(i).slot, boxAt(j).slot));
-      });
-      continue;
-    }
-    for (std::uint32_t i = 0; i + 1 < runLength; ++i)
-      for (std::uint32_t j = i + 1; j < runLength; ++j)
-        if (ownedByCell(run[i], run[j])) emit(boxAt(i), boxAt(j));
-  }
-
-  // Stage 3: huge boxes against this slab's boxes, through the cells the huge box covers when they are few
-  // enough, else one by one; either way a pair is this slab's when the overlap's min corner lies in it. In a
-  // cell strictly inside the huge box's range every box listed overlaps it, and the overlap's min corner is
-  // in that cell exactly when the box starts there on every axis (the whole-grid search's rule).
-  const double keysPerCell = double(keys) / double(cells);
-  for (std::uint32_t h : huge) {
-    const LocalBox a = boxOf(p, h);
-    const CellRange whole = cellRange(a, g);
-    if (whole.hi[A] < a0 || whole.lo[A] >= a1) continue;
-    const CellRange r = toSlab(whole);
-    if (double(r.count()) * (1.0 + keysPerCell) < double(m)) {
-      std::uint32_t first[3], last[3] = {whole.hi[0], whole.hi[1], whole.hi[2]};
+  auto testSlab = [&](auto&& box) {
+    // A range's first cells in slab coordinates; on the slab axis none when the box starts below the slab.
+    auto firstCells = [&](const CellRange& whole, std::uint32_t first[3]) {
+      for (int i = 0; i < 3; ++i) first[i] = whole.lo[i];
+      first[A] = whole.lo[A] >= a0 ? whole.lo[A] - a0 : std::numeric_limits<std::uint32_t>::max();
+    };
+    auto startBits = [](const std::uint32_t first[3], std::uint32_t x, std::uint32_t y, std::uint32_t z) {
+      return (std::uint32_t(x == first[0]) | std::uint32_t(y == first[1]) << 1 |
+              std::uint32_t(z == first[2]) << 2)
+             << kStartShift;
+    };
+    // f(cell, start bits) for every slab cell of box j, the bits (an entry's top three) saying on which axes
+    // the cell is the box's first.
+    auto forCellsOf = [&](std::size_t j, auto&& f) {
+      const LocalBox& b = box(j);
+      if (t.cells[j].fits()) {
+        const std::uint32_t axes =
+            cellOf(b.lo[A], g.origin[A], g.invCell, g.dims[A]) >= a0 ? kAllAxes : kAllAxes & ~(1u << A);
+        t.cells[j].forEach(
+            dims, [&](std::uint32_t c, std::uint32_t firstOn) { f(c, (firstOn & axes) << kStartShift); });
+        return;
+      }
+      const CellRange whole = cellRange(b, g);
+      std::uint32_t first[3];
       firstCells(whole, first);
-      last[A] -= a0;  // not below the slab: the range reaches it
-      forEachCellOf(r, dims, [&](std::uint32_t c, std::uint32_t x, std::uint32_t y, std::uint32_t z) {
-        const std::uint32_t hugeBits = startBits(first, x, y, z);
-        const bool inner = hugeBits == 0 && x != last[0] && y != last[1] && z != last[2];
-        counts.candidates += start[c + 1] - start[c];
-        for (std::uint32_t e = start[c]; e < start[c + 1]; ++e) {
-          const std::uint32_t entry = t.entries[e];
-          if (!ownedByCell(hugeBits, entry)) continue;
-          const LocalBox& b = t.box[entry & kSlabBox];
-          if (inner ? passesFilter(a, b) : boxesOverlap(a, b) && passesFilter(a, b))
+      forEachCellOf(toSlab(whole), dims,
+                    [&](std::uint32_t c, std::uint32_t x, std::uint32_t y, std::uint32_t z) {
+                      f(c, startBits(first, x, y, z));
+                    });
+    };
+
+    // Stages 4-5: a counting sort of the slab's entries by cell. Counts go up, an inclusive scan turns them
+    // into cell ends, and placing counts them back down to each cell's start.
+    reserveExact(t.cellStart, std::size_t(cells) + 1);
+    t.cellStart.assign(std::size_t(cells) + 1, 0);
+    std::uint32_t* start = t.cellStart.data();
+    for (std::size_t j = 0; j < m; ++j) forCellsOf(j, [&](std::uint32_t c, std::uint32_t) { ++start[c]; });
+    for (std::uint32_t c = 1; c <= cells; ++c) start[c] += start[c - 1];
+    resizeExact(t.entries, keys);
+    for (std::size_t j = 0; j < m; ++j)
+      forCellsOf(
+          j, [&](std::uint32_t c, std::uint32_t bits) { t.entries[--start[c]] = std::uint32_t(j) | bits; });
+
+    // Stages 8-9 per cell of two or more boxes: the cell's ownership from the entries alone, then the overlap
+    // and the filter.
+    auto emit = [&](const LocalBox& a, const LocalBox& b) {
+      if (boxesOverlap(a, b) && passesFilter(a, b)) add(makePairKey(a.slot, b.slot));
+    };
+    for (std::uint32_t c = 0; c < cells; ++c) {
+      const std::uint32_t e0 = start[c], runLength = start[c + 1] - e0;
+      if (runLength < 2) continue;
+      counts.candidates += std::uint64_t(runLength) * (runLength - 1) / 2;
+      const std::uint32_t* run = t.entries.data() + e0;
+      auto boxAt = [&](std::uint32_t i) -> decltype(auto) { return box(run[i] & kSlabBox); };
+      if (runLength >= kLocalRunMin && runLength <= kLocalRunMax) {
+        forEachOverlapInRun(runLength, boxAt, [&](std::uint32_t i, std::uint32_t j) {
+          if (ownedByCell(run[i], run[j]) && passesFilter(boxAt(i), boxAt(j)))
+            add(makePairKey(boxAt(i).slot, boxAt(j).slot));
+        });
+        continue;
+      }
+      for (std::uint32_t i = 0; i + 1 < runLength; ++i)
+        for (std::uint32_t j = i + 1; j < runLength; ++j)
+          if (ownedByCell(run[i], run[j])) emit(boxAt(i), boxAt(j));
+    }
+
+    // Stage 3: huge boxes against this slab's boxes, through the cells the huge box covers when they are few
+    // enough, else one by one; either way a pair is this slab's when the overlap's min corner lies in it. In
+    // a cell strictly inside the huge box's range every box listed overlaps it, and the overlap's min corner
+    // is in that cell exactly when the box starts there on every axis (the whole-grid search's rule).
+    const double keysPerCell = double(keys) / double(cells);
+    for (std::uint32_t h : huge) {
+      const LocalBox a = boxOf(p, h);
+      const CellRange whole = cellRange(a, g);
+      if (whole.hi[A] < a0 || whole.lo[A] >= a1) continue;
+      const CellRange r = toSlab(whole);
+      if (double(r.count()) * (1.0 + keysPerCell) < double(m)) {
+        std::uint32_t first[3], last[3] = {whole.hi[0], whole.hi[1], whole.hi[2]};
+        firstCells(whole, first);
+        last[A] -= a0;  // not below the slab: the range reaches it
+        forEachCellOf(r, dims, [&](std::uint32_t c, std::uint32_t x, std::uint32_t y, std::uint32_t z) {
+          const std::uint32_t hugeBits = startBits(first, x, y, z);
+          const bool inner = hugeBits == 0 && x != last[0] && y != last[1] && z != last[2];
+          counts.candidates += start[c + 1] - start[c];
+          for (std::uint32_t e = start[c]; e < start[c + 1]; ++e) {
+            const std::uint32_t entry = t.entries[e];
+            if (!ownedByCell(hugeBits, entry)) continue;
+            const LocalBox& b = box(entry & kSlabBox);
+            if (inner ? passesFilter(a, b) : boxesOverlap(a, b) && passesFilter(a, b))
+              add(makePairKey(a.slot, b.slot));
+          }
+        });
+      } else {
+        counts.candidates += m;
+        for (std::size_t j = 0; j < m; ++j) {
+          const LocalBox& b = box(j);
+          const std::uint32_t layer = cellOf(std::max(a.lo[A], b.lo[A]), g.origin[A], g.invCell, g.dims[A]);
+          if (layer >= a0 && layer < a1 && boxesOverlap(a, b) && passesFilter(a, b))
             add(makePairKey(a.slot, b.slot));
         }
-      });
-    } else {
-      counts.candidates += m;
-      for (std::size_t j = 0; j < m; ++j) {
-        const LocalBox& b = t.box[j];
-        const std::uint32_t layer = cellOf(std::max(a.lo[A], b.lo[A]), g.origin[A], g.invCell, g.dims[A]);
-        if (layer >= a0 && layer < a1 && boxesOverlap(a, b) && passesFilter(a, b))
-          add(makePairKey(a.slot, b.slot));
       }
     }
-  }
-  return counts;
+    return counts;
+  };
+  if (inPlace) return testSlab([&](std::size_t j) { return boxOf(p, member[j]); });
+  return testSlab([&](std::size_t j) -> const LocalBox& { return t.box[j]; });
 }
 
 std::size_t SlabSearch::bytesOf(const Scratch& t) {

@@ -39,21 +39,27 @@ struct SlabSearchCounts {
 /// Plans and runs slab searches; keeps its working memory between them until release().
 class SlabSearch {
  public:
-  /// Boxes per slab at least (smaller slabs cost more in per-slab setup than they save).
-  static constexpr std::uint64_t kMinSlabBoxes = 256;
+  /// Boxes per slab aimed at, at least. Each thread holds the working memory of the largest slab it took, so
+  /// in a small scene it is the slabs' size that sets the peak per proxy: at 1,000 boxes, slabs aimed at 256
+  /// boxes peaked at 101-133 bytes per proxy and at 64 boxes at 89-104, in steps as fast (README).
+  static constexpr std::uint64_t kMinSlabBoxes = 64;
 
   /// Cuts grid `g` of the `binned` slots into slabs of about `slabBoxes` boxes each (0: the scene's count
   /// over kSlabsAimed, and at least kMinSlabBoxes), and lists each binned slot in every slab it reaches.
-  /// Returns false, with nothing planned, when fewer than `minSlabs` slabs come out. `kept`, when its axis
+  /// Returns false, with nothing planned, when fewer than `minSlabs` slabs come out. `reading` says how
+  /// search() will read the boxes (readsInPlace() for Auto's choice). `kept`, when its axis
   /// is the one the slabs cut (axis()), gives the binned boxes' extents along it (by binned index, or by
   /// slot for all of `p`'s slots), which are then not read from `p`; they are freed (or taken over) as soon
   /// as the plan no longer needs them.
   bool plan(const ProxyArrays& p, const std::vector<std::uint32_t>& binned, const Grid& g,
-            std::uint32_t slabBoxes, std::uint32_t minSlabs, AxisExtents* kept = nullptr);
+            std::uint32_t slabBoxes, std::uint32_t minSlabs, SlabBoxReading reading,
+            AxisExtents* kept = nullptr);
   /// The axis the last plan cut (the one with most cells), also after release(): a guess for the next.
   int axis() const { return m_axis; }
   /// Whether the last plan took its extents from `kept`.
   bool tookKeptExtents() const { return m_tookKept; }
+  /// Whether search() reads the planned boxes in place instead of copying each slab's.
+  bool readsInPlace() const { return m_inPlace; }
   /// Slabs of the last plan.
   std::size_t slabs() const { return m_firstLayer.empty() ? 0 : m_firstLayer.size() - 1; }
   /// Output lists search() fills: one per slab, one per huge box.
@@ -72,7 +78,7 @@ class SlabSearch {
  private:
   /// One thread's working memory for the slab it is searching.
   struct Scratch {
-    std::vector<LocalBox> box;             // the slab's boxes, in slab-list order
+    std::vector<LocalBox> box;             // the slab's boxes, in slab-list order (unless read in place)
     std::vector<PackedCells> cells;        // their cells in slab coordinates
     std::vector<std::uint32_t> cellStart;  // first entry per slab cell (+1 sentinel)
     std::vector<std::uint32_t> entries;    // box indices by cell, kSlabHome on a box's home cell
@@ -80,8 +86,10 @@ class SlabSearch {
     std::size_t growthBytes = 0;           // the most it held while its pair list grew (old and new arrays)
   };
 
+  /// Searches slab `slab` with t's memory; its pairs are left in t.pairs, all of them, or with `buckets`
+  /// those not yet added to the buckets' piece `slab`.
   SlabSearchCounts searchSlab(std::size_t slab, const ProxyArrays& p, const std::vector<std::uint32_t>& huge,
-                              const Grid& g, Scratch& t);
+                              const Grid& g, Scratch& t, PairBuckets* buckets);
   /// Bytes of one thread's working memory (capacities).
   static std::size_t bytesOf(const Scratch& t);
   /// Doubles t's pair list by hand, so the moment it holds the old array and the new one is counted.
@@ -89,6 +97,7 @@ class SlabSearch {
 
   int m_axis = 0;                           // the axis the slabs cut (the one with most cells)
   bool m_tookKept = false;                  // the last plan read the grid choice's kept extents
+  bool m_inPlace = false;                   // search() reads boxes by slot, with no copy per slab
   std::vector<std::uint32_t> m_firstLayer;  // per slab: its first layer along m_axis (+ the end)
   std::vector<std::uint32_t> m_layerSlab;   // per layer: its slab
   std::vector<std::size_t> m_memberStart;   // per slab: first index in m_members (+ the end)
