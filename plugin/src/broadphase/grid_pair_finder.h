@@ -174,9 +174,9 @@ enum class SlabTiling { Auto, AnySize, Always, Off };
 
 /// How a slab search's thread reads the boxes of its slab (slab_search.h); results are identical. Copy: into
 /// an array of LocalBox in slab order (each slab's boxes together; the scene's proxies do not stay in the
-/// cache of a large scene). InPlace: where they are, by slot (no copy). Auto: in place when the copies that
-/// the threads' largest slabs would hold at once come to more than a few bytes per binned box (small scenes,
-/// whose proxies stay in the cache anyway).
+/// cache of a large scene). InPlace: where they are, by slot (no copy). Auto: in place in a scene of a few
+/// thousand boxes (whose proxies stay in the cache anyway) when the copies that the threads' largest slabs
+/// would hold at once come to more than a few bytes per binned box.
 enum class SlabBoxReading { Auto, Copy, InPlace };
 
 /// Knobs of one pair search.

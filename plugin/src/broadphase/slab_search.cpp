@@ -35,11 +35,13 @@ constexpr std::size_t kPlanChunks = 64;
 constexpr int kStartShift = 29;
 constexpr std::uint32_t kAllAxes = 7;
 constexpr std::uint32_t kSlabBox = (1u << kStartShift) - 1;
-/// SlabBoxReading::Auto reads the boxes in place when the threads' copies would hold more than this many
-/// bytes per binned box. A copy pays at scale, where a slab's boxes lie far apart in the scene; the scenes
-/// over it are small ones (a few thousand boxes), whose proxies stay in the cache, and in them the copies
-/// took 12-24 of the 100 bytes per proxy a step may hold (README, "At most 100 bytes per proxy").
+/// SlabBoxReading::Auto reads the boxes in place in a scene of at most kInPlaceMaxBoxes binned boxes when the
+/// threads' copies would hold more than kCopyBytesPerBox bytes per binned box: there the copies took 12-24 of
+/// the 100 bytes per proxy a step may hold (README, "At most 100 bytes per proxy"). In larger scenes they
+/// take less, and reading in place cost more: a pile of 10,000 boxes (the falling column after 80 steps,
+/// about 10 pairs per box, a few large slabs) spent twice as long in its candidate tests.
 constexpr std::size_t kCopyBytesPerBox = 8;
+constexpr std::size_t kInPlaceMaxBoxes = 4096;
 /// Makes room for n elements in v, with a capacity of exactly n when it must grow (resize alone would double
 /// it, and each thread holds its scratch at the largest slab's size until the search ends). The old array is
 /// freed before the new one is allocated, so the two are never held at once.
@@ -225,8 +227,9 @@ bool SlabSearch::plan(const ProxyArrays& p, const std::vector<std::uint32_t>& bi
                     std::greater<>());
   std::size_t copied = 0;
   for (std::size_t k = 0; k < threads; ++k) copied += slabSizes[k];
-  m_inPlace = reading == SlabBoxReading::InPlace ||
-              (reading == SlabBoxReading::Auto && copied * sizeof(LocalBox) > kCopyBytesPerBox * n);
+  m_inPlace =
+      reading == SlabBoxReading::InPlace || (reading == SlabBoxReading::Auto && n <= kInPlaceMaxBoxes &&
+                                             copied * sizeof(LocalBox) > kCopyBytesPerBox * n);
   return true;
 }
 
