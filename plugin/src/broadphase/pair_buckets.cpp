@@ -10,7 +10,7 @@ namespace {
 
 /// The lower slot's bits left in an entry beside the higher slot's `slotBits` (the rest name the bucket):
 /// about one bucket per 1,024 slots, at most kMaxBuckets (a small scene in 256 buckets held a segment's
-/// bookkeeping per 4 proxies), and at least kMinBuckets: a thread sorts a bucket in two buffers of 4 bytes
+/// bookkeeping per 4 proxies), and at least 8: a thread sorts a bucket in two buffers of 4 bytes
 /// per entry, which for a single bucket are 8 bytes for every pair of the scene beside the pieces' 4 (a pile
 /// of 1,000 boxes and 4,250 pairs peaked at 165 bytes per proxy).
 std::uint32_t shiftFor(std::uint32_t slotBits) {

@@ -272,7 +272,7 @@ SlabSearchCounts SlabSearch::searchSlab(std::size_t slab, const ProxyArrays& p,
                                         PairBuckets* buckets) {
   t.pairs.clear();
   // Into buckets, a full list that holds a part's worth is handed over rather than grown: a slab of a pile
-  // has several pairs per box, and a doubling list held 3 bytes per such pair beside the 8 found.
+  // has several pairs per box, and a doubling list held up to twice its keys, three times while it grew.
   auto add = [&](std::uint64_t key) {
     if (t.pairs.size() == t.pairs.capacity()) {
       if (buckets && t.pairs.size() >= buckets->partKeys()) {

@@ -40,8 +40,9 @@ struct SlabSearchCounts {
 class SlabSearch {
  public:
   /// Boxes per slab aimed at, at least. Each thread holds the working memory of the largest slab it took, so
-  /// in a small scene it is the slabs' size that sets the peak per proxy: at 1,000 boxes, slabs aimed at 256
-  /// boxes peaked at 101-133 bytes per proxy and at 64 boxes at 89-104, in steps as fast (README).
+  /// in a small scene it is the slabs' size that sets the peak per proxy: at 1,000 boxes with copies, slabs
+  /// aimed at 256 boxes peaked at 125-133 bytes per proxy and at 64 boxes at 101-111, in steps within the
+  /// noise of the machine (measurement history).
   static constexpr std::uint64_t kMinSlabBoxes = 64;
 
   /// Cuts grid `g` of the `binned` slots into slabs of about `slabBoxes` boxes each (0: the scene's count
