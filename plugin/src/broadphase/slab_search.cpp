@@ -244,8 +244,9 @@ SlabSearchCounts SlabSearch::search(const ProxyArrays& p, const std::vector<std:
       tbb::blocked_range<std::size_t>(0, slabCount, 1),
       [&](const tbb::blocked_range<std::size_t>& r) {
         for (std::size_t k = r.begin(); k != r.end(); ++k) {
-          // Found into the thread's list, then copied at their exact size: lists grown by push_back hold
-          // up to twice their pairs, and all of them are held until the gather.
+          // Found into the thread's list, then copied at their exact size (lists grown by push_back hold
+          // up to twice their pairs, and all of them are held until the gather), or into buckets the rest
+          // of what searchSlab has not handed over.
           Scratch& t = m_scratch.local();
           counts[k] = searchSlab(k, p, huge, g, t, buckets);
           if (buckets)
@@ -306,15 +307,14 @@ SlabSearchCounts SlabSearch::searchSlab(std::size_t slab, const ProxyArrays& p,
     }
     return r;
   };
-  const bool inPlace = m_inPlace;
-  if (!inPlace) resizeExact(t.box, m);
+  if (!m_inPlace) resizeExact(t.box, m);
   resizeExact(t.cells, m);
   std::uint64_t keys = 0;
   const std::uint32_t* member = m_members.data() + begin;
   for (std::size_t j = 0; j < m; ++j) {
     if (j + kBoxPrefetchAhead < m) p.prefetchBox(member[j + kBoxPrefetchAhead]);
     const LocalBox b = boxOf(p, member[j]);
-    if (!inPlace) t.box[j] = b;
+    if (!m_inPlace) t.box[j] = b;
     const CellRange r = toSlab(cellRange(b, g));
     keys += r.count();
     t.cells[j] = PackedCells::of(r, dims);
@@ -427,7 +427,7 @@ SlabSearchCounts SlabSearch::searchSlab(std::size_t slab, const ProxyArrays& p,
     }
     return counts;
   };
-  if (inPlace) return testSlab([&](std::size_t j) { return boxOf(p, member[j]); });
+  if (m_inPlace) return testSlab([&](std::size_t j) { return boxOf(p, member[j]); });
   return testSlab([&](std::size_t j) -> const LocalBox& { return t.box[j]; });
 }
 
