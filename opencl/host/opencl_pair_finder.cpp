@@ -391,7 +391,9 @@ void OpenClPairFinder::findPairs(const ProxyArrays& p, const PairFinderOptions& 
     }
   });
   m_stats.rebinnedProxies = std::uint32_t(m_active.size()) - m_stats.restingProxies;
-  std::size_t bytes = m_bins.bytes() + m_movedBins.bytes();
+  // The scan's and the sort's scratch are the finder's too: the pair sort keeps 12 bytes per pair of its
+  // largest sort, and on a sparse grid the cell sort 12 per entry.
+  std::size_t bytes = m_bins.bytes() + m_movedBins.bytes() + m_scan.bytes() + m_sort.bytes();
   for (const DeviceArray* a :
        {&m_minX,       &m_minY,         &m_minZ,          &m_maxX,    &m_maxY,      &m_maxZ,
         &m_group,      &m_mask,         &m_flags,         &m_grid,    &m_activeBuf, &m_hugeBuf,
@@ -399,8 +401,14 @@ void OpenClPairFinder::findPairs(const ProxyArrays& p, const PairFinderOptions& 
         &m_updatesBuf, &m_movedHugeBuf, &m_isMovedHugeBuf}) {
     bytes += a->bytes;
   }
+  // And the host's lists, which it keeps between calls as well.
   m_stats.scratchBytes =
-      bytes + m_resting.capacity() + (m_keptPairs.capacity() + m_carried.capacity() + m_found.capacity()) * 8;
+      bytes + m_resting.capacity() + m_isHuge.capacity() + m_extent.capacity() * sizeof(float) +
+      m_updates.capacity() * sizeof(GpucolProxyUpdate) +
+      (m_active.capacity() + m_binned.capacity() + m_huge.capacity() + m_moved.capacity() +
+       m_movedBinned.capacity() + m_movedHuge.capacity()) *
+          sizeof(std::uint32_t) +
+      (m_keptPairs.capacity() + m_carried.capacity() + m_found.capacity() + m_packed.capacity()) * 8;
 }
 
 bool OpenClPairFinder::keepGrid(const ProxyArrays& p, const PairFinderOptions& options) {

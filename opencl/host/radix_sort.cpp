@@ -1,10 +1,10 @@
 #include "opencl/host/radix_sort.h"
 
-#include "gpucol_kernels/kernels.h"
-
 #include <algorithm>
 #include <stdexcept>
 #include <string>
+
+#include "gpucol_kernels/kernels.h"
 
 namespace gpucol::opencl {
 
@@ -26,12 +26,14 @@ OpenClRadixSort::OpenClRadixSort(OpenClContext& context) : m_context(context), m
   });
 }
 
-void OpenClRadixSort::sort(const cl::Buffer& keys, const cl::Buffer& values, std::size_t n, unsigned keyBits) {
+void OpenClRadixSort::sort(const cl::Buffer& keys, const cl::Buffer& values, std::size_t n,
+                           unsigned keyBits) {
   if (keyBits == 0 || keyBits > 64) {
     throw std::invalid_argument("OpenClRadixSort: keyBits must be in 1..64, got " + std::to_string(keyBits));
   }
   if (n > 0xffffffffu) {
-    throw std::length_error("OpenClRadixSort: " + std::to_string(n) + " elements exceed the uint32 index range");
+    throw std::length_error("OpenClRadixSort: " + std::to_string(n) +
+                            " elements exceed the uint32 index range");
   }
   if (n <= 1) {
     return;
@@ -79,7 +81,13 @@ void OpenClRadixSort::sort(const cl::Buffer& keys, const cl::Buffer& values, std
   });
 }
 
-void OpenClRadixSort::sort(std::vector<std::uint64_t>& keys, std::vector<std::uint32_t>& values, unsigned keyBits) {
+std::size_t OpenClRadixSort::bytes() const {
+  return m_tempCapacity * (sizeof(cl_ulong) + sizeof(cl_uint)) + m_countsCapacity * sizeof(cl_uint) +
+         m_scan.bytes();
+}
+
+void OpenClRadixSort::sort(std::vector<std::uint64_t>& keys, std::vector<std::uint32_t>& values,
+                           unsigned keyBits) {
   if (keys.size() != values.size()) {
     throw std::invalid_argument("OpenClRadixSort: keys and values differ in length");
   }

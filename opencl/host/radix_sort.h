@@ -1,17 +1,17 @@
 #pragma once
 
-#include "opencl/host/opencl_context.h"
-#include "opencl/host/scan.h"
-
 #include <cstddef>
 #include <cstdint>
 #include <vector>
 
+#include "opencl/host/opencl_context.h"
+#include "opencl/host/scan.h"
+
 namespace gpucol::opencl {
 
 /// Stable radix sort of (uint64 key, uint32 value) pairs on an OpenCL device, 4 bits per pass, each
-/// work-item counting and scattering one chunk in order, digit offsets from OpenClScan. Keeps its scratch buffers between calls (grown, never shrunk); one object
-/// per thread.
+/// work-item counting and scattering one chunk in order, digit offsets from OpenClScan. Keeps its scratch
+/// buffers between calls (grown, never shrunk); one object per thread.
 class OpenClRadixSort {
  public:
   /// Builds (or takes from the cache) the sort program of `context`.
@@ -24,6 +24,10 @@ class OpenClRadixSort {
 
   /// Convenience for tests: sorts host vectors through the device.
   void sort(std::vector<std::uint64_t>& keys, std::vector<std::uint32_t>& values, unsigned keyBits = 64);
+
+  /// Device bytes of the scratch buffers it keeps: the second key and value arrays (12 bytes per element of
+  /// the longest sort so far), the digit counts, and its scan's.
+  std::size_t bytes() const;
 
  private:
   OpenClContext& m_context;

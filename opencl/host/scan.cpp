@@ -1,10 +1,10 @@
 #include "opencl/host/scan.h"
 
-#include "gpucol_kernels/kernels.h"
-
 #include <algorithm>
 #include <stdexcept>
 #include <string>
+
+#include "gpucol_kernels/kernels.h"
 
 namespace gpucol::opencl {
 
@@ -21,7 +21,8 @@ OpenClScan::OpenClScan(OpenClContext& context, Method method) : m_context(contex
     m_chunkTotals = cl::Kernel(program, "scan_chunk_totals");
     m_scanChunks = cl::Kernel(program, "scan_chunks");
     m_chunked = method == Method::Chunked || (method == Method::Auto && !m_context.isGpu());
-    m_chunkGroupSize = std::min(m_context.workGroupSize(m_chunkTotals), m_context.workGroupSize(m_scanChunks));
+    m_chunkGroupSize =
+        std::min(m_context.workGroupSize(m_chunkTotals), m_context.workGroupSize(m_scanChunks));
     const std::size_t units = m_context.device().getInfo<CL_DEVICE_MAX_COMPUTE_UNITS>();
     m_targetChunks = std::max<std::size_t>(1, units * m_chunkGroupSize);
     // Two values of local memory per work-item.
@@ -46,11 +47,16 @@ std::uint32_t OpenClScan::exclusiveScan(const cl::Buffer& data, std::size_t n) {
     cl_uint overflow = 0;
     queue.enqueueReadBuffer(m_overflow, CL_TRUE, 0, sizeof(cl_uint), &overflow);
     if (overflow != 0) {
-      throw std::overflow_error("OpenClScan: the sum of " + std::to_string(n) +
-                                " values exceeds 2^32 - 1");
+      throw std::overflow_error("OpenClScan: the sum of " + std::to_string(n) + " values exceeds 2^32 - 1");
     }
     return total;
   });
+}
+
+std::size_t OpenClScan::bytes() const {
+  std::size_t total = sizeof(cl_uint);  // m_overflow
+  for (std::size_t capacity : m_levelCapacity) total += capacity * sizeof(cl_uint);
+  return total;
 }
 
 const cl::Buffer& OpenClScan::levelBuffer(std::size_t level, std::size_t count) {
@@ -73,7 +79,8 @@ std::uint32_t OpenClScan::scanLevelChunked(const cl::Buffer& data, std::size_t n
   const cl::Buffer sums = levelBuffer(level, chunks);
   setKernelArgs(m_chunkTotals, 0, data, static_cast<cl_uint>(n), static_cast<cl_uint>(chunkLength), sums,
                 m_overflow);
-  queue.enqueueNDRangeKernel(m_chunkTotals, cl::NullRange, cl::NDRange(global), cl::NDRange(m_chunkGroupSize));
+  queue.enqueueNDRangeKernel(m_chunkTotals, cl::NullRange, cl::NDRange(global),
+                             cl::NDRange(m_chunkGroupSize));
   std::uint32_t total = 0;
   if (chunks == 1) {
     // One chunk: its total is the answer and its offset is zero.

@@ -1,10 +1,10 @@
 #pragma once
 
-#include "opencl/host/opencl_context.h"
-
 #include <cstddef>
 #include <cstdint>
 #include <vector>
+
+#include "opencl/host/opencl_context.h"
 
 namespace gpucol::opencl {
 
@@ -29,6 +29,9 @@ class OpenClScan {
   /// Convenience for tests and small inputs: scans a host vector through the device.
   std::uint32_t exclusiveScan(std::vector<std::uint32_t>& values);
 
+  /// Device bytes of the scratch buffers it keeps (the block totals of every level, the overflow flag).
+  std::size_t bytes() const;
+
  private:
   std::uint32_t scanLevel(const cl::Buffer& data, std::size_t n, std::size_t level);
   std::uint32_t scanLevelChunked(const cl::Buffer& data, std::size_t n, std::size_t level);
@@ -42,7 +45,7 @@ class OpenClScan {
   bool m_chunked = false;
   std::size_t m_chunkGroupSize = 0;
   std::size_t m_targetChunks = 0;  // work-items per chunked pass to aim for
-  std::size_t m_blockItems = 0;  // L: items per work-group of scan_blocks
+  std::size_t m_blockItems = 0;    // L: items per work-group of scan_blocks
   std::size_t m_addGroupSize = 0;
   cl::Buffer m_overflow;
   std::vector<cl::Buffer> m_levelSums;  // block totals of each recursion level
