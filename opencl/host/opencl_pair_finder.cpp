@@ -97,7 +97,6 @@ class OpenClPairFinder final : public PairFinder {
   std::vector<std::uint32_t> m_active, m_binned, m_huge;
   std::vector<std::uint8_t> m_isHuge;
   std::vector<float> m_extent;
-  std::vector<std::uint64_t> m_packed;
   DeviceArray m_minX, m_minY, m_minZ, m_maxX, m_maxY, m_maxZ, m_group, m_mask, m_flags;
   DeviceArray m_grid, m_activeBuf, m_hugeBuf, m_isHugeBuf, m_pairs, m_pairValues, m_counter, m_overflow;
   Bins m_bins;                    // the last full grid search's entries and runs (kept for stage 11)
@@ -342,14 +341,14 @@ void OpenClPairFinder::readPairs(cl_uint slotBits, std::vector<std::uint64_t>& p
     m_sort.sort(m_pairs.buffer, m_pairValues.ensure(m_context.context(), std::size_t(found) * 4), found,
                 2 * slotBits);
   }
-  m_packed.resize(found);
+  // Read into the output itself and widened there: no host copy of the compressed keys (8 bytes a pair).
+  pairs.resize(found);
   if (found > 0) {
-    q.enqueueReadBuffer(m_pairs.buffer, CL_TRUE, 0, std::size_t(found) * 8, m_packed.data());
+    q.enqueueReadBuffer(m_pairs.buffer, CL_TRUE, 0, std::size_t(found) * 8, pairs.data());
   }
   const std::uint64_t lowMask = (std::uint64_t(1) << slotBits) - 1;
-  pairs.resize(found);
-  for (std::uint32_t i = 0; i < found; ++i) {
-    pairs[i] = ((m_packed[i] >> slotBits) << 32) | (m_packed[i] & lowMask);
+  for (std::uint64_t& key : pairs) {
+    key = ((key >> slotBits) << 32) | (key & lowMask);
   }
 }
 
@@ -402,13 +401,13 @@ void OpenClPairFinder::findPairs(const ProxyArrays& p, const PairFinderOptions& 
     bytes += a->bytes;
   }
   // And the host's lists, which it keeps between calls as well.
-  m_stats.scratchBytes =
-      bytes + m_resting.capacity() + m_isHuge.capacity() + m_extent.capacity() * sizeof(float) +
-      m_updates.capacity() * sizeof(GpucolProxyUpdate) +
-      (m_active.capacity() + m_binned.capacity() + m_huge.capacity() + m_moved.capacity() +
-       m_movedBinned.capacity() + m_movedHuge.capacity()) *
-          sizeof(std::uint32_t) +
-      (m_keptPairs.capacity() + m_carried.capacity() + m_found.capacity() + m_packed.capacity()) * 8;
+  m_stats.scratchBytes = bytes + m_resting.capacity() + m_isHuge.capacity() +
+                         m_extent.capacity() * sizeof(float) +
+                         m_updates.capacity() * sizeof(GpucolProxyUpdate) +
+                         (m_active.capacity() + m_binned.capacity() + m_huge.capacity() + m_moved.capacity() +
+                          m_movedBinned.capacity() + m_movedHuge.capacity()) *
+                             sizeof(std::uint32_t) +
+                         (m_keptPairs.capacity() + m_carried.capacity() + m_found.capacity()) * 8;
 }
 
 bool OpenClPairFinder::keepGrid(const ProxyArrays& p, const PairFinderOptions& options) {
