@@ -27,10 +27,10 @@ namespace gpucol::opencl {
 namespace {
 
 /// What the driver may hold for one finder besides its buffers (its kernels, queued commands' records):
-/// about 45 KB was measured; a list or a buffer per proxy left out is far more at the sizes below.
+/// 38-50 KB were measured; a list or a buffer per proxy left out is far more at the sizes below.
 constexpr std::ptrdiff_t kUncountedSlack = 256 * 1024;
 
-/// A cloud of unit boxes, two boxes per 16 unit cubes (about half a pair per box), optionally as two
+/// A cloud of unit boxes, one box per 8 unit cubes (about half a pair per box), optionally as two
 /// clusters `gap` apart along x (a sparse grid: the finder sorts (cell, slot) keys by radix).
 struct Cloud {
   std::vector<float> corner[6];
