@@ -17,11 +17,32 @@ struct DeviceArray {
   /// ones).
   const cl::Buffer& ensure(const cl::Context& context, std::size_t wanted) {
     wanted = std::max<std::size_t>(wanted, 16);
-    if (bytes < wanted) {
-      buffer = cl::Buffer(context, CL_MEM_READ_WRITE, wanted + wanted / 4);
-      bytes = wanted + wanted / 4;
-    }
+    if (bytes < wanted) allocate(context, wanted + wanted / 4);
     return buffer;
+  }
+  /// As ensure, but the first buffer is exactly `wanted` bytes, for arrays sized by the slot count, which a
+  /// steady scene keeps; once such an array has had to grow, it takes the quarter more as well.
+  const cl::Buffer& ensureFitted(const cl::Context& context, std::size_t wanted) {
+    if (bytes == 0) {
+      allocate(context, std::max<std::size_t>(wanted, 16));
+      return buffer;
+    }
+    return ensure(context, wanted);
+  }
+  /// As ensure, but what the buffer held is kept (copied on the device into the larger one).
+  const cl::Buffer& ensureKeeping(const cl::Context& context, cl::CommandQueue& queue, std::size_t wanted) {
+    if (bytes >= wanted) return buffer;
+    const cl::Buffer old = buffer;
+    const std::size_t oldBytes = bytes;
+    allocate(context, wanted + wanted / 4);
+    if (oldBytes > 0) queue.enqueueCopyBuffer(old, buffer, 0, 0, oldBytes);
+    return buffer;
+  }
+
+ private:
+  void allocate(const cl::Context& context, std::size_t size) {
+    buffer = cl::Buffer(context, CL_MEM_READ_WRITE, size);
+    bytes = size;
   }
 };
 

@@ -1,6 +1,9 @@
 // OpenCL implementation of the grid pair finder; stage numbers are those of grid_pair_finder.h.
 #include "opencl/host/opencl_pair_finder.h"
 
+#include <tbb/blocked_range.h>
+#include <tbb/parallel_for.h>
+
 #include <algorithm>
 #include <cmath>
 #include <cstddef>
@@ -23,8 +26,11 @@ static_assert(sizeof(GpucolGridParams) == 32, "GpucolGridParams layout differs f
 static_assert(offsetof(GpucolGridParams, invCell) == 12 && offsetof(GpucolGridParams, dimX) == 16 &&
                   offsetof(GpucolGridParams, dimZ) == 24,
               "GpucolGridParams offsets differ from the kernels'");
-static_assert(sizeof(GpucolProxyUpdate) == 40 && offsetof(GpucolProxyUpdate, group) == 24 &&
-                  offsetof(GpucolProxyUpdate, slot) == 32 && offsetof(GpucolProxyUpdate, flags) == 36,
+static_assert(sizeof(GpucolProxyBox) == 32 && offsetof(GpucolProxyBox, group) == 12 &&
+                  offsetof(GpucolProxyBox, maxX) == 16 && offsetof(GpucolProxyBox, mask) == 28,
+              "GpucolProxyBox layout differs from the kernels'");
+static_assert(sizeof(GpucolProxyUpdate) == 40 && offsetof(GpucolProxyUpdate, slot) == 32 &&
+                  offsetof(GpucolProxyUpdate, flags) == 36,
               "GpucolProxyUpdate layout differs from the kernels'");
 static_assert(GPUCOL_PROXY_ACTIVE == kProxyActive && GPUCOL_PROXY_STATIC == kProxyStatic,
               "proxy flag bits differ between grid_params.h and grid_pair_finder.h");
@@ -34,6 +40,9 @@ namespace {
 /// Stage 11: the kept grid is reused while at most this fraction of the active proxies changed since it was
 /// built (measured on PoCL, see the README's broad phase section); beyond it a full search is about as fast.
 constexpr double kIncrementalFraction = 0.125;
+
+/// The kernels' first arguments (PROXY_PARAMS in grid_find_pairs.cl): the boxes and the flags.
+constexpr cl_uint kProxyArgs = 2;
 
 /// Stages 4-6 of one list of binned proxies on the device: their slots sorted by cell (keySlots; the cells
 /// themselves in cellKeys on a sparse grid only), the runs of equal cells, and the runs' scanned candidate
@@ -60,6 +69,9 @@ class OpenClPairFinder final : public PairFinder {
                  std::vector<std::uint64_t>& pairs) override;
   const PairFinderStats& stats() const override { return m_stats; }
   std::string name() const override { return "opencl"; }
+  /// The boxes go to the device through one pass over them (upload), from the caller's records as well as
+  /// from six arrays, so the caller need not copy them first.
+  bool readsBoxRecords() const override { return true; }
   bool runsOnGpu() const override { return m_context.isGpu(); }
 
  private:
@@ -69,6 +81,7 @@ class OpenClPairFinder final : public PairFinder {
   };
   Kernels& kernels(bool newton);
   void chooseGrid(const ProxyArrays& p, const PairFinderOptions& options, GpucolGridParams& g);
+  static GpucolProxyBox deviceBox(const ProxyArrays& p, std::uint32_t s);
   void upload(const ProxyArrays& p);
   bool keepGrid(const ProxyArrays& p, const PairFinderOptions& options);
   void sendChanges(const ProxyArrays& p, Kernels& k);
@@ -97,7 +110,7 @@ class OpenClPairFinder final : public PairFinder {
   std::vector<std::uint32_t> m_active, m_binned, m_huge;
   std::vector<std::uint8_t> m_isHuge;
   std::vector<float> m_extent;
-  DeviceArray m_minX, m_minY, m_minZ, m_maxX, m_maxY, m_maxZ, m_group, m_mask, m_flags;
+  DeviceArray m_boxes, m_flags;  // every slot's GpucolProxyBox and flags
   DeviceArray m_grid, m_activeBuf, m_hugeBuf, m_isHugeBuf, m_pairs, m_pairValues, m_counter, m_overflow;
   Bins m_bins;                    // the last full grid search's entries and runs (kept for stage 11)
   std::uint32_t m_lastPairs = 0;  // pairs the device found in the last search (sizes the next output)
@@ -167,28 +180,33 @@ void OpenClPairFinder::chooseGrid(const ProxyArrays& p, const PairFinderOptions&
   for (int a = 0; a < 3; ++a) m_stats.dims[a] = grid.dims[a];
 }
 
+GpucolProxyBox OpenClPairFinder::deviceBox(const ProxyArrays& p, std::uint32_t s) {
+  const BoxCorners b = p.box(s);
+  return GpucolProxyBox{b.lo[0], b.lo[1], b.lo[2], p.group[s], b.hi[0], b.hi[1], b.hi[2], p.mask[s]};
+}
+
 void OpenClPairFinder::upload(const ProxyArrays& p) {
   const cl::Context& c = m_context.context();
   cl::CommandQueue& q = m_context.queue();
   const std::size_t n = p.count;
-  const std::pair<DeviceArray*, const float*> floats[] = {{&m_minX, p.minX}, {&m_minY, p.minY},
-                                                          {&m_minZ, p.minZ}, {&m_maxX, p.maxX},
-                                                          {&m_maxY, p.maxY}, {&m_maxZ, p.maxZ}};
-  for (const auto& f : floats) {
-    q.enqueueWriteBuffer(f.first->ensure(c, n * 4), CL_FALSE, 0, n * 4, f.second);
-  }
-  q.enqueueWriteBuffer(m_group.ensure(c, n * 4), CL_FALSE, 0, n * 4, p.group);
-  q.enqueueWriteBuffer(m_mask.ensure(c, n * 4), CL_FALSE, 0, n * 4, p.mask);
-  q.enqueueWriteBuffer(m_flags.ensure(c, n), CL_FALSE, 0, n, p.flags);
+  // Written through a mapping, not from a host copy of every box: on a CPU device the mapping is the
+  // buffer itself, so the boxes are gathered once and held once.
+  const std::size_t bytes = n * sizeof(GpucolProxyBox);
+  const cl::Buffer& boxes = m_boxes.ensureFitted(c, bytes);
+  auto* out = static_cast<GpucolProxyBox*>(
+      q.enqueueMapBuffer(boxes, CL_TRUE, CL_MAP_WRITE_INVALIDATE_REGION, 0, bytes));
+  tbb::parallel_for(tbb::blocked_range<std::uint32_t>(0, p.count, 4096),
+                    [&](const tbb::blocked_range<std::uint32_t>& r) {
+                      for (std::uint32_t s = r.begin(); s < r.end(); ++s) out[s] = deviceBox(p, s);
+                    });
+  q.enqueueUnmapMemObject(boxes, out);
+  q.enqueueWriteBuffer(m_flags.ensureFitted(c, n), CL_FALSE, 0, n, p.flags);
   m_syncedCount = p.count;
 }
 
 void OpenClPairFinder::setProxyArgs(cl::Kernel& kernel) {
-  const DeviceArray* arrays[] = {&m_minX, &m_minY,  &m_minZ, &m_maxX, &m_maxY,
-                                 &m_maxZ, &m_group, &m_mask, &m_flags};
-  for (cl_uint i = 0; i < 9; ++i) {
-    kernel.setArg(i, arrays[i]->buffer);
-  }
+  kernel.setArg(0, m_boxes.buffer);
+  kernel.setArg(1, m_flags.buffer);
 }
 
 void OpenClPairFinder::launch(cl::Kernel& kernel, std::uint64_t items) {
@@ -235,11 +253,12 @@ void OpenClPairFinder::bin(Kernels& k, const std::vector<std::uint32_t>& slots, 
     q.enqueueFillBuffer(b.counts.ensure(c, (cells + 1) * 4), zero, 0, (cells + 1) * 4);
     setProxyArgs(k.countOrPlaceEntries);
     // Counting writes no entry: any buffer stands for the entries' argument.
-    setKernelArgs(k.countOrPlaceEntries, 9, m_grid.buffer, b.slots.buffer, b.count, b.counts.buffer,
+    setKernelArgs(k.countOrPlaceEntries, kProxyArgs, m_grid.buffer, b.slots.buffer, b.count, b.counts.buffer,
                   cl_uint(0), b.slots.buffer);
     launch(k.countOrPlaceEntries, b.count);
     b.keys = m_scan.exclusiveScan(b.counts.buffer, cells + 1);
-    setKernelArgs(k.countOrPlaceEntries, 13, cl_uint(1), b.keySlots.ensure(c, std::size_t(b.keys) * 4));
+    setKernelArgs(k.countOrPlaceEntries, kProxyArgs + 4, cl_uint(1),
+                  b.keySlots.ensure(c, std::size_t(b.keys) * 4));
     launch(k.countOrPlaceEntries, b.keys == 0 ? 0 : b.count);
     setKernelArgs(k.markFilledCells, 0, b.counts.buffer, cellCount, b.runHeads.ensure(c, cells * 4));
     launch(k.markFilledCells, cells);
@@ -251,12 +270,12 @@ void OpenClPairFinder::bin(Kernels& k, const std::vector<std::uint32_t>& slots, 
   } else {
     // Stage 4: count cells per box, scan, fill (cell, slot) entries.
     setProxyArgs(k.countCells);
-    setKernelArgs(k.countCells, 9, m_grid.buffer, b.slots.buffer, b.count, b.counts.ensure(c, b.count * 4),
-                  m_overflow.buffer);
+    setKernelArgs(k.countCells, kProxyArgs, m_grid.buffer, b.slots.buffer, b.count,
+                  b.counts.ensure(c, b.count * 4), m_overflow.buffer);
     launch(k.countCells, b.count);
     b.keys = m_scan.exclusiveScan(b.counts.buffer, b.count);
     setProxyArgs(k.writeKeys);
-    setKernelArgs(k.writeKeys, 9, m_grid.buffer, b.slots.buffer, b.count, b.counts.buffer,
+    setKernelArgs(k.writeKeys, kProxyArgs, m_grid.buffer, b.slots.buffer, b.count, b.counts.buffer,
                   b.cellKeys.ensure(c, std::size_t(b.keys) * 8),
                   b.keySlots.ensure(c, std::size_t(b.keys) * 4));
     launch(k.writeKeys, b.keys == 0 ? 0 : b.count);
@@ -298,9 +317,9 @@ void OpenClPairFinder::testBins(Kernels& k, Bins& b, const cl::Buffer& out, std:
                                         ? m_tuning.candidatesPerItem
                                         : std::max(minChunk, (b.candidates + targetItems - 1) / targetItems);
   setProxyArgs(k.testCandidates);
-  setKernelArgs(k.testCandidates, 9, m_grid.buffer, b.runStart.buffer, b.runCell.buffer, b.runPairs.buffer,
-                b.runs, b.candidates, cl_uint(chunkLength), b.keySlots.buffer, slotBits, out, capacity,
-                m_counter.buffer);
+  setKernelArgs(k.testCandidates, kProxyArgs, m_grid.buffer, b.runStart.buffer, b.runCell.buffer,
+                b.runPairs.buffer, b.runs, b.candidates, cl_uint(chunkLength), b.keySlots.buffer, slotBits,
+                out, capacity, m_counter.buffer);
   launch(k.testCandidates, (b.candidates + chunkLength - 1) / chunkLength);
 }
 
@@ -312,8 +331,8 @@ void OpenClPairFinder::testHuge(Kernels& k, const DeviceArray& huge, std::uint32
   }
   const std::uint32_t activeCount = std::uint32_t(m_active.size());
   setProxyArgs(k.testHuge);
-  setKernelArgs(k.testHuge, 9, huge.buffer, hugeCount, m_activeBuf.buffer, activeCount, isHuge.buffer,
-                slotBits, out, capacity, m_counter.buffer);
+  setKernelArgs(k.testHuge, kProxyArgs, huge.buffer, hugeCount, m_activeBuf.buffer, activeCount,
+                isHuge.buffer, slotBits, out, capacity, m_counter.buffer);
   launchStrided(k.testHuge, std::uint64_t(hugeCount) * activeCount);
 }
 
@@ -354,9 +373,9 @@ void OpenClPairFinder::readPairs(cl_uint slotBits, std::vector<std::uint64_t>& p
 
 void OpenClPairFinder::findPairs(const ProxyArrays& p, const PairFinderOptions& options,
                                  std::vector<std::uint64_t>& pairs) {
-  if (p.count > 0 && !(p.minX && p.minY && p.minZ && p.maxX && p.maxY && p.maxZ)) {
-    // The device is sent the six axis arrays as they are (readsBoxRecords() is false).
-    throw std::invalid_argument("gpucol OpenCL pair finder: ProxyArrays without the six axis arrays");
+  if (p.count > 0 && !(p.minX && p.minY && p.minZ && p.maxX && p.maxY && p.maxZ) && !p.records.blocks) {
+    throw std::invalid_argument(
+        "gpucol OpenCL pair finder: ProxyArrays with neither the six axis arrays nor records");
   }
   m_stats = PairFinderStats{};
   pairs.clear();
@@ -394,10 +413,8 @@ void OpenClPairFinder::findPairs(const ProxyArrays& p, const PairFinderOptions& 
   // largest sort, and on a sparse grid the cell sort 12 per entry.
   std::size_t bytes = m_bins.bytes() + m_movedBins.bytes() + m_scan.bytes() + m_sort.bytes();
   for (const DeviceArray* a :
-       {&m_minX,       &m_minY,         &m_minZ,          &m_maxX,    &m_maxY,      &m_maxZ,
-        &m_group,      &m_mask,         &m_flags,         &m_grid,    &m_activeBuf, &m_hugeBuf,
-        &m_isHugeBuf,  &m_pairs,        &m_pairValues,    &m_counter, &m_overflow,  &m_restingBuf,
-        &m_updatesBuf, &m_movedHugeBuf, &m_isMovedHugeBuf}) {
+       {&m_boxes, &m_flags, &m_grid, &m_activeBuf, &m_hugeBuf, &m_isHugeBuf, &m_pairs, &m_pairValues,
+        &m_counter, &m_overflow, &m_restingBuf, &m_updatesBuf, &m_movedHugeBuf, &m_isMovedHugeBuf}) {
     bytes += a->bytes;
   }
   // And the host's lists, which it keeps between calls as well.
@@ -412,12 +429,11 @@ void OpenClPairFinder::findPairs(const ProxyArrays& p, const PairFinderOptions& 
 
 bool OpenClPairFinder::keepGrid(const ProxyArrays& p, const PairFinderOptions& options) {
   // Stage 11, as the CPU finder decides it: the kept grid serves while the options that shape it are the
-  // same, `moved` is known, and few active proxies changed since it was built. The device's arrays must
-  // also still hold every slot (a grown slot count past their size takes a full upload).
+  // same, `moved` is known, and few active proxies changed since it was built (new slots among them: the
+  // device's arrays grow to hold them in sendChanges).
   if (!m_kept || p.moved == nullptr || m_active.size() < options.bruteForceBelow || m_active.size() < 2 ||
       options.cellSizeRule != m_keptOptions.cellSizeRule ||
-      options.hugeCellLimit != m_keptOptions.hugeCellLimit || p.count < m_syncedCount ||
-      std::size_t(p.count) * 4 > m_minX.bytes || p.count > m_flags.bytes || p.count > m_restingBuf.bytes) {
+      options.hugeCellLimit != m_keptOptions.hugeCellLimit || p.count < m_syncedCount) {
     return false;
   }
   // A slot stays resting while it stays active and does not change; new slots start changed. A slot that
@@ -430,8 +446,7 @@ bool OpenClPairFinder::keepGrid(const ProxyArrays& p, const PairFinderOptions& o
     const bool active = (p.flags[s] & kProxyActive) != 0;
     if (p.moved[s] || s >= m_syncedCount || (m_resting[s] && !active)) {
       m_resting[s] = 0;
-      m_updates.push_back(GpucolProxyUpdate{p.minX[s], p.minY[s], p.minZ[s], p.maxX[s], p.maxY[s], p.maxZ[s],
-                                            p.group[s], p.mask[s], s, p.flags[s]});
+      m_updates.push_back(GpucolProxyUpdate{deviceBox(p, s), s, p.flags[s]});
     }
     if (active && !m_resting[s]) {
       m_moved.push_back(s);
@@ -445,16 +460,17 @@ bool OpenClPairFinder::keepGrid(const ProxyArrays& p, const PairFinderOptions& o
 
 void OpenClPairFinder::sendChanges(const ProxyArrays& p, Kernels& k) {
   const cl::Context& c = m_context.context();
+  cl::CommandQueue& q = m_context.queue();
+  // New slots: the arrays grow, keeping what they hold (every new slot is among the updates).
+  m_boxes.ensureKeeping(c, q, std::size_t(p.count) * sizeof(GpucolProxyBox));
+  m_flags.ensureKeeping(c, q, p.count);
+  m_restingBuf.ensureKeeping(c, q, p.count);
   const std::uint32_t count = std::uint32_t(m_updates.size());
   if (count > 0) {
     const std::size_t bytes = std::size_t(count) * sizeof(GpucolProxyUpdate);
-    m_context.queue().enqueueWriteBuffer(m_updatesBuf.ensure(c, bytes), CL_FALSE, 0, bytes, m_updates.data());
-    const DeviceArray* arrays[] = {&m_minX, &m_minY,  &m_minZ, &m_maxX,  &m_maxY,
-                                   &m_maxZ, &m_group, &m_mask, &m_flags, &m_restingBuf};
-    for (cl_uint i = 0; i < 10; ++i) {
-      k.updateProxies.setArg(i, arrays[i]->buffer);
-    }
-    setKernelArgs(k.updateProxies, 10, m_updatesBuf.buffer, count);
+    q.enqueueWriteBuffer(m_updatesBuf.ensure(c, bytes), CL_FALSE, 0, bytes, m_updates.data());
+    setKernelArgs(k.updateProxies, 0, m_boxes.buffer, m_flags.buffer, m_restingBuf.buffer,
+                  m_updatesBuf.buffer, count);
     launch(k.updateProxies, count);
   }
   m_syncedCount = p.count;
@@ -466,9 +482,13 @@ void OpenClPairFinder::fullSearch(const ProxyArrays& p, const PairFinderOptions&
   cl::CommandQueue& q = m_context.queue();
   upload(p);
   const std::uint32_t activeCount = std::uint32_t(m_active.size());
-  q.enqueueWriteBuffer(m_activeBuf.ensure(c, activeCount * 4), CL_FALSE, 0, activeCount * 4, m_active.data());
   const cl_uint slotBits = indexBits(p.count);
   const cl_uint zero = 0;
+  // The active list goes to the device only for the kernels that walk it: brute force and huge boxes.
+  auto uploadActive = [&] {
+    q.enqueueWriteBuffer(m_activeBuf.ensureFitted(c, activeCount * 4), CL_FALSE, 0, activeCount * 4,
+                         m_active.data());
+  };
 
   const bool useGrid = activeCount >= options.bruteForceBelow;
   GpucolGridParams grid{};
@@ -483,10 +503,12 @@ void OpenClPairFinder::fullSearch(const ProxyArrays& p, const PairFinderOptions&
     m_stats.candidates = m_bins.candidates + std::uint64_t(m_huge.size()) * activeCount;
     if (!m_huge.empty()) {
       const std::uint32_t hugeCount = std::uint32_t(m_huge.size());
+      uploadActive();
       q.enqueueWriteBuffer(m_hugeBuf.ensure(c, hugeCount * 4), CL_FALSE, 0, hugeCount * 4, m_huge.data());
       q.enqueueWriteBuffer(m_isHugeBuf.ensure(c, activeCount), CL_FALSE, 0, activeCount, m_isHuge.data());
     }
   } else {
+    uploadActive();
     m_stats.candidates = gpucol_pair_count(activeCount);
   }
 
@@ -501,8 +523,8 @@ void OpenClPairFinder::fullSearch(const ProxyArrays& p, const PairFinderOptions&
       testHuge(k, m_hugeBuf, std::uint32_t(m_huge.size()), m_isHugeBuf, out, capacity, slotBits);
     } else {
       setProxyArgs(k.bruteTest);
-      setKernelArgs(k.bruteTest, 9, m_activeBuf.buffer, activeCount, cl_ulong(gpucol_pair_count(activeCount)),
-                    slotBits, out, capacity, m_counter.buffer);
+      setKernelArgs(k.bruteTest, kProxyArgs, m_activeBuf.buffer, activeCount,
+                    cl_ulong(gpucol_pair_count(activeCount)), slotBits, out, capacity, m_counter.buffer);
       launchStrided(k.bruteTest, gpucol_pair_count(activeCount));
     }
     if (pairsFit(capacity)) break;
@@ -529,7 +551,7 @@ void OpenClPairFinder::fullSearch(const ProxyArrays& p, const PairFinderOptions&
     m_keptHugeCount = std::uint32_t(m_huge.size());
     m_resting.assign(p.count, 0);
     for (std::uint32_t s : m_active) m_resting[s] = 1;
-    q.enqueueWriteBuffer(m_restingBuf.ensure(c, p.count), CL_FALSE, 0, p.count, m_resting.data());
+    q.enqueueWriteBuffer(m_restingBuf.ensureFitted(c, p.count), CL_FALSE, 0, p.count, m_resting.data());
     m_kept = true;
   }
 }
@@ -571,7 +593,7 @@ void OpenClPairFinder::incremental(const ProxyArrays& p, const PairFinderOptions
         ++h;
       }
     }
-    q.enqueueWriteBuffer(m_activeBuf.ensure(c, activeCount * 4), CL_FALSE, 0, activeCount * 4,
+    q.enqueueWriteBuffer(m_activeBuf.ensureFitted(c, activeCount * 4), CL_FALSE, 0, activeCount * 4,
                          m_active.data());
     q.enqueueWriteBuffer(m_isMovedHugeBuf.ensure(c, activeCount), CL_FALSE, 0, activeCount, m_isHuge.data());
     q.enqueueWriteBuffer(m_movedHugeBuf.ensure(c, hugeCount * 4), CL_FALSE, 0, hugeCount * 4,
@@ -584,7 +606,7 @@ void OpenClPairFinder::incremental(const ProxyArrays& p, const PairFinderOptions
     const cl::Buffer& out = m_pairs.ensure(c, std::size_t(capacity) * 8);
     if (binnedCount > 0) {
       setProxyArgs(k.testMoved);
-      setKernelArgs(k.testMoved, 9, m_grid.buffer, m_restingBuf.buffer, m_bins.runStart.buffer,
+      setKernelArgs(k.testMoved, kProxyArgs, m_grid.buffer, m_restingBuf.buffer, m_bins.runStart.buffer,
                     m_bins.runCell.buffer, m_bins.runs, m_bins.keySlots.buffer, m_hugeBuf.buffer,
                     m_keptHugeCount, m_movedBins.slots.buffer, binnedCount, slotBits, out, capacity,
                     m_counter.buffer);

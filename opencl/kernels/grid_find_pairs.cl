@@ -14,22 +14,27 @@
 // Binning and the dedupe rule must compute the same cell for the same float: no contraction, no fast math.
 #pragma OPENCL FP_CONTRACT OFF
 
-#define PROXY_PARAMS                                                                                      \
-  __global const float *minX, __global const float *minY, __global const float *minZ,                      \
-      __global const float *maxX, __global const float *maxY, __global const float *maxZ,                  \
-      __global const int *group, __global const int *mask, __global const uchar *flags
-#define PROXY_ARGS minX, minY, minZ, maxX, maxY, maxZ, group, mask, flags
+// Every slot's box and filter (grid_params.h), and its flags.
+#define PROXY_PARAMS __global const GpucolProxyBox *boxes, __global const uchar *flags
+#define PROXY_ARGS boxes, flags
 
-// Stage 8's filter: Bullet's group/mask rule; never static–static.
-bool filters_accept(__global const int* group, __global const int* mask, __global const uchar* flags,
-                    const uint a, const uint b) {
-  return (group[a] & mask[b]) != 0 && (group[b] & mask[a]) != 0 && (flags[a] & flags[b] & GPUCOL_PROXY_STATIC) == 0u;
+// Stage 8: overlap on all three axes, touching counts.
+bool boxes_overlap(const GpucolProxyBox a, const GpucolProxyBox b) {
+  return a.minX <= b.maxX && b.minX <= a.maxX && a.minY <= b.maxY && b.minY <= a.maxY && a.minZ <= b.maxZ &&
+         b.minZ <= a.maxZ;
 }
 
-// Stage 8: overlap on all three axes, touching counts, and the filter.
-bool accept_pair(PROXY_PARAMS, const uint a, const uint b) {
-  return minX[a] <= maxX[b] && minX[b] <= maxX[a] && minY[a] <= maxY[b] && minY[b] <= maxY[a] &&
-         minZ[a] <= maxZ[b] && minZ[b] <= maxZ[a] && filters_accept(group, mask, flags, a, b);
+// Stage 8's filter for slots sa and sb: Bullet's group/mask rule; never static–static.
+bool filters_accept(const GpucolProxyBox a, const GpucolProxyBox b, __global const uchar* flags, const uint sa,
+                    const uint sb) {
+  return (a.group & b.mask) != 0 && (b.group & a.mask) != 0 &&
+         (flags[sa] & flags[sb] & GPUCOL_PROXY_STATIC) == 0u;
+}
+
+// Stage 8: overlap and filter of slots sa and sb.
+bool accept_pair(PROXY_PARAMS, const uint sa, const uint sb) {
+  const GpucolProxyBox a = boxes[sa], b = boxes[sb];
+  return boxes_overlap(a, b) && filters_accept(a, b, flags, sa, sb);
 }
 
 // Stage 4: the cell coordinate, monotone in x (see grid_pair_finder.h).
@@ -44,21 +49,29 @@ uint cell_of(const float x, const float origin, const float invCell, const uint 
   return min((uint)t, dim - 1u);
 }
 
-// Stage 4: the cells box s covers on each axis, lo[a]..hi[a].
+// Stage 4: the cells box b covers on each axis, lo[a]..hi[a].
 typedef struct {
   uint lo[3];
   uint hi[3];
 } CellRange;
 
-CellRange cell_range(PROXY_PARAMS, const uint s, const GpucolGridParams g) {
+CellRange cell_range(const GpucolProxyBox b, const GpucolGridParams g) {
   CellRange r;
-  r.lo[0] = cell_of(minX[s], g.originX, g.invCell, g.dimX);
-  r.hi[0] = cell_of(maxX[s], g.originX, g.invCell, g.dimX);
-  r.lo[1] = cell_of(minY[s], g.originY, g.invCell, g.dimY);
-  r.hi[1] = cell_of(maxY[s], g.originY, g.invCell, g.dimY);
-  r.lo[2] = cell_of(minZ[s], g.originZ, g.invCell, g.dimZ);
-  r.hi[2] = cell_of(maxZ[s], g.originZ, g.invCell, g.dimZ);
+  r.lo[0] = cell_of(b.minX, g.originX, g.invCell, g.dimX);
+  r.hi[0] = cell_of(b.maxX, g.originX, g.invCell, g.dimX);
+  r.lo[1] = cell_of(b.minY, g.originY, g.invCell, g.dimY);
+  r.hi[1] = cell_of(b.maxY, g.originY, g.invCell, g.dimY);
+  r.lo[2] = cell_of(b.minZ, g.originZ, g.invCell, g.dimZ);
+  r.hi[2] = cell_of(b.maxZ, g.originZ, g.invCell, g.dimZ);
   return r;
+}
+
+// Stage 9: the cell holding the min corner of the overlap of a and b.
+ulong overlap_cell(const GpucolProxyBox a, const GpucolProxyBox b, const GpucolGridParams g) {
+  const uint cx = cell_of(max(a.minX, b.minX), g.originX, g.invCell, g.dimX);
+  const uint cy = cell_of(max(a.minY, b.minY), g.originY, g.invCell, g.dimY);
+  const uint cz = cell_of(max(a.minZ, b.minZ), g.originZ, g.invCell, g.dimZ);
+  return ((ulong)cz * g.dimY + cy) * g.dimX + cx;
 }
 
 // Stage 7: candidate k of n objects -> (a, b); exact whatever square root (pair_mapping.h).
@@ -89,7 +102,7 @@ __kernel void grid_count_cells(PROXY_PARAMS, __global const GpucolGridParams* gr
   }
   const uint s = binned[i];
   const GpucolGridParams g = *grid;
-  const CellRange span = cell_range(PROXY_ARGS, s, g);
+  const CellRange span = cell_range(boxes[s], g);
   const ulong count = (ulong)(span.hi[0] - span.lo[0] + 1u) * (span.hi[1] - span.lo[1] + 1u) *
                       (span.hi[2] - span.lo[2] + 1u);
   if (count > 0xffffffffUL) {
@@ -109,7 +122,7 @@ __kernel void grid_write_keys(PROXY_PARAMS, __global const GpucolGridParams* gri
   }
   const uint s = binned[i];
   const GpucolGridParams g = *grid;
-  const CellRange span = cell_range(PROXY_ARGS, s, g);
+  const CellRange span = cell_range(boxes[s], g);
   uint o = keyOffsets[i];
   for (uint z = span.lo[2]; z <= span.hi[2]; ++z) {
     for (uint y = span.lo[1]; y <= span.hi[1]; ++y) {
@@ -141,7 +154,7 @@ __kernel void grid_count_or_place_entries(PROXY_PARAMS, __global const GpucolGri
   }
   const uint s = binned[i];
   const GpucolGridParams g = *grid;
-  const CellRange span = cell_range(PROXY_ARGS, s, g);
+  const CellRange span = cell_range(boxes[s], g);
   for (uint z = span.lo[2]; z <= span.hi[2]; ++z) {
     for (uint y = span.lo[1]; y <= span.hi[1]; ++y) {
       const uint row = (z * g.dimY + y) * g.dimX;  // a dense grid's cells fit 32 bits
@@ -253,19 +266,14 @@ __kernel void grid_test_candidates(PROXY_PARAMS, __global const GpucolGridParams
   while (k < end) {
     // Row i: box a is read once for its candidates (i, j), j < m, that fall in this chunk.
     const uint a = keySlots[start + (uint)i];
-    const float aMinX = minX[a], aMinY = minY[a], aMinZ = minZ[a];
-    const float aMaxX = maxX[a], aMaxY = maxY[a], aMaxZ = maxZ[a];
+    const GpucolProxyBox boxA = boxes[a];
     const uint rowEnd = (uint)min((ulong)end, (ulong)k + (m - j));
     for (; k < rowEnd; ++k, ++j) {
       const uint b = keySlots[start + (uint)j];
-      if (aMinX <= maxX[b] && minX[b] <= aMaxX && aMinY <= maxY[b] && minY[b] <= aMaxY && aMinZ <= maxZ[b] &&
-          minZ[b] <= aMaxZ && filters_accept(group, mask, flags, a, b)) {
-        const uint cx = cell_of(max(aMinX, minX[b]), g.originX, g.invCell, g.dimX);
-        const uint cy = cell_of(max(aMinY, minY[b]), g.originY, g.invCell, g.dimY);
-        const uint cz = cell_of(max(aMinZ, minZ[b]), g.originZ, g.invCell, g.dimZ);
-        if (((ulong)cz * g.dimY + cy) * g.dimX + cx == (ulong)runCell[run]) {
-          append_pair(min(a, b), max(a, b), slotBits, pairs, capacity, pairCount);
-        }
+      const GpucolProxyBox boxB = boxes[b];
+      if (boxes_overlap(boxA, boxB) && filters_accept(boxA, boxB, flags, a, b) &&
+          overlap_cell(boxA, boxB, g) == (ulong)runCell[run]) {
+        append_pair(min(a, b), max(a, b), slotBits, pairs, capacity, pairCount);
       }
     }
     if (j < m) {
@@ -324,24 +332,14 @@ __kernel void brute_test_pairs(PROXY_PARAMS, __global const uint* active, const 
 
 // Stage 11: writes the slots that changed since the last search into the kept arrays and marks them as no
 // longer resting (their entries in the kept cells, and their pairs of the last search, are stale).
-__kernel void grid_update_proxies(__global float* minX, __global float* minY, __global float* minZ,
-                                  __global float* maxX, __global float* maxY, __global float* maxZ,
-                                  __global int* group, __global int* mask, __global uchar* flags,
-                                  __global uchar* resting, __global const GpucolProxyUpdate* updates,
-                                  const uint updateCount) {
+__kernel void grid_update_proxies(__global GpucolProxyBox* boxes, __global uchar* flags, __global uchar* resting,
+                                  __global const GpucolProxyUpdate* updates, const uint updateCount) {
   const uint i = get_global_id(0);
   if (i >= updateCount) {
     return;
   }
   const GpucolProxyUpdate u = updates[i];
-  minX[u.slot] = u.minX;
-  minY[u.slot] = u.minY;
-  minZ[u.slot] = u.minZ;
-  maxX[u.slot] = u.maxX;
-  maxY[u.slot] = u.maxY;
-  maxZ[u.slot] = u.maxZ;
-  group[u.slot] = u.group;
-  mask[u.slot] = u.mask;
+  boxes[u.slot] = u.box;
   flags[u.slot] = (uchar)u.flags;
   resting[u.slot] = 0u;
 }
@@ -364,7 +362,8 @@ __kernel void grid_test_moved(PROXY_PARAMS, __global const GpucolGridParams* gri
   }
   const uint sm = moved[i];
   const GpucolGridParams g = *grid;
-  const CellRange span = cell_range(PROXY_ARGS, sm, g);
+  const GpucolProxyBox boxM = boxes[sm];
+  const CellRange span = cell_range(boxM, g);
   for (uint z = span.lo[2]; z <= span.hi[2]; ++z) {
     for (uint y = span.lo[1]; y <= span.hi[1]; ++y) {
       const uint row = (uint)(((ulong)z * g.dimY + y) * g.dimX);
@@ -382,13 +381,12 @@ __kernel void grid_test_moved(PROXY_PARAMS, __global const GpucolGridParams* gri
         const uint c = runCell[r];
         for (uint e = runStart[r]; e < runStart[r + 1u]; ++e) {
           const uint s = keySlots[e];
-          if (!resting[s] || !accept_pair(PROXY_ARGS, sm, s)) {
+          if (!resting[s]) {
             continue;
           }
-          const uint cx = cell_of(max(minX[sm], minX[s]), g.originX, g.invCell, g.dimX);
-          const uint cy = cell_of(max(minY[sm], minY[s]), g.originY, g.invCell, g.dimY);
-          const uint cz = cell_of(max(minZ[sm], minZ[s]), g.originZ, g.invCell, g.dimZ);
-          if (((ulong)cz * g.dimY + cy) * g.dimX + cx == (ulong)c) {
+          const GpucolProxyBox box = boxes[s];
+          if (boxes_overlap(boxM, box) && filters_accept(boxM, box, flags, sm, s) &&
+              overlap_cell(boxM, box, g) == (ulong)c) {
             append_pair(min(sm, s), max(sm, s), slotBits, pairs, capacity, pairCount);
           }
         }

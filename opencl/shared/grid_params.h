@@ -30,18 +30,25 @@ typedef struct GpucolGridParams {
   gpucol_grid_uint unused;
 } GpucolGridParams;
 
+/* One proxy slot as the kernels read it: its box and its filter in 32 bytes, so that a candidate test loads
+   one box from one cache line instead of a value from each of eight arrays (the flags stay in a byte
+   array of their own, read only for the pairs that overlap). */
+typedef struct GpucolProxyBox {
+  float minX;
+  float minY;
+  float minZ;
+  gpucol_grid_int group;
+  float maxX;
+  float maxY;
+  float maxZ;
+  gpucol_grid_int mask;
+} GpucolProxyBox;
+
 /* One proxy slot that changed since the last search (stage 11, resting proxies): while the device keeps the
    last grid, the host sends only these and grid_update_proxies writes them into the device's arrays and
    marks the slot as no longer resting. A destroyed proxy comes with flags 0. */
 typedef struct GpucolProxyUpdate {
-  float minX;
-  float minY;
-  float minZ;
-  float maxX;
-  float maxY;
-  float maxZ;
-  gpucol_grid_int group;
-  gpucol_grid_int mask;
+  GpucolProxyBox box;
   gpucol_grid_uint slot;
   gpucol_grid_uint flags;
 } GpucolProxyUpdate;

@@ -190,6 +190,60 @@ TEST(GridBroadphase, PairCacheMatchesBruteForceOverStepsNoGrid) {
   EXPECT_FALSE(bp.stats().usedGrid);
 }
 
+TEST(GridBroadphase, PairCacheMatchesBruteForceOverStepsOnOpenCl) {
+  // The OpenCL finder reads the boxes in the proxies (BoxRecords) as the CPU finder does: every box moving,
+  // proxies created and destroyed, static and filtered ones.
+  if (!gpucol::makeOpenClPairFinder(gpucol::Config{}))
+    GTEST_SKIP() << "no OpenCL pair finder (built without OpenCL, or no OpenCL device)";
+  gpucol::Config config;
+  config.bruteForceBelow = 100;
+  config.broadphaseBackend = gpucol::Backend::OpenCL;
+  gpucol::GridBroadphase bp(config);
+  runSteps(bp, bp.getOverlappingPairCache(), 1500, 3);
+  EXPECT_TRUE(bp.stats().usedGrid);
+  EXPECT_TRUE(bp.stats().usedOpenCl);
+}
+
+TEST(GridBroadphase, OpenClKeepsItsGridWhileProxiesAreAdded) {
+  // Few boxes move and a few proxies are created each step, past the slots the device's arrays were sized
+  // for: the kept grid serves (stage 11) and the arrays grow keeping what they hold.
+  if (!gpucol::makeOpenClPairFinder(gpucol::Config{}))
+    GTEST_SKIP() << "no OpenCL pair finder (built without OpenCL, or no OpenCL device)";
+  gpucol::Config config;
+  config.bruteForceBelow = 100;
+  config.broadphaseBackend = gpucol::Backend::OpenCL;
+  gpucol::GridBroadphase bp(config);
+  btDefaultCollisionConfiguration configuration;
+  btCollisionDispatcher dispatcher(&configuration);
+  std::mt19937 rng(23);
+  const int first = 3000, added = 40, steps = 6;
+  std::vector<Box> boxes(std::size_t(first + added * steps), Box{});
+  for (int i = 0; i < first; ++i) {
+    randomBox(rng, boxes[std::size_t(i)], 15.0f);
+    addProxy(bp, boxes, i, &dispatcher);
+  }
+  std::uniform_real_distribution<float> step(-0.3f, 0.3f);
+  int incrementalSteps = 0;
+  for (int t = 0, live = first; t <= steps; ++t) {
+    bp.calculateOverlappingPairs(&dispatcher);
+    ASSERT_TRUE(bp.stats().usedOpenCl) << "step " << t;
+    ASSERT_EQ(cachePairs(bp.getOverlappingPairCache()), bruteForce(boxes)) << "step " << t;
+    incrementalSteps += bp.stats().restingProxies > 0;
+    if (t == steps) break;
+    for (int i = 0; i < live; i += 50) {
+      Box& b = boxes[std::size_t(i)];
+      const btVector3 d(step(rng), step(rng), step(rng));
+      b.lo += d, b.hi += d;
+      bp.setAabb(b.proxy, b.lo, b.hi, &dispatcher);
+    }
+    for (int i = 0; i < added; ++i, ++live) {
+      randomBox(rng, boxes[std::size_t(live)], 15.0f);
+      addProxy(bp, boxes, live, &dispatcher);
+    }
+  }
+  EXPECT_EQ(incrementalSteps, steps) << "every step after the first keeps the grid";
+}
+
 /// Creates a proxy for each box (its index as client object) in `bp` and steps, then moves every box 0.001
 /// along x and steps again: every proxy moves and few pairs change, so that step's peak is the search's.
 void stepAndNudge(gpucol::GridBroadphase& bp, const std::vector<Box>& boxes, btDispatcher* dispatcher) {
