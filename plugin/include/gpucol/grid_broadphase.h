@@ -26,11 +26,12 @@ struct GridBroadphaseTuning {
   /// CPU path: search the grid slab by slab, up to 2^18 proxies (less memory at the peak of a step; at any
   /// number with boxesInPlace); false: always as a whole (the pairs are the same).
   bool slabSearch = true;
-  /// CPU path: read each box where Bullet's proxy holds it instead of from a copy of every box made for the
-  /// search, and search slabs at any size: 24 bytes less per proxy at the peak of a step (about 100 less at
-  /// 1M proxies), at about the same speed (steps took 0.89-1.00 times as long at 100K moving proxies and
-  /// 0.82-1.07 at 1M; the README measures both). false: the search reads a copy of every box. Needs
-  /// single-precision Bullet; ignored otherwise (always a copy).
+  /// Read each box where Bullet's proxy holds it instead of from a copy of every box made for the search. On
+  /// the CPU path the slabs are then searched at any size: 24 bytes less per proxy at the peak of a step
+  /// (about 100 less at 1M proxies), at about the same speed (steps took 0.89-1.00 times as long at 100K
+  /// moving proxies and 0.82-1.07 at 1M; the README measures both); the OpenCL path gathers the boxes from
+  /// the proxies as it uploads them (24 bytes less per proxy at its peak). false: the search reads a copy of
+  /// every box. Needs single-precision Bullet; ignored otherwise (always a copy).
   bool boxesInPlace = true;
 };
 

@@ -1,7 +1,8 @@
 // gpucol::GridBroadphase: Bullet's side of the grid broad phase. Proxies live in fixed blocks (stable
-// addresses) and are the one place a box is kept between steps; the CPU finder reads the boxes in the
-// proxies (GridBroadphaseTuning::boxesInPlace), and for any other finder each search copies the live boxes
-// into a structure-of-arrays view (broadphase/grid_pair_finder.h) and drops it afterwards. Each step's sorted
+// addresses) and are the one place a box is kept between steps; the finders read the boxes in the proxies
+// (GridBroadphaseTuning::boxesInPlace; the OpenCL one as it uploads them), and for a finder that cannot, each
+// search copies the live boxes into a structure-of-arrays view (broadphase/grid_pair_finder.h) and drops it
+// afterwards. Each step's sorted
 // pair list is diffed against the last one so the pair cache only sees additions and removals (DESIGN.md,
 // data flow): the diff lists them, then the cache gets them. That list is also the pair finder's previous
 // result, which it carries resting pairs over from (no second copy is kept).
@@ -332,8 +333,7 @@ struct GridBroadphase::Impl {
                       });
   }
 
-  /// True when the scan copies the boxes into the view, as every finder but an in-place CPU finder reads
-  /// them.
+  /// True when the scan copies the boxes into the view: when they are not read in place.
   bool copyInScan() const { return !(kProxyBoxesAreFloats && tuning.boxesInPlace); }
 
   /// The finder's view of the filled buffer (consumes nonFiniteChanged): the boxes in the proxies when
