@@ -190,15 +190,21 @@ TEST(GridBroadphase, PairCacheMatchesBruteForceOverStepsNoGrid) {
   EXPECT_FALSE(bp.stats().usedGrid);
 }
 
-TEST(GridBroadphase, PairCacheMatchesBruteForceOverStepsOnOpenCl) {
-  // The OpenCL finder reads the boxes in the proxies (BoxRecords) as the CPU finder does: every box moving,
-  // proxies created and destroyed, static and filtered ones.
-  if (!gpucol::makeOpenClPairFinder(gpucol::Config{}))
-    GTEST_SKIP() << "no OpenCL pair finder (built without OpenCL, or no OpenCL device)";
+/// The grid from 100 proxies on the OpenCL finder, for tests that skip when there is none.
+gpucol::Config openClGridConfig() {
   gpucol::Config config;
   config.bruteForceBelow = 100;
   config.broadphaseBackend = gpucol::Backend::OpenCL;
-  gpucol::GridBroadphase bp(config);
+  return config;
+}
+
+bool haveOpenClPairFinder() { return gpucol::makeOpenClPairFinder(gpucol::Config{}) != nullptr; }
+
+TEST(GridBroadphase, PairCacheMatchesBruteForceOverStepsOnOpenCl) {
+  // The OpenCL finder reads the boxes in the proxies (BoxRecords) as the CPU finder does: every box moving,
+  // proxies created and destroyed, static and filtered ones.
+  if (!haveOpenClPairFinder()) GTEST_SKIP() << "no OpenCL pair finder (built without OpenCL, or no device)";
+  gpucol::GridBroadphase bp(openClGridConfig());
   runSteps(bp, bp.getOverlappingPairCache(), 1500, 3);
   EXPECT_TRUE(bp.stats().usedGrid);
   EXPECT_TRUE(bp.stats().usedOpenCl);
@@ -207,12 +213,8 @@ TEST(GridBroadphase, PairCacheMatchesBruteForceOverStepsOnOpenCl) {
 TEST(GridBroadphase, OpenClKeepsItsGridWhileProxiesAreAdded) {
   // Few boxes move and a few proxies are created each step, past the slots the device's arrays were sized
   // for: the kept grid serves (stage 11) and the arrays grow keeping what they hold.
-  if (!gpucol::makeOpenClPairFinder(gpucol::Config{}))
-    GTEST_SKIP() << "no OpenCL pair finder (built without OpenCL, or no OpenCL device)";
-  gpucol::Config config;
-  config.bruteForceBelow = 100;
-  config.broadphaseBackend = gpucol::Backend::OpenCL;
-  gpucol::GridBroadphase bp(config);
+  if (!haveOpenClPairFinder()) GTEST_SKIP() << "no OpenCL pair finder (built without OpenCL, or no device)";
+  gpucol::GridBroadphase bp(openClGridConfig());
   btDefaultCollisionConfiguration configuration;
   btCollisionDispatcher dispatcher(&configuration);
   std::mt19937 rng(23);
