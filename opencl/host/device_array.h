@@ -31,11 +31,10 @@ struct DeviceArray {
   }
   /// As ensure, but what the buffer held is kept (copied on the device into the larger one).
   const cl::Buffer& ensureKeeping(const cl::Context& context, cl::CommandQueue& queue, std::size_t wanted) {
-    if (bytes >= wanted) return buffer;
     const cl::Buffer old = buffer;
     const std::size_t oldBytes = bytes;
-    allocate(context, wanted + wanted / 4);
-    if (oldBytes > 0) queue.enqueueCopyBuffer(old, buffer, 0, 0, oldBytes);
+    ensure(context, wanted);
+    if (oldBytes > 0 && bytes != oldBytes) queue.enqueueCopyBuffer(old, buffer, 0, 0, oldBytes);
     return buffer;
   }
 

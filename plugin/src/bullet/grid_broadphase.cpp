@@ -2,10 +2,9 @@
 // addresses) and are the one place a box is kept between steps; the finders read the boxes in the proxies
 // (GridBroadphaseTuning::boxesInPlace; the OpenCL one as it uploads them), and for a finder that cannot, each
 // search copies the live boxes into a structure-of-arrays view (broadphase/grid_pair_finder.h) and drops it
-// afterwards. Each step's sorted
-// pair list is diffed against the last one so the pair cache only sees additions and removals (DESIGN.md,
-// data flow): the diff lists them, then the cache gets them. That list is also the pair finder's previous
-// result, which it carries resting pairs over from (no second copy is kept).
+// afterwards. Each step's sorted pair list is diffed against the last one so the pair cache only sees
+// additions and removals (DESIGN.md, data flow): the diff lists them, then the cache gets them. That list is
+// also the pair finder's previous result, which it carries resting pairs over from (no second copy is kept).
 #include "gpucol/grid_broadphase.h"
 
 #include <LinearMath/btAabbUtil2.h>
