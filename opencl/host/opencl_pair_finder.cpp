@@ -38,7 +38,7 @@ static_assert(GPUCOL_PROXY_ACTIVE == kProxyActive && GPUCOL_PROXY_STATIC == kPro
 namespace {
 
 /// Stage 11: the kept grid is reused while at most this fraction of the active proxies changed since it was
-/// built (measured on PoCL, see the README's broad phase section); beyond it a full search is about as fast.
+/// built (measured on PoCL: measurement history, "Broad phase"); beyond it a full search is about as fast.
 constexpr double kIncrementalFraction = 0.125;
 
 /// The kernels' first arguments (PROXY_PARAMS in grid_find_pairs.cl): the boxes and the flags.

@@ -316,7 +316,7 @@ TEST(GridBroadphase, BoxesCopiedForTheSearchGiveTheSamePairsAsInPlace) {
 /// (GridBroadphaseStats::peakBytes), with the default tuning, once every box moves each step and once 1% do
 /// (stage 11 on the kept grid), and at the steps that keep the grid (the first, and the first where few
 /// moved). A sparse cloud, about 0.5 pairs per proxy. Copying the boxes for the search (boxesInPlace false)
-/// adds 24 bytes per proxy at the peak (README) and fails it.
+/// adds 24 bytes per proxy at the peak (measurement history) and fails it.
 TEST(GridBroadphase, PeakOfAStepStaysWithin100BytesPerProxyPlus8PerPair) {
   // Each thread that takes a slab holds its own scratch: one thread makes the peaks repeatable.
   tbb::global_control oneThread(tbb::global_control::max_allowed_parallelism, 1);

@@ -15,7 +15,9 @@ namespace gpucol {
 struct GridBroadphaseTuning {
   /// Cell size from the density rule of Avril et al. §4.1 instead of the objects' median size.
   bool densityCellSize = false;
-  /// Write candidate results to the §3.4 bit mask instead of compacted per-chunk lists.
+  /// Write candidate results to the §3.4 bit mask instead of compacted per-chunk lists. CPU path only (the
+  /// OpenCL finder always compacts); the grid is then searched whole, not in slabs. Slower in 7 of the 9
+  /// cases measured (README, "Broad phase").
   bool bitMaskOutput = false;
   /// Use the Newton/"magic constant" square root (§3.3) for the mapping function's first guess.
   bool newtonSqrt = false;
@@ -29,9 +31,9 @@ struct GridBroadphaseTuning {
   /// Read each box where Bullet's proxy holds it instead of from a copy of every box made for the search. On
   /// the CPU path the slabs are then searched at any size: 24 bytes less per proxy at the peak of a step
   /// (about 100 less at 1M proxies), at about the same speed (steps took 0.89-1.00 times as long at 100K
-  /// moving proxies and 0.82-1.07 at 1M; the README measures both); the OpenCL path gathers the boxes from
-  /// the proxies as it uploads them (24 bytes less per proxy at its peak). false: the search reads a copy of
-  /// every box. Needs single-precision Bullet; ignored otherwise (always a copy).
+  /// moving proxies and 0.82-1.07 at 1M; the measurement history has both); the OpenCL path gathers the boxes
+  /// from the proxies as it uploads them (24 bytes less per proxy at its peak). false: the search reads a
+  /// copy of every box. Needs single-precision Bullet; ignored otherwise (always a copy).
   bool boxesInPlace = true;
 };
 

@@ -37,8 +37,8 @@ constexpr std::uint32_t kAllAxes = 7;
 constexpr std::uint32_t kSlabBox = (1u << kStartShift) - 1;
 /// SlabBoxReading::Auto reads the boxes in place in a scene of at most kInPlaceMaxBoxes binned boxes when the
 /// threads' copies would hold more than kCopyBytesPerBox bytes per binned box: there the copies took 12-24 of
-/// the 100 bytes per proxy a step may hold (README, "At most 100 bytes per proxy"). In larger scenes they
-/// take less, and reading in place cost more: a pile of 10,000 boxes (the falling column after 80 steps,
+/// the 100 bytes per proxy a step may hold (measurement history, "Small scenes' peaks"). In larger scenes
+/// they take less, and reading in place cost more: a pile of 10,000 boxes (the falling column after 80 steps,
 /// about 10 pairs per box, a few large slabs) spent twice as long in its candidate tests.
 constexpr std::size_t kCopyBytesPerBox = 8;
 constexpr std::size_t kInPlaceMaxBoxes = 4096;

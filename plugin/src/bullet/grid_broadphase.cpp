@@ -337,8 +337,8 @@ struct GridBroadphase::Impl {
 
   /// The finder's view of the filled buffer (consumes nonFiniteChanged): the boxes in the proxies when
   /// `readsRecords`, else in the view's arrays (a copy less than half the proxies' size, which took 24 more
-  /// bytes per proxy at the peak and no less time: README), which the scan filled unless boxesInPlace met a
-  /// finder that cannot read them in place.
+  /// bytes per proxy at the peak and no less time: measurement history), which the scan filled unless
+  /// boxesInPlace met a finder that cannot read them in place.
   ProxyArrays finderView(bool readsRecords) {
     ProxyArrays v;
     v.count = slotCount;
