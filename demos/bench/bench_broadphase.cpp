@@ -327,6 +327,7 @@ struct Options {
   bool stages = false;
   bool interleave = false;
   int bruteForceBelow = Config{}.bruteForceBelow;
+  std::uint32_t hugeCellLimit = GridBroadphaseTuning{}.hugeCellLimit;
   std::size_t peerMax = 1000000;
   // bt32BitAxisSweep3 inserts each new proxy by walking its edges down the three sorted axes: n proxies
   // cost O(n^2) to create (measured here: 30K take 14 s, so 100K would take minutes), so it is left out above
@@ -402,6 +403,7 @@ void runAll(const Options& o) {
       tuning.densityCellSize = o.cellRule == "density";
       tuning.bitMaskOutput = o.output == "bitmask";
       tuning.newtonSqrt = o.sqrtMode == "newton";
+      tuning.hugeCellLimit = o.hugeCellLimit;
       for (const char* variant : {"cpu", "cpu-whole", "cpu-copy", "opencl"}) {
         const bool cpu = std::string(variant) != "opencl";
         const std::string label = std::string("gpucol-") + variant;
@@ -553,6 +555,10 @@ const CommandRegistration kRegistration([](CLI::App& app) {
       ->capture_default_str();
   cmd->add_option("--brute-force-below", options->bruteForceBelow, "Config::bruteForceBelow")
       ->check(CLI::NonNegativeNumber)
+      ->capture_default_str();
+  cmd->add_option("--huge-cell-limit", options->hugeCellLimit,
+                  "GridBroadphaseTuning::hugeCellLimit: a box over this many cells is tested against all")
+      ->check(CLI::PositiveNumber)
       ->capture_default_str();
   cmd->add_option("--peer-max", options->peerMax, "skip btDbvt and b3GpuGrid above this many proxies")
       ->capture_default_str();
