@@ -87,8 +87,8 @@ TEST(PackedPairs, PlainListsRoundTripAt8BytesAKey) {
   }
   EXPECT_GE(plain.bytes(), 8 * (keys.size() - plain.segments()));
   EXPECT_LT(coded.bytes(), plain.bytes());
-  EXPECT_TRUE(PackedPairs::worthCoding(101, 100));
-  EXPECT_FALSE(PackedPairs::worthCoding(100, 100));
+  EXPECT_TRUE(PackedPairs::worthCoding(151, 100));
+  EXPECT_FALSE(PackedPairs::worthCoding(150, 100));
 }
 
 TEST(PackedPairs, ReaderStartsAtAnySegment) {

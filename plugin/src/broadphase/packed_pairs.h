@@ -11,10 +11,14 @@
 // ((b - a - 1) << 1) | 1 followed by a varint of (a - previous a - 1). All in 32-bit wrap-around arithmetic,
 // so any ascending, duplicate-free keys round-trip (pair keys have a < b, which keeps the codes short).
 //
-// A list of no more keys than proxies is kept plain (8 bytes a key, one array cut into segments of
-// kSegmentKeys only for the walks; adopt() takes a list over without a copy): the target allows
-// 8 bytes per pair, and decoding a sparse scene's keys (mostly a new row each, in 3-4 bytes) took 6 ns a key,
-// which made the diff of the sleeping scene at 100K proxies 0.12 -> 0.9 ms (worthCoding).
+// A list of at most 1.5 keys per proxy is kept plain (8 bytes a key, one array cut into segments of
+// kSegmentKeys only for the walks; adopt() takes a list over without a copy): the target allows 8 bytes per
+// pair, and coding costs time. Decoding a sparse scene's keys (mostly a new row each, in 3-4 bytes) took 6 ns
+// a key, which made the diff of the sleeping scene at 100K proxies 0.12 -> 0.9 ms; coding the 1.06 keys per
+// proxy of 1M mixed boxes made the step's sort and diff 42.5-53.6 ms
+// instead of 21.0-25.5 (measurement history). Above
+// 1.5 keys per proxy, plain lists would take the peak of a step that keeps few proxies moving (stage 11) past
+// the target: 101.5 bytes per proxy at 1.95 keys per proxy (worthCoding).
 #include <cstddef>
 #include <cstdint>
 #include <stdexcept>
@@ -34,8 +38,8 @@ class PackedPairs {
   /// Keys per segment (the unit of parallel coding and walking).
   static constexpr std::size_t kSegmentKeys = 4096;
 
-  /// Whether `keys` pair keys of `slots` proxy slots are worth coding: more keys than slots.
-  static bool worthCoding(std::size_t keys, std::size_t slots) { return keys > slots; }
+  /// Whether `keys` pair keys of `slots` proxy slots are worth coding: more than 1.5 keys per slot.
+  static bool worthCoding(std::size_t keys, std::size_t slots) { return 2 * keys > 3 * slots; }
 
   /// Keys held.
   std::size_t size() const { return m_size; }
