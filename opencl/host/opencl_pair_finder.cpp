@@ -64,6 +64,12 @@ class OpenClPairFinder final : public PairFinder {
  public:
   OpenClPairFinder(OpenClContext& context, const OpenClPairFinderTuning& tuning)
       : m_context(context), m_tuning(tuning), m_scan(context), m_sort(context) {}
+  /// Waits for the queue: a write not waited for reads the finder's host lists until the queue runs it (a
+  /// step cut short by an OpenCL error may leave some queued). clFinish, which throws nothing; its error, on
+  /// a queue that already failed, changes nothing here.
+  ~OpenClPairFinder() override { clFinish(m_context.queue()()); }
+  OpenClPairFinder(const OpenClPairFinder&) = delete;
+  OpenClPairFinder& operator=(const OpenClPairFinder&) = delete;
 
   void findPairs(const ProxyArrays& proxies, const PairFinderOptions& options,
                  std::vector<std::uint64_t>& pairs) override;
@@ -551,7 +557,10 @@ void OpenClPairFinder::fullSearch(const ProxyArrays& p, const PairFinderOptions&
     m_keptHugeCount = std::uint32_t(m_huge.size());
     m_resting.assign(p.count, 0);
     for (std::uint32_t s : m_active) m_resting[s] = 1;
-    q.enqueueWriteBuffer(m_restingBuf.ensureFitted(c, p.count), CL_FALSE, 0, p.count, m_resting.data());
+    // Waited for: no read of this step comes after it, and the next step's keepGrid edits m_resting (and may
+    // reallocate it) on the host before anything waits on the queue. Not waited for, PoCL's thread was seen
+    // reading the list after the finder had freed it (AddressSanitizer, ClusteredScene).
+    q.enqueueWriteBuffer(m_restingBuf.ensureFitted(c, p.count), CL_TRUE, 0, p.count, m_resting.data());
     m_kept = true;
   }
 }
