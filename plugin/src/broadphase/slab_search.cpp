@@ -63,6 +63,15 @@ inline bool ownedByCell(std::uint32_t a, std::uint32_t b) {
   return ((a | b) >> kStartShift) == kAllAxes;
 }
 
+/// ownedByCell and boxesOverlap in one condition, so one branch, which is rarely taken. In the short runs of
+/// 100K uniform boxes a cell owned 70% of its candidates, their boxes overlapped in 18%, and both held in 9%:
+/// a branch on ownership first went either way at random. The tests took 11% less time with the single
+/// branch, at 100K uniform and mixed boxes (measurement history). The sum is 8 only for an owned pair (7: all
+/// three start bits) whose boxes overlap (1); GCC splits `a & b` of two conditions back into two branches.
+inline bool ownedAndOverlapping(std::uint32_t ea, std::uint32_t eb, const LocalBox& a, const LocalBox& b) {
+  return ((ea | eb) >> kStartShift) + std::uint32_t(boxesOverlap(a, b)) == kAllAxes + 1;
+}
+
 /// The extent along one axis of binned box i (slot s): kept by the grid choice, or read from that axis's two
 /// arrays (the planning passes read nothing else there), or from the records.
 class AxisExtent {
@@ -368,9 +377,6 @@ SlabSearchCounts SlabSearch::searchSlab(std::size_t slab, const ProxyArrays& p,
 
     // Stages 8-9 per cell of two or more boxes: the cell's ownership from the entries alone, then the overlap
     // and the filter.
-    auto emit = [&](const LocalBox& a, const LocalBox& b) {
-      if (boxesOverlap(a, b) && passesFilter(a, b)) add(makePairKey(a.slot, b.slot));
-    };
     for (std::uint32_t c = 0; c < cells; ++c) {
       const std::uint32_t e0 = start[c], runLength = start[c + 1] - e0;
       if (runLength < 2) continue;
@@ -384,9 +390,13 @@ SlabSearchCounts SlabSearch::searchSlab(std::size_t slab, const ProxyArrays& p,
         });
         continue;
       }
-      for (std::uint32_t i = 0; i + 1 < runLength; ++i)
-        for (std::uint32_t j = i + 1; j < runLength; ++j)
-          if (ownedByCell(run[i], run[j])) emit(boxAt(i), boxAt(j));
+      for (std::uint32_t i = 0; i + 1 < runLength; ++i) {
+        const LocalBox& a = boxAt(i);
+        for (std::uint32_t j = i + 1; j < runLength; ++j) {
+          const LocalBox& b = boxAt(j);
+          if (ownedAndOverlapping(run[i], run[j], a, b) && passesFilter(a, b)) add(makePairKey(a.slot, b.slot));
+        }
+      }
     }
 
     // Stage 3: huge boxes against this slab's boxes, through the cells the huge box covers when they are few
