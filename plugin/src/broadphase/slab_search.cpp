@@ -394,7 +394,8 @@ SlabSearchCounts SlabSearch::searchSlab(std::size_t slab, const ProxyArrays& p,
         const LocalBox& a = boxAt(i);
         for (std::uint32_t j = i + 1; j < runLength; ++j) {
           const LocalBox& b = boxAt(j);
-          if (ownedAndOverlapping(run[i], run[j], a, b) && passesFilter(a, b)) add(makePairKey(a.slot, b.slot));
+          if (ownedAndOverlapping(run[i], run[j], a, b) && passesFilter(a, b))
+            add(makePairKey(a.slot, b.slot));
         }
       }
     }
