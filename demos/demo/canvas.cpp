@@ -2,6 +2,7 @@
 
 #include <algorithm>
 #include <cmath>
+#include <cstring>
 
 // stb_easy_font is header-only and all static; the functions this file does not call would warn.
 #pragma GCC diagnostic push
@@ -38,9 +39,11 @@ std::vector<Quad> glyphQuads(const std::string& text) {
   std::vector<Quad> out;
   out.reserve(std::size_t(quads));
   for (int q = 0; q < quads; ++q) {
-    // Four vertices of 16 bytes: x, y, z floats and a colour.
-    const float* v0 = reinterpret_cast<const float*>(buffer.data() + q * 64);
-    const float* v2 = reinterpret_cast<const float*>(buffer.data() + q * 64 + 32);
+    // Four vertices of 16 bytes: x, y, z floats and a colour. Copied out, not read through a float pointer:
+    // the buffer is char storage, which a float lvalue may not alias.
+    float v0[2], v2[2];
+    std::memcpy(v0, buffer.data() + std::size_t(q) * 64, sizeof v0);
+    std::memcpy(v2, buffer.data() + std::size_t(q) * 64 + 32, sizeof v2);
     out.push_back(
         {std::min(v0[0], v2[0]), std::min(v0[1], v2[1]), std::max(v0[0], v2[0]), std::max(v0[1], v2[1])});
   }
