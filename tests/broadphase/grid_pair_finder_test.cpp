@@ -76,8 +76,8 @@ Scene uniformCloud(int n, float side, float halfSize, std::uint32_t seed) {
 }
 
 /// Checks the finder against brute force with every combination of options, grid forced and not, the grid
-/// searched whole and in slabs (of 64 boxes, so that small scenes have many), the boxes in arrays and in
-/// records.
+/// searched whole and in slabs (of 64 boxes, so that small scenes have many; by home cell where the boxes
+/// are of about one size, and never), the boxes in arrays and in records.
 void expectMatchesBruteForce(const Scene& scene, const std::string& what, std::uint64_t minPairs = 1,
                              std::uint32_t hugeCellLimit = gpucol::PairFinderOptions{}.hugeCellLimit) {
   const std::vector<std::uint64_t> reference = gpucol::findPairsBruteForce(scene.view());
@@ -88,8 +88,11 @@ void expectMatchesBruteForce(const Scene& scene, const std::string& what, std::u
       for (auto rule : {gpucol::CellSizeRule::Size, gpucol::CellSizeRule::Density})
         for (auto output : {gpucol::PairOutput::Compacted, gpucol::PairOutput::BitMask})
           for (auto sqrtMode : {gpucol::MappingSqrt::Double, gpucol::MappingSqrt::Newton})
-            for (auto tiling : {gpucol::SlabTiling::Off, gpucol::SlabTiling::Always}) {
+            for (auto [tiling, homeCells] : {std::pair(gpucol::SlabTiling::Off, true),
+                                              std::pair(gpucol::SlabTiling::Always, true),
+                                              std::pair(gpucol::SlabTiling::Always, false)}) {
               gpucol::PairFinderOptions o;
+              o.homeCells = homeCells;
               o.bruteForceBelow = below;
               o.cellSizeRule = rule;
               o.output = output;
@@ -105,14 +108,24 @@ void expectMatchesBruteForce(const Scene& scene, const std::string& what, std::u
               ASSERT_EQ(pairs, reference)
                   << what << " records=" << records << " below=" << below << " rule=" << int(rule)
                   << " output=" << int(output) << " sqrt=" << int(sqrtMode) << " tiling=" << int(tiling)
-                  << " grid=" << finder->stats().usedGrid << " slabs=" << finder->stats().slabs;
-              EXPECT_EQ(finder->stats().usedGrid, below == 0) << what;
+                  << " homeCells=" << homeCells << " grid=" << finder->stats().usedGrid
+                  << " slabs=" << finder->stats().slabs << " byHomeCell=" << finder->stats().homeCells;
+              const gpucol::PairFinderStats& st = finder->stats();
+              EXPECT_EQ(st.usedGrid, below == 0) << what;
+              if (!homeCells || rule == gpucol::CellSizeRule::Density) {
+                EXPECT_FALSE(st.homeCells) << what;
+              }
               if (tiling == gpucol::SlabTiling::Off || output == gpucol::PairOutput::BitMask) {
-                EXPECT_EQ(finder->stats().slabs, 0u) << what;
-              } else if (finder->stats().slabs > 0) {
-                EXPECT_EQ(finder->stats().slabBoxesInPlace,
-                          o.slabBoxReading == gpucol::SlabBoxReading::InPlace)
+                EXPECT_EQ(st.slabs, 0u) << what;
+                EXPECT_FALSE(st.homeCells) << what;
+              } else if (st.slabs > 0) {
+                // By home cell, the boxes are always copied (into cell order).
+                EXPECT_EQ(st.slabBoxesInPlace,
+                          !st.homeCells && o.slabBoxReading == gpucol::SlabBoxReading::InPlace)
                     << what;
+              }
+              if (!st.homeCells) {
+                EXPECT_EQ(st.wideBoxes, 0u) << what;
               }
             }
 }
@@ -667,6 +680,105 @@ TEST(GridPairFinder, SlabSearchAndTheGridKeptAfterIt) {
   EXPECT_TRUE(finder->stats().incremental);
 }
 
+/// A cloud of unit boxes (one per 8 unit volumes), with every 7th box on a lattice of touching unit cubes, and
+/// `wide` boxes of half extent 0.95 at odd indices (never in stage 2's sample of every 2nd box, so larger than
+/// the home cells).
+Scene unitBoxCloud(int n, float offset, int wide, std::uint32_t seed) {
+  std::mt19937 rng(seed);
+  const float side = std::cbrt(8.0f * float(n));
+  std::uniform_real_distribution<float> pos(0.0f, side);
+  std::uniform_int_distribution<int> lattice(0, int(side) - 1);
+  Scene s;
+  for (int i = 0; i < n; ++i) {
+    const bool onLattice = i % 7 == 0;
+    float c[3];
+    for (float& x : c) x = offset + (onLattice ? float(lattice(rng)) + 0.5f : pos(rng));
+    const float half = i % 2 == 1 && i / 2 < wide ? 0.95f : 0.5f;
+    s.add(c[0], c[1], c[2], half, half, half);
+  }
+  return s;
+}
+
+/// Boxes of about one size are searched by home cell, on a grid of cells as large as the largest sampled box:
+/// the same pairs as brute force and as the search in every cell a box overlaps, with fewer candidates;
+/// boxes larger than the cells (wide), huge boxes through their cells and one by one, and a grid kept for
+/// stage 11 after the search, which the next search then uses.
+TEST(GridPairFinder, SearchByHomeCell) {
+  Scene s = unitBoxCloud(12000, -20.0f, 25, 21);
+  s.add(0, -20, 0, 30, 1, 30);  // a ground under the cloud, in its lowest cells: tested one by one
+  s.add(5, 5, 5, 7, 0.3f, 7);   // a plate over a few slabs' cells: tested through its cells
+  s.add(10, 5, -8, 1, 25, 1);   // a pillar along the slab axis
+  gpucol::ProxyArrays view = s.view();
+  const std::vector<std::uint64_t> reference = gpucol::findPairsBruteForce(view);
+  ASSERT_GT(reference.size(), 5000u);
+  gpucol::PairFinderOptions o, allCells;
+  o.bruteForceBelow = allCells.bruteForceBelow = 0;
+  allCells.homeCells = false;
+  auto finder = gpucol::makeCpuPairFinder(), allCellsFinder = gpucol::makeCpuPairFinder();
+  std::vector<std::uint64_t> pairs;
+  allCellsFinder->findPairs(view, allCells, pairs);
+  ASSERT_EQ(pairs, reference);
+  EXPECT_FALSE(allCellsFinder->stats().homeCells);
+  auto search = [&](const char* what) {
+    SCOPED_TRACE(what);
+    finder->findPairs(view, o, pairs);
+    ASSERT_EQ(pairs, gpucol::findPairsBruteForce(view));
+  };
+  search("first");
+  const gpucol::PairFinderStats& st = finder->stats();
+  EXPECT_TRUE(st.homeCells);
+  EXPECT_GE(st.slabs, 8u);
+  EXPECT_EQ(st.hugeProxies, 3u);
+  EXPECT_GT(st.wideBoxes, 0u) << "boxes larger than the sampled ones span three home cells";
+  EXPECT_LT(st.wideBoxes, 100u);
+  EXPECT_GT(st.cellSize, 1.0f);
+  EXPECT_LT(st.cellSize, 1.01f) << "as large as the largest sampled box";
+  EXPECT_LT(st.candidates, allCellsFinder->stats().candidates);
+  // Few moved: the grid kept after the first search (the size rule's, not the home grid) serves.
+  std::vector<std::uint8_t> moved(s.flags.size(), 0);
+  view.moved = moved.data();
+  auto moveFew = [&](std::size_t first) {
+    std::fill(moved.begin(), moved.end(), std::uint8_t(0));
+    for (std::size_t i = first; i < moved.size(); i += 50) {
+      s.minY[i] += 0.3f, s.maxY[i] += 0.3f;
+      moved[i] = 1;
+    }
+  };
+  moveFew(0);
+  search("few moved after the first");
+  EXPECT_TRUE(st.incremental);
+  std::fill(moved.begin(), moved.end(), std::uint8_t(1));
+  search("all moved");
+  EXPECT_TRUE(st.homeCells);
+  EXPECT_FALSE(st.incremental);
+  moveFew(7);
+  search("few moved after all moved");
+  EXPECT_TRUE(st.homeCells);
+  moveFew(13);
+  search("few moved again");
+  EXPECT_TRUE(st.incremental);
+}
+
+/// Unit boxes far from the origin, where a float's step is 1/16 (cellOf rounds), and in a plane of touching
+/// boxes: the same pairs by home cell.
+TEST(GridPairFinder, SearchByHomeCellFarAwayAndFlat) {
+  const Scene far = unitBoxCloud(6000, 1e6f, 0, 22);
+  Scene flat;
+  for (int x = 0; x < 70; ++x)
+    for (int z = 0; z < 70; ++z) flat.add(float(x), 0.0f, float(z), 0.5f, 0.5f, 0.5f);
+  for (const auto& [scene, what] : {std::pair<const Scene*, const char*>(&far, "far"),
+                                    std::pair<const Scene*, const char*>(&flat, "flat")}) {
+    SCOPED_TRACE(what);
+    gpucol::PairFinderOptions o;
+    o.bruteForceBelow = 0;
+    auto finder = gpucol::makeCpuPairFinder();
+    std::vector<std::uint64_t> pairs;
+    finder->findPairs(scene->view(), o, pairs);
+    EXPECT_EQ(pairs, gpucol::findPairsBruteForce(scene->view()));
+    EXPECT_TRUE(finder->stats().homeCells);
+  }
+}
+
 /// SlabTiling::Auto and AnySize search a scene of fewer than 2,048 binned boxes in whatever slabs its grid
 /// gives, as many as it fills or fewer (a grid of 4 layers), and leave a big scene that gives fewer than 8
 /// (all boxes at one spot: one cell, one slab) to the whole-grid search, which spreads that cell's candidates
@@ -700,22 +812,30 @@ TEST(GridPairFinder, SmallScenesInAnySlabsTheirGridGives) {
 }
 
 /// Beyond kMaxSlabBoxes (2^18) binned boxes Auto searches the grid whole and AnySize still in slabs, with the
-/// same pairs, in a first search (whose grid both keep for stage 11) and in one where all moved.
+/// same pairs, in a first search (whose grid both keep for stage 11) and in one where all moved; by home cell
+/// (these boxes are of about one size) Auto searches in slabs at any size.
 TEST(GridPairFinder, SlabSearchAtAnySize) {
   const Scene s = uniformCloud(270000, 90.0f, 0.6f, 17);
   std::vector<std::uint8_t> moved(s.flags.size(), 1);
   gpucol::ProxyArrays view = s.view();
-  std::vector<std::uint64_t> whole, slabs;
-  for (auto tiling : {gpucol::SlabTiling::Auto, gpucol::SlabTiling::AnySize}) {
+  std::vector<std::uint64_t> whole, slabs, byHomeCell;
+  for (auto [tiling, homeCells] : {std::pair(gpucol::SlabTiling::Auto, false),
+                                   std::pair(gpucol::SlabTiling::AnySize, false),
+                                   std::pair(gpucol::SlabTiling::Auto, true)}) {
+    SCOPED_TRACE(homeCells ? "by home cell" : tiling == gpucol::SlabTiling::Auto ? "auto" : "any size");
     auto finder = gpucol::makeCpuPairFinder();
     gpucol::PairFinderOptions o;
     o.slabTiling = tiling;
-    std::vector<std::uint64_t>& pairs = tiling == gpucol::SlabTiling::Auto ? whole : slabs;
+    o.homeCells = homeCells;
+    std::vector<std::uint64_t>& pairs = homeCells                            ? byHomeCell
+                                        : tiling == gpucol::SlabTiling::Auto ? whole
+                                                                             : slabs;
     view.moved = nullptr;
     for (int step = 0; step < 2; ++step) {
       std::vector<std::uint64_t> found;
       finder->findPairs(view, o, found);
-      if (tiling == gpucol::SlabTiling::Auto)
+      EXPECT_EQ(finder->stats().homeCells, homeCells);
+      if (tiling == gpucol::SlabTiling::Auto && !homeCells)
         EXPECT_EQ(finder->stats().slabs, 0u);
       else
         EXPECT_GE(finder->stats().slabs, 8u);
@@ -726,12 +846,13 @@ TEST(GridPairFinder, SlabSearchAtAnySize) {
   }
   ASSERT_GE(whole.size(), 10000u);
   EXPECT_EQ(slabs, whole);
+  EXPECT_EQ(byHomeCell, whole);
 }
 
 /// SlabBoxReading::Auto reads the boxes in place in a scene of at most 4,096 binned boxes when the copies of
 /// the threads' largest slabs would come to more than 8 bytes per binned box (many boxes per slab, or a few
 /// large slabs), and copies them otherwise; the pairs are the same either way. Two threads, as on the machine
-/// the rule was measured on.
+/// the rule was measured on. (A search by home cell always copies: it is not asked for here.)
 TEST(GridPairFinder, SlabBoxesReadInPlaceWhereTheirCopiesWouldWeighMost) {
   tbb::global_control two(tbb::global_control::max_allowed_parallelism, 2);
   // A cloud long along x, the axis the slabs cut, and a column across it at x = 0 that fills one slab.
@@ -762,6 +883,7 @@ TEST(GridPairFinder, SlabBoxesReadInPlaceWhereTheirCopiesWouldWeighMost) {
       auto finder = gpucol::makeCpuPairFinder();
       gpucol::PairFinderOptions o;
       o.slabBoxReading = reading;
+      o.homeCells = false;
       std::vector<std::uint64_t> pairs;
       finder->findPairs(c.scene.view(), o, pairs);
       EXPECT_EQ(pairs, reference) << int(reading);

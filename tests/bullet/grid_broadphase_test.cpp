@@ -264,15 +264,18 @@ void stepAndNudge(gpucol::GridBroadphase& bp, const std::vector<Box>& boxes, btD
 
 /// One scene of `count` random boxes in a cube of half side `side`, stepped by a broad phase that copies the
 /// boxes and by one that reads them in place, the default (stepAndNudge): the same pairs, at least `minPairs`
-/// of them, and a peak at least `savedPerProxy` bytes per proxy lower in place.
+/// of them, and a peak at least `savedPerProxy` bytes per proxy lower in place. `homeCells` is both's
+/// GridBroadphaseTuning::homeCells.
 void expectInPlaceSamePairsLowerPeak(const gpucol::Config& config, int count, float side, std::uint32_t seed,
-                                     std::size_t savedPerProxy, std::uint64_t minPairs) {
+                                     std::size_t savedPerProxy, std::uint64_t minPairs, bool homeCells) {
   btDefaultCollisionConfiguration configuration;
   btCollisionDispatcher dispatcher(&configuration);
-  gpucol::GridBroadphaseTuning copy;
+  gpucol::GridBroadphaseTuning copy, inPlace;
   copy.boxesInPlace = false;
+  copy.homeCells = inPlace.homeCells = homeCells;
   gpucol::GridBroadphase copying(config), reading(config);
   copying.setTuning(copy);
+  reading.setTuning(inPlace);
   ASSERT_TRUE(gpucol::GridBroadphaseTuning{}.boxesInPlace);
   std::mt19937 rng(seed);
   std::vector<Box> boxes(std::size_t(count), Box{});
@@ -290,9 +293,12 @@ void expectInPlaceSamePairsLowerPeak(const gpucol::Config& config, int count, fl
 }
 
 TEST(GridBroadphase, BoxesReadInPlaceAreSearchedInSlabsAtAnySize) {
-  // Beyond 2^18 moving proxies the default searches the grid whole, and in place in slabs: the same pairs,
-  // and a peak lower by more than the copy's 24 bytes per proxy (the whole-grid search's own working memory).
-  expectInPlaceSamePairsLowerPeak(gpucol::Config{}, 270000, 90.0f, 5, 60, 10000);
+  // Beyond 2^18 moving proxies a copy is searched whole, and in place in slabs: the same pairs, and a peak
+  // lower by more than the copy's 24 bytes per proxy (the whole-grid search's own working memory).
+  expectInPlaceSamePairsLowerPeak(gpucol::Config{}, 270000, 90.0f, 5, 60, 10000, false);
+  // By home cell (GridBroadphaseTuning::homeCells; these boxes are of about one size) both are searched in
+  // slabs: a peak lower by about the copy's 24 bytes per proxy.
+  expectInPlaceSamePairsLowerPeak(gpucol::Config{}, 270000, 90.0f, 5, 20, 10000, true);
 }
 
 TEST(GridBroadphase, BoxesCopiedForTheSearchGiveTheSamePairsAsInPlace) {
@@ -309,7 +315,7 @@ TEST(GridBroadphase, BoxesCopiedForTheSearchGiveTheSamePairsAsInPlace) {
 
   // The same scene stepped by both: one step that moves every box a little (few pairs change, so the
   // step's peak is the search's), and the peaks differ by about the copy's 24 bytes per proxy.
-  expectInPlaceSamePairsLowerPeak(config, 4000, 40.0f, 4, 20, 0);
+  expectInPlaceSamePairsLowerPeak(config, 4000, 40.0f, 4, 20, 0, false);
 }
 
 /// Issue 4's memory target: at most 100 bytes per proxy plus 8 per pair at the peak of a step

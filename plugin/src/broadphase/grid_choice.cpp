@@ -28,6 +28,19 @@ constexpr std::size_t kChunk = 16384;
 constexpr float kSurveyCellRatio = 2.0f;
 /// The bounds of no box.
 constexpr float kInf = std::numeric_limits<float>::infinity();
+/// The search by home cell serves when, in stage 2's sample, at most kHomeLargerShare of the boxes have a
+/// largest extent over kHomeExtentRatio times the median: its cells are as large as the largest of the
+/// others, so the larger that is beside the median, the more boxes a cell's neighbours hold; and each larger
+/// box (a ground, a wall) is searched on its own, as a huge or a wide box.
+constexpr float kHomeExtentRatio = 1.5f;
+constexpr float kHomeLargerShare = 1.0f / 64.0f;
+/// ... and when its grid has at most this many cells per binned box (plus kHomeCellsSlack): each slab's
+/// thread holds a start per cell of its slab.
+constexpr std::uint64_t kHomeCellsPerBox = 16;
+constexpr std::uint64_t kHomeCellsSlack = 1024;
+/// The home grid's cell is this much larger than the sample's largest extent, so that rounding in cellOf
+/// does not make boxes of that extent span three cells (those that still do are searched as wide boxes).
+constexpr float kHomeCellMargin = 1.0f + 1.0f / 1024.0f;
 
 /// Min and max corners of a set of boxes.
 struct Bounds {
@@ -57,12 +70,29 @@ Bounds boundsOf(const ProxyArrays& p, const std::vector<std::uint32_t>& slots, s
       });
 }
 
+/// Sets g's dims for boxes within [lo, hi] at cell edge `cell` (g.origin = lo); false when their count would
+/// not fit 32 bits.
+bool fitDims(const float lo[3], const float hi[3], float cell, Grid& g) {
+  std::uint64_t total = 1;
+  for (int a = 0; a < 3; ++a) {
+    const double d = std::floor((double(hi[a]) - double(lo[a])) / double(cell)) + 1.0;
+    if (!(d <= double(kMaxCells))) return false;
+    g.dims[a] = std::uint32_t(d);
+    total *= g.dims[a];
+    if (total > kMaxCells) return false;
+  }
+  for (int a = 0; a < 3; ++a) g.origin[a] = lo[a];
+  g.cell = cell;
+  g.invCell = 1.0f / cell;
+  return true;
+}
+
 }  // namespace
 
 Grid chooseGrid(const ProxyArrays& p, const std::vector<std::uint32_t>& active,
                 const PairFinderOptions& options, std::vector<float>& extentScratch,
                 std::vector<std::uint32_t>& binned, std::vector<std::uint32_t>& huge, AxisExtents* kept,
-                const BoxSurvey* survey, bool* surveyTaken) {
+                const BoxSurvey* survey, bool* surveyTaken, Grid* home) {
   const std::size_t n = active.size();
   // Stage 2: the median of the largest extent, robust to a few huge boxes (a mean would follow them). Above
   // kMedianSamples boxes, the median of every stride-th box: the cell size only sets the speed, never the
@@ -81,6 +111,17 @@ Grid chooseGrid(const ProxyArrays& p, const std::vector<std::uint32_t>& active,
   std::nth_element(extentScratch.begin(), extentScratch.begin() + std::ptrdiff_t(samples / 2),
                    extentScratch.end());
   const float median = extentScratch[samples / 2];
+  // The home grid's cell: the largest sampled extent up to kHomeExtentRatio times the median (after
+  // nth_element those lie above it), and how many sampled boxes are larger.
+  float homeExtent = median;
+  std::size_t larger = 0;
+  for (std::size_t i = samples / 2; i < samples; ++i) {
+    const float e = extentScratch[i];
+    if (e <= kHomeExtentRatio * median)
+      homeExtent = std::max(homeExtent, e);
+    else
+      ++larger;
+  }
   float cell = kSizeFactor * median;
   if (options.cellSizeRule == CellSizeRule::Density || !(cell > 0.0f)) {
     const Bounds all = boundsOf(p, active, 0, n);
@@ -172,28 +213,18 @@ Grid chooseGrid(const ProxyArrays& p, const std::vector<std::uint32_t>& active,
 
   Grid g;
   g.sizedCell = sizedCell;
+  if (home) home->cell = 0.0f;
   if (binned.empty()) return g;
-  const float* bmin = box.lo;
-  const float* bmax = box.hi;
   // Coarsen until the cell index fits 32 bits: exactness never depends on the cell size.
-  for (;;) {
-    std::uint64_t total = 1;
-    bool fits = true;
-    for (int a = 0; a < 3 && fits; ++a) {
-      const double d = std::floor((double(bmax[a]) - double(bmin[a])) / double(cell)) + 1.0;
-      fits = d <= double(kMaxCells);
-      if (fits) {
-        g.dims[a] = std::uint32_t(d);
-        total *= g.dims[a];
-        fits = total <= kMaxCells;
-      }
-    }
-    if (fits) break;
-    cell *= 2.0f;
+  while (!fitDims(box.lo, box.hi, cell, g)) cell *= 2.0f;
+  if (home && options.homeCells && options.cellSizeRule == CellSizeRule::Size && homeExtent > 0.0f &&
+      float(larger) <= kHomeLargerShare * float(samples)) {
+    Grid h;
+    h.sizedCell = sizedCell;
+    if (fitDims(box.lo, box.hi, homeExtent * kHomeCellMargin, h) &&
+        h.cells() <= kHomeCellsPerBox * binned.size() + kHomeCellsSlack)
+      *home = h;
   }
-  for (int a = 0; a < 3; ++a) g.origin[a] = bmin[a];
-  g.cell = cell;
-  g.invCell = 1.0f / cell;
   return g;
 }
 

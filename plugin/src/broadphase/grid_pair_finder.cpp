@@ -54,6 +54,11 @@ constexpr std::size_t kAnySlabsBelow = 2048;
 /// search; at 1M each slab read the view from memory again, and steps took 8-31% longer (measurement
 /// history). The limit lies between the two measured sizes.
 constexpr std::size_t kMaxSlabBoxes = std::size_t(1) << 18;
+/// SlabTiling::Auto and AnySize search by home cell (where chooseGrid finds a home grid) from this many binned
+/// boxes: each thread then copies its slab's boxes in cell order beside a start per cell, which in a scene of
+/// 1,000 boxes raised the peak of a step from 84-94 to 101-107 bytes per proxy, over issue 4's 100; the other
+/// slab search reads a small scene's boxes in place.
+constexpr std::size_t kHomeCellsFrom = 4096;
 /// Chunks per search at most, so per-chunk bookkeeping stays small next to the work.
 constexpr std::uint64_t kMaxChunks = 256;
 
@@ -241,7 +246,7 @@ class CpuPairFinder final : public PairFinder {
   void bruteForce(const ProxyArrays& p, const PairFinderOptions& options, std::vector<std::uint64_t>& pairs);
   void grid(const ProxyArrays& p, const PairFinderOptions& options, bool keepGrid,
             std::vector<std::uint64_t>& pairs);
-  bool searchSlabs(const ProxyArrays& p, const PairFinderOptions& options, const Grid& g);
+  bool searchSlabs(const ProxyArrays& p, const PairFinderOptions& options, const Grid& g, const Grid& home);
   void binKeptGrid(const ProxyArrays& p, const Grid& g, std::size_t binnedCount);
   void binSorted(const ProxyArrays& p, const Grid& g);
   void testRuns(const PairFinderOptions& options, const Grid& g);
@@ -972,8 +977,9 @@ void CpuPairFinder::grid(const ProxyArrays& p, const PairFinderOptions& options,
   // The binned and huge lists hold every active slot: the binned list is written over the active list.
   m_binned.swap(m_active), std::vector<std::uint32_t>().swap(m_active);
   bool surveyTaken = false;
-  const Grid g =
-      chooseGrid(p, m_binned, options, m_extent, m_binned, m_huge, &m_keptExtents, p.survey, &surveyTaken);
+  Grid home;  // the grid of a search by home cell, when chooseGrid finds one (home.cell > 0)
+  const Grid g = chooseGrid(p, m_binned, options, m_extent, m_binned, m_huge, &m_keptExtents, p.survey,
+                            &surveyTaken, slabsMayServe(options) ? &home : nullptr);
   m_stats.surveyTaken = surveyTaken;
   // The survey's extents are by slot; the plan takes them as it takes the grid choice's own.
   if (surveyTaken && m_keptExtents.axis >= 0 && p.survey->extents.axis == m_keptExtents.axis)
@@ -987,7 +993,7 @@ void CpuPairFinder::grid(const ProxyArrays& p, const PairFinderOptions& options,
   m_stats.cellSize = g.cell;
   for (int a = 0; a < 3; ++a) m_stats.dims[a] = g.dims[a];
   m_stats.chooseMs = clock.lap();
-  const bool slabs = searchSlabs(p, options, g);
+  const bool slabs = searchSlabs(p, options, g, home);
   // Unused when the plan did not take them.
   std::vector<std::uint32_t>().swap(m_keptExtents.lo), std::vector<std::uint32_t>().swap(m_keptExtents.hi);
   if (!slabs) {
@@ -1026,13 +1032,16 @@ void CpuPairFinder::grid(const ProxyArrays& p, const PairFinderOptions& options,
   }
 }
 
-bool CpuPairFinder::searchSlabs(const ProxyArrays& p, const PairFinderOptions& options, const Grid& g) {
+bool CpuPairFinder::searchSlabs(const ProxyArrays& p, const PairFinderOptions& options, const Grid& g,
+                                const Grid& home) {
   // The whole-grid search serves what slabs cannot: the bit mask (indexed by global candidate numbers) and
-  // sparse grids (a slab of a sparse grid would have mostly empty cells).
-  if (!slabsMayServe(options) || m_binned.empty() || g.cells() > denseCellLimit(m_binned.size()))
-    return false;
+  // sparse grids (a slab of a sparse grid would have mostly empty cells). A home grid is dense enough by
+  // chooseGrid's choice, and its slabs copy each box once, so the limit on binned boxes is not for them.
   const bool always = options.slabTiling == SlabTiling::Always;
-  if (options.slabTiling == SlabTiling::Auto && m_binned.size() > kMaxSlabBoxes) return false;
+  const bool byHome = home.cell > 0.0f && (always || m_binned.size() >= kHomeCellsFrom);
+  const bool gridServes = g.cells() <= denseCellLimit(m_binned.size()) &&
+                          !(options.slabTiling == SlabTiling::Auto && m_binned.size() > kMaxSlabBoxes);
+  if (!slabsMayServe(options) || m_binned.empty() || !(byHome || gridServes)) return false;
   StageClock clock;
   // A home order that the whole-grid search would not reuse (binSorted) is not held beside the slabs.
   const auto releaseHomeOrder = [&] {
@@ -1041,8 +1050,14 @@ bool CpuPairFinder::searchSlabs(const ProxyArrays& p, const PairFinderOptions& o
   if (!homeOrderFits(m_binned.size())) releaseHomeOrder();
   const bool small = m_binned.size() < kAnySlabsBelow;
   const std::uint32_t minSlabs = always || small ? 1 : kMinSlabs;
-  if (!m_slabs.plan(p, m_binned, g, options.slabBoxes, minSlabs, options.slabBoxReading, &m_keptExtents))
-    return false;
+  // By home cell where the boxes are of about one size (the plan's own grid), else in every cell they overlap.
+  const bool planned =
+      (byHome && m_slabs.plan(p, m_binned, home, options.slabBoxes, minSlabs, options.slabBoxReading,
+                              &m_keptExtents, true)) ||
+      (gridServes &&
+       m_slabs.plan(p, m_binned, g, options.slabBoxes, minSlabs, options.slabBoxReading, &m_keptExtents));
+  if (!planned) return false;
+  const Grid& searched = m_slabs.byHomeCell() ? home : g;
   // The home order serves the whole-grid search's locality only; a slab search does not keep it up to date.
   releaseHomeOrder();
   notePeak();
@@ -1053,11 +1068,17 @@ bool CpuPairFinder::searchSlabs(const ProxyArrays& p, const PairFinderOptions& o
   if (m_coded) m_buckets.reset(p.count, m_slabs.outputs(m_huge.size()));
   const std::size_t first = m_coded ? 0 : takeChunks(m_slabs.outputs(m_huge.size()));
   const SlabSearchCounts counts =
-      m_slabs.search(p, m_huge, g, m_chunkPairs, first, m_coded ? &m_buckets : nullptr);
+      m_slabs.search(p, m_huge, searched, m_chunkPairs, first, m_coded ? &m_buckets : nullptr);
   m_stats.testMs = clock.lap();
   m_stats.slabs = std::uint32_t(m_slabs.slabs());
   m_stats.slabAxisKept = m_slabs.tookKeptExtents();
   m_stats.slabBoxesInPlace = m_slabs.readsInPlace();
+  m_stats.homeCells = m_slabs.byHomeCell();
+  m_stats.wideBoxes = std::uint32_t(std::min<std::uint64_t>(counts.wide, UINT32_MAX));
+  if (m_stats.homeCells) {
+    m_stats.cellSize = home.cell;
+    for (int a = 0; a < 3; ++a) m_stats.dims[a] = home.dims[a];
+  }
   m_stats.keys = counts.keys;
   m_stats.candidates += counts.candidates;
   notePeak();
@@ -1071,11 +1092,24 @@ void CpuPairFinder::binKeptGrid(const ProxyArrays& p, const Grid& g, std::size_t
   // the binned boxes. Its entries name them by their place in the binned list, listed again here (the
   // active slots less the huge ones: the slab lists held them during the search), which becomes the home
   // order; that order is by slot, not by home cell, so the next whole-grid search renews it. A grid of more
-  // entries than 32-bit positions reach is not kept (the slabs found its pairs; the next search is a full
-  // one).
-  if (m_stats.keys > std::numeric_limits<std::uint32_t>::max() || binnedCount > kEntryBox) return;
+  // entries than 32-bit positions reach, or a sparse one (after a search by home cell on a grid of its own),
+  // is not kept (the slabs found its pairs; the next search is a full one).
+  if (binnedCount > kEntryBox || g.cells() > denseCellLimit(binnedCount)) return;
   std::vector<std::uint32_t> huge = m_huge;
   std::sort(huge.begin(), huge.end());
+  if (m_stats.homeCells) {
+    // The slabs counted one entry per box on their own grid: the kept grid's entries are counted here.
+    m_stats.keys = tbb::parallel_reduce(
+        tbb::blocked_range<std::size_t>(0, p.count, kGrain), std::uint64_t(0),
+        [&](const tbb::blocked_range<std::size_t>& r, std::uint64_t sum) {
+          for (std::size_t s = r.begin(); s != r.end(); ++s)
+            if ((p.flags[s] & kProxyActive) && !std::binary_search(huge.begin(), huge.end(), s))
+              sum += cellRange(boxOf(p, std::uint32_t(s)), g).count();
+          return sum;
+        },
+        std::plus<std::uint64_t>());
+  }
+  if (m_stats.keys > std::numeric_limits<std::uint32_t>::max()) return;
   m_homeOrder.clear();
   m_homeOrder.reserve(binnedCount);
   for (std::uint32_t s = 0; s < p.count; ++s)

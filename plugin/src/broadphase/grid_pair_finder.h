@@ -197,6 +197,10 @@ struct PairFinderOptions {
   std::uint32_t slabBoxes = 0;
   /// CPU finder: how a slab search reads its boxes.
   SlabBoxReading slabBoxReading = SlabBoxReading::Auto;
+  /// CPU finder, size rule: a slab search of boxes of about one size puts each box in its home cell alone and
+  /// pairs it with the boxes of the neighbouring cells (slab_search.h); false: always in every cell it
+  /// overlaps. The pairs are the same.
+  bool homeCells = true;
 };
 
 /// What one search did (for benchmarks, tests and printStats).
@@ -228,6 +232,12 @@ struct PairFinderStats {
   bool slabAxisKept = false;
   /// True when the slab search read its boxes in place (SlabBoxReading) instead of copying them.
   bool slabBoxesInPlace = false;
+  /// True when the slab search paired boxes by home cell (PairFinderOptions::homeCells) on a grid of its own
+  /// (cellSize and dims give that grid's).
+  bool homeCells = false;
+  /// Boxes of a search by home cell that spanned three or more of its cells on an axis and were tested
+  /// against every box of their slabs (counted once per slab).
+  std::uint32_t wideBoxes = 0;
   /// True when the grid choice took ProxyArrays::survey (no box was read for stage 3 and the bounds).
   bool surveyTaken = false;
   /// True when the search kept the last grid and binned only moved proxies (stage 11).

@@ -42,22 +42,6 @@ constexpr std::uint32_t kSlabBox = (1u << kStartShift) - 1;
 /// about 10 pairs per box, a few large slabs) spent twice as long in its candidate tests.
 constexpr std::size_t kCopyBytesPerBox = 8;
 constexpr std::size_t kInPlaceMaxBoxes = 4096;
-/// Makes room for n elements in v, with a capacity of exactly n when it must grow (resize alone would double
-/// it, and each thread holds its scratch at the largest slab's size until the search ends). The old array is
-/// freed before the new one is allocated, so the two are never held at once.
-template <typename T>
-void reserveExact(std::vector<T>& v, std::size_t n) {
-  if (n > v.capacity()) {
-    std::vector<T>().swap(v);  // its own statement: the emptied temporary frees the array here
-    v.reserve(n);
-  }
-}
-/// reserveExact, then n elements.
-template <typename T>
-void resizeExact(std::vector<T>& v, std::size_t n) {
-  reserveExact(v, n);
-  v.resize(n);
-}
 /// Stage 9 on two entries (or an entry and a huge box's bits) of one cell.
 inline bool ownedByCell(std::uint32_t a, std::uint32_t b) {
   return ((a | b) >> kStartShift) == kAllAxes;
@@ -109,9 +93,10 @@ class AxisExtent {
 
 bool SlabSearch::plan(const ProxyArrays& p, const std::vector<std::uint32_t>& binned, const Grid& g,
                       std::uint32_t slabBoxes, std::uint32_t minSlabs, SlabBoxReading reading,
-                      AxisExtents* kept) {
+                      AxisExtents* kept, bool homeCells) {
   m_firstLayer.clear();
   m_inPlace = false;
+  m_home = homeCells;
   const std::size_t n = binned.size();
   m_axis = 0;
   for (int a = 1; a < 3; ++a)
@@ -236,9 +221,9 @@ bool SlabSearch::plan(const ProxyArrays& p, const std::vector<std::uint32_t>& bi
                     std::greater<>());
   std::size_t copied = 0;
   for (std::size_t k = 0; k < threads; ++k) copied += slabSizes[k];
-  m_inPlace =
-      reading == SlabBoxReading::InPlace || (reading == SlabBoxReading::Auto && n <= kInPlaceMaxBoxes &&
-                                             copied * sizeof(LocalBox) > kCopyBytesPerBox * n);
+  m_inPlace = !m_home && (reading == SlabBoxReading::InPlace ||
+                          (reading == SlabBoxReading::Auto && n <= kInPlaceMaxBoxes &&
+                           copied * sizeof(LocalBox) > kCopyBytesPerBox * n));
   return true;
 }
 
@@ -257,7 +242,8 @@ SlabSearchCounts SlabSearch::search(const ProxyArrays& p, const std::vector<std:
           // up to twice their pairs, and all of them are held until the gather), or into buckets the rest
           // of what searchSlab has not handed over.
           Scratch& t = m_scratch.local();
-          counts[k] = searchSlab(k, p, huge, g, t, buckets);
+          counts[k] = m_home ? searchSlabByHomeCell(k, p, huge, g, t, buckets)
+                             : searchSlab(k, p, huge, g, t, buckets);
           if (buckets)
             buckets->addToPiece(k, t.pairs);
           else
@@ -273,7 +259,8 @@ SlabSearchCounts SlabSearch::search(const ProxyArrays& p, const std::vector<std:
     if (buckets) buckets->addToPiece(slabCount + i, list);
   });
   SlabSearchCounts total;
-  for (const SlabSearchCounts& c : counts) total.keys += c.keys, total.candidates += c.candidates;
+  for (const SlabSearchCounts& c : counts)
+    total.keys += c.keys, total.candidates += c.candidates, total.wide += c.wide;
   return total;
 }
 
@@ -283,17 +270,7 @@ SlabSearchCounts SlabSearch::searchSlab(std::size_t slab, const ProxyArrays& p,
   t.pairs.clear();
   // Into buckets, a full list that holds a part's worth is handed over rather than grown: a slab of a pile
   // has several pairs per box, and a doubling list held up to twice its keys, three times while it grew.
-  auto add = [&](std::uint64_t key) {
-    if (t.pairs.size() == t.pairs.capacity()) {
-      if (buckets && t.pairs.size() >= buckets->partKeys()) {
-        buckets->addToPiece(slab, t.pairs);
-        t.pairs.clear();
-      } else {
-        growPairs(t);
-      }
-    }
-    t.pairs.push_back(key);
-  };
+  auto add = [&](std::uint64_t key) { addPair(slab, t, buckets, key); };
   SlabSearchCounts counts;
   const std::size_t begin = m_memberStart[slab], m = m_memberStart[slab + 1] - begin;
   if (m == 0) return counts;
@@ -443,8 +420,9 @@ SlabSearchCounts SlabSearch::searchSlab(std::size_t slab, const ProxyArrays& p,
 }
 
 std::size_t SlabSearch::bytesOf(const Scratch& t) {
-  return t.box.capacity() * sizeof(LocalBox) + t.cells.capacity() * sizeof(PackedCells) +
-         (t.cellStart.capacity() + t.entries.capacity()) * 4 + t.pairs.capacity() * 8;
+  return (t.box.capacity() + t.sorted.capacity()) * sizeof(LocalBox) +
+         t.cells.capacity() * sizeof(PackedCells) +
+         (t.cellStart.capacity() + t.entries.capacity() + t.wide.capacity()) * 4 + t.pairs.capacity() * 8;
 }
 
 void SlabSearch::growPairs(Scratch& t) {

@@ -15,6 +15,18 @@
 // §3.2), which is what spreads cells over GPU threads. A slab's thread walks its cells' candidates in
 // order, so it needs no numbering. The bit-mask output (§3.4) is indexed by that numbering, so it always
 // uses the whole-grid search. A grid kept for stage 11 is binned whole by the finder after the slabs.
+//
+// By home cell (boxes of about one size, PairFinderOptions::homeCells): on a grid whose cells are as large as
+// the largest box, a box spans at most two cells per axis, so two boxes that overlap have home cells (the
+// cells of their min corners) at most one apart on every axis: cellOf is monotone, and a.lo <= b.hi gives
+// cellOf(a.lo) <= cellOf(b.hi) <= cellOf(b.lo) + 1. Each box then goes into its home cell alone, one entry
+// instead of up to eight, and each cell's boxes are tested against the later ones of the cell and those of
+// its 13 neighbours that come after it (a half shell), each pair of cells once, with no stage 9 rule. The
+// slabs cut the same way; a slab owns the pairs whose later home layer along its axis it holds (the layer of
+// the overlap's min corner, as in the other search), and so also holds, as a layer below its own, the boxes
+// that start one layer below it and reach into it. A box that still spans three cells on an axis (one of the
+// few larger boxes, or by rounding) is kept out of the cells and, as a huge box is, tested against the boxes
+// of the cells around its range, with that rule.
 #include <tbb/enumerable_thread_specific.h>
 
 #include <cstddef>
@@ -28,12 +40,31 @@
 
 namespace gpucol {
 
+/// Makes room for n elements in v, with a capacity of exactly n when it must grow (resize alone would double
+/// it, and each thread holds its scratch at the largest slab's size until the search ends). The old array is
+/// freed before the new one is allocated, so the two are never held at once.
+template <typename T>
+inline void reserveExact(std::vector<T>& v, std::size_t n) {
+  if (n > v.capacity()) {
+    std::vector<T>().swap(v);  // its own statement: the emptied temporary frees the array here
+    v.reserve(n);
+  }
+}
+/// reserveExact, then n elements.
+template <typename T>
+inline void resizeExact(std::vector<T>& v, std::size_t n) {
+  reserveExact(v, n);
+  v.resize(n);
+}
+
 /// Counts of one slab search (PairFinderStats).
 struct SlabSearchCounts {
   /// (cell, box) entries over all slabs: each is in one slab, so this is the whole grid's count.
   std::uint64_t keys = 0;
   /// Candidate pairs tested: pairs of boxes sharing a cell, and huge boxes against binned ones.
   std::uint64_t candidates = 0;
+  /// Search by home cell: boxes spanning three or more cells on an axis (once per slab that lists them).
+  std::uint64_t wide = 0;
 };
 
 /// Plans and runs slab searches; keeps its working memory between them until release().
@@ -52,15 +83,19 @@ class SlabSearch {
   /// is the one the slabs cut (axis()), gives the binned boxes' extents along it (by binned index, or by
   /// slot for all of `p`'s slots), which are then not read from `p`; they are freed (or taken over) as soon
   /// as the plan no longer needs them.
+  /// `homeCells`: search() pairs the boxes by home cell (the grid is then the home grid of chooseGrid, and the
+  /// boxes are always copied).
   bool plan(const ProxyArrays& p, const std::vector<std::uint32_t>& binned, const Grid& g,
             std::uint32_t slabBoxes, std::uint32_t minSlabs, SlabBoxReading reading,
-            AxisExtents* kept = nullptr);
+            AxisExtents* kept = nullptr, bool homeCells = false);
   /// The axis the last plan cut (the one with most cells), also after release(): a guess for the next.
   int axis() const { return m_axis; }
   /// Whether the last plan took its extents from `kept`.
   bool tookKeptExtents() const { return m_tookKept; }
   /// Whether search() reads the planned boxes in place instead of copying each slab's.
   bool readsInPlace() const { return m_inPlace; }
+  /// Whether search() pairs the planned boxes by home cell.
+  bool byHomeCell() const { return m_home; }
   /// Slabs of the last plan.
   std::size_t slabs() const { return m_firstLayer.empty() ? 0 : m_firstLayer.size() - 1; }
   /// Output lists search() fills: one per slab, one per huge box.
@@ -82,7 +117,9 @@ class SlabSearch {
     std::vector<LocalBox> box;             // the slab's boxes, in slab-list order (unless read in place)
     std::vector<PackedCells> cells;        // their cells in slab coordinates
     std::vector<std::uint32_t> cellStart;  // first entry per slab cell (+1 sentinel)
-    std::vector<std::uint32_t> entries;    // box indices by cell, kSlabHome on a box's home cell
+    std::vector<std::uint32_t> entries;    // box indices by cell, with start bits (by home cell: each box's cell)
+    std::vector<LocalBox> sorted;          // by home cell: the boxes in cell order
+    std::vector<std::uint32_t> wide;       // by home cell: the boxes that span three or more cells on an axis
     std::vector<std::uint64_t> pairs;      // the pairs of the slab being searched
     std::size_t growthBytes = 0;           // the most it held while its pair list grew (old and new arrays)
   };
@@ -91,6 +128,27 @@ class SlabSearch {
   /// those not yet added to the buckets' piece `slab`.
   SlabSearchCounts searchSlab(std::size_t slab, const ProxyArrays& p, const std::vector<std::uint32_t>& huge,
                               const Grid& g, Scratch& t, PairBuckets* buckets);
+  /// searchSlab by home cell (slab_home_cells.cpp), for slabs cut across axis A.
+  SlabSearchCounts searchSlabByHomeCell(std::size_t slab, const ProxyArrays& p,
+                                        const std::vector<std::uint32_t>& huge, const Grid& g, Scratch& t,
+                                        PairBuckets* buckets);
+  template <int A>
+  SlabSearchCounts searchSlabByHomeCellOn(std::size_t slab, const ProxyArrays& p,
+                                          const std::vector<std::uint32_t>& huge, const Grid& g, Scratch& t,
+                                          PairBuckets* buckets);
+  /// Appends a pair key to t's list of slab `slab`; into `buckets`, a full list that holds a part's worth is
+  /// handed over to them rather than grown.
+  static void addPair(std::size_t slab, Scratch& t, PairBuckets* buckets, std::uint64_t key) {
+    if (t.pairs.size() == t.pairs.capacity()) {
+      if (buckets && t.pairs.size() >= buckets->partKeys()) {
+        buckets->addToPiece(slab, t.pairs);
+        t.pairs.clear();
+      } else {
+        growPairs(t);
+      }
+    }
+    t.pairs.push_back(key);
+  }
   /// Bytes of one thread's working memory (capacities).
   static std::size_t bytesOf(const Scratch& t);
   /// Doubles t's pair list by hand, so the moment it holds the old array and the new one is counted.
@@ -99,6 +157,7 @@ class SlabSearch {
   int m_axis = 0;                           // the axis the slabs cut (the one with most cells)
   bool m_tookKept = false;                  // the last plan read the grid choice's kept extents
   bool m_inPlace = false;                   // search() reads boxes by slot, with no copy per slab
+  bool m_home = false;                      // search() pairs boxes by home cell
   std::vector<std::uint32_t> m_firstLayer;  // per slab: its first layer along m_axis (+ the end)
   std::vector<std::uint32_t> m_layerSlab;   // per layer: its slab
   std::vector<std::size_t> m_memberStart;   // per slab: first index in m_members (+ the end)
