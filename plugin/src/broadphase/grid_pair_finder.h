@@ -235,8 +235,8 @@ struct PairFinderStats {
   /// True when the slab search paired boxes by home cell (PairFinderOptions::homeCells) on a grid of its own
   /// (cellSize and dims give that grid's).
   bool homeCells = false;
-  /// Boxes of a search by home cell that spanned three or more of its cells on an axis and were tested
-  /// against every box of their slabs (counted once per slab).
+  /// Boxes of a search by home cell that spanned three or more of its cells on an axis and were tested, as
+  /// huge boxes are, through the cells around them (counted once per slab that lists them).
   std::uint32_t wideBoxes = 0;
   /// True when the grid choice took ProxyArrays::survey (no box was read for stage 3 and the bounds).
   bool surveyTaken = false;

@@ -10,7 +10,7 @@
 namespace gpucol {
 namespace {
 
-/// The cell entry of a box that spans three or more cells on an axis (searched one by one).
+/// The cell entry of a box that spans three or more cells on an axis (searched through the cells around it).
 constexpr std::uint32_t kWideBox = std::numeric_limits<std::uint32_t>::max();
 
 }  // namespace
@@ -54,7 +54,7 @@ SlabSearchCounts SlabSearch::searchSlabByHomeCellOn(std::size_t slab, const Prox
   const std::uint32_t* member = m_members.data() + begin;
   for (std::size_t j = 0; j < m; ++j) {
     if (j + kBoxPrefetchAhead < m) p.prefetchBox(member[j + kBoxPrefetchAhead]);
-    const LocalBox b = boxOf(p, member[j]);
+    const BoxCorners b = p.box(member[j]);  // the corners alone: the filters are read when placing
     const std::uint32_t u = cellU(b.lo[U]), v = cellV(b.lo[V]), layer = cellA(b.lo[A]);
     // A member reaches the slab, so a box of at most two cells per axis starts in layer a0 - 1 or above.
     if (cellU(b.hi[U]) - u > 1 || cellV(b.hi[V]) - v > 1 || cellA(b.hi[A]) - layer > 1 || layer + 1 < a0) {
