@@ -59,7 +59,8 @@ inline void resizeExact(std::vector<T>& v, std::size_t n) {
 
 /// Counts of one slab search (PairFinderStats).
 struct SlabSearchCounts {
-  /// (cell, box) entries over all slabs: each is in one slab, so this is the whole grid's count.
+  /// (cell, box) entries over all slabs: each is in one slab, so this is the whole grid's count (by home
+  /// cell: one per box in each slab that lists it).
   std::uint64_t keys = 0;
   /// Candidate pairs tested: pairs of boxes sharing a cell, and huge boxes against binned ones.
   std::uint64_t candidates = 0;
