@@ -1097,26 +1097,28 @@ void CpuPairFinder::binKeptGrid(const ProxyArrays& p, const Grid& g, std::size_t
   if (binnedCount > kEntryBox || g.cells() > denseCellLimit(binnedCount)) return;
   std::vector<std::uint32_t> huge = m_huge;
   std::sort(huge.begin(), huge.end());
-  if (m_stats.homeCells) {
-    // The slabs counted one entry per box on their own grid: the kept grid's entries are counted here.
-    m_stats.keys = tbb::parallel_reduce(
-        tbb::blocked_range<std::size_t>(0, p.count, kGrain), std::uint64_t(0),
-        [&](const tbb::blocked_range<std::size_t>& r, std::uint64_t sum) {
-          for (std::size_t s = r.begin(); s != r.end(); ++s)
-            if ((p.flags[s] & kProxyActive) && !std::binary_search(huge.begin(), huge.end(), s))
-              sum += cellRange(boxOf(p, std::uint32_t(s)), g).count();
-          return sum;
-        },
-        std::plus<std::uint64_t>());
-  }
-  if (m_stats.keys > std::numeric_limits<std::uint32_t>::max()) return;
   m_homeOrder.clear();
   m_homeOrder.reserve(binnedCount);
   for (std::uint32_t s = 0; s < p.count; ++s)
     if ((p.flags[s] & kProxyActive) && !std::binary_search(huge.begin(), huge.end(), s))
       m_homeOrder.push_back(s);
+  if (m_stats.homeCells) {
+    // The slabs counted one entry per box on their own grid: the kept grid's entries are counted here.
+    m_stats.keys = tbb::parallel_reduce(
+        tbb::blocked_range<std::size_t>(0, m_homeOrder.size(), kGrain), std::uint64_t(0),
+        [&](const tbb::blocked_range<std::size_t>& r, std::uint64_t sum) {
+          for (std::size_t i = r.begin(); i != r.end(); ++i)
+            sum += cellRange(boxOf(p, m_homeOrder[i]), g).count();
+          return sum;
+        },
+        std::plus<std::uint64_t>());
+  }
+  if (m_stats.keys > std::numeric_limits<std::uint32_t>::max()) {
+    std::vector<std::uint32_t>().swap(m_homeOrder);
+    return;
+  }
   m_homeOrderAge = kHomeOrderSteps;
-  m_sorted.resize(m_stats.keys);  // each (cell, box) entry was counted by the one slab holding its cell
+  m_sorted.resize(m_stats.keys);  // counted by the slab holding each entry's cell, or above
   countingSort(
       m_homeOrder.size(), g.cells(), m_cellStart,
       [&](std::size_t i, auto&& f) { forEachCell(cellRange(boxOf(p, m_homeOrder[i]), g), g, f); },
