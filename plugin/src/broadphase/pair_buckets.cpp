@@ -5,6 +5,8 @@
 #include <algorithm>
 #include <array>
 
+#include "memory/exact_vector.h"
+
 namespace gpucol {
 namespace {
 
@@ -18,12 +20,6 @@ std::uint32_t shiftFor(std::uint32_t slotBits) {
   const std::uint32_t bucketBits =
       std::min({kMaxBucketBits, slotBits, std::max(kMinBucketBits, slotBits > 10 ? slotBits - 10 : 0)});
   return slotBits - bucketBits;
-}
-
-/// Frees `v` when it cannot hold `n`, then sizes it to `n` (a grown vector could hold twice what it needs).
-void sizeExactly(std::vector<std::uint32_t>& v, std::size_t n) {
-  if (v.capacity() < n) std::vector<std::uint32_t>().swap(v), v.reserve(n);
-  v.resize(n);
 }
 
 /// Sorts e[0, n) of `bits` significant bits: an LSD radix sort in passes of at most 11 bits through `s`
@@ -110,8 +106,8 @@ void PairBuckets::packInto(PackedPairs& out, bool plain) {
     forEachPart([&](const Part& part) { n += part.bucketStart[bucket + 1] - part.bucketStart[bucket]; });
     if (n == 0) return;
     Buffers& buffers = m_buffers.local();
-    sizeExactly(buffers.entries, n);
-    sizeExactly(buffers.scratch, n);
+    resizeExact(buffers.entries, n);
+    resizeExact(buffers.scratch, n);
     std::uint32_t* e = buffers.entries.data();
     forEachPart([&](const Part& part) {
       const std::uint32_t* from = part.entries.data();

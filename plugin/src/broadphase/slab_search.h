@@ -37,25 +37,9 @@
 #include "broadphase/grid_pair_finder.h"
 #include "broadphase/local_box.h"
 #include "broadphase/pair_buckets.h"
+#include "memory/exact_vector.h"
 
 namespace gpucol {
-
-/// Makes room for n elements in v, with a capacity of exactly n when it must grow (resize alone would double
-/// it, and each thread holds its scratch at the largest slab's size until the search ends). The old array is
-/// freed before the new one is allocated, so the two are never held at once.
-template <typename T>
-inline void reserveExact(std::vector<T>& v, std::size_t n) {
-  if (n > v.capacity()) {
-    std::vector<T>().swap(v);  // its own statement: the emptied temporary frees the array here
-    v.reserve(n);
-  }
-}
-/// reserveExact, then n elements.
-template <typename T>
-inline void resizeExact(std::vector<T>& v, std::size_t n) {
-  reserveExact(v, n);
-  v.resize(n);
-}
 
 /// Counts of one slab search (PairFinderStats).
 struct SlabSearchCounts {
