@@ -346,10 +346,10 @@ void runAll(const Options& o) {
   const std::vector<std::string> runs = parseNames(o.runs);
   auto wanted = [&](const char* name) { return std::find(runs.begin(), runs.end(), name) != runs.end(); };
   for (const std::string& name : runs)
-    if (name != "cpu" && name != "cpu-whole" && name != "cpu-copy" && name != "cpu-homecells" &&
+    if (name != "cpu" && name != "cpu-whole" && name != "cpu-copy" && name != "cpu-allcells" &&
         name != "opencl" && name != "dbvt" && name != "sap" && name != "b3")
       throw std::runtime_error("unknown broad phase " + name +
-                               " (cpu, cpu-whole, cpu-copy, cpu-homecells, opencl, dbvt, sap, b3)");
+                               " (cpu, cpu-whole, cpu-copy, cpu-allcells, opencl, dbvt, sap, b3)");
 
   // Ours on OpenCL and Bullet3's peer run on the same device: the one gpucol's OpenCL layer chooses.
   Config base;
@@ -404,7 +404,7 @@ void runAll(const Options& o) {
       tuning.bitMaskOutput = o.output == "bitmask";
       tuning.newtonSqrt = o.sqrtMode == "newton";
       tuning.hugeCellLimit = o.hugeCellLimit;
-      for (const char* variant : {"cpu", "cpu-whole", "cpu-copy", "cpu-homecells", "opencl"}) {
+      for (const char* variant : {"cpu", "cpu-whole", "cpu-copy", "cpu-allcells", "opencl"}) {
         const bool cpu = std::string(variant) != "opencl";
         const std::string label = std::string("gpucol-") + variant;
         if (!wanted(variant)) continue;
@@ -419,7 +419,7 @@ void runAll(const Options& o) {
         GridBroadphaseTuning variantTuning = tuning;
         variantTuning.slabSearch = std::string(variant) != "cpu-whole";
         if (std::string(variant) == "cpu-copy") variantTuning.boxesInPlace = false;
-        if (std::string(variant) == "cpu-homecells") variantTuning.homeCells = true;
+        if (std::string(variant) == "cpu-allcells") variantTuning.homeCells = false;
         grid->setTuning(variantTuning);
         stepStats.emplace_back();
         std::vector<GridBroadphaseStats>* stats = &stepStats.back();
@@ -527,8 +527,8 @@ const CommandRegistration kRegistration([](CLI::App& app) {
   cmd->add_option(
          "--run", options->runs,
          "comma-separated broad phases: cpu, opencl (gpucol), cpu-whole (gpucol CPU, grid never cut in "
-         "slabs), cpu-copy (gpucol CPU, boxes copied for the search, not read in the proxies), cpu-homecells "
-         "(gpucol CPU, by home cell where the boxes are of about one size), dbvt (btDbvtBroadphase), sap "
+         "slabs), cpu-copy (gpucol CPU, boxes copied for the search, not read in the proxies), cpu-allcells "
+         "(gpucol CPU, each box in every cell it overlaps, never by home cell), dbvt (btDbvtBroadphase), sap "
          "(bt32BitAxisSweep3), b3 (b3GpuGridBroadphase)")
       ->capture_default_str();
   cmd->add_option("--steps", options->steps, "timed steps per case (median reported)")
