@@ -1,137 +1,23 @@
-// GridBroadphaseStats::memoryBytes and peakBytes against the heap itself: this executable replaces the
-// global operator new and delete with ones that count the bytes live and their high-water mark, so the
-// figures the README's memory targets rest on are checked against what was really allocated (through
-// operator new: the broad phase's vectors; Bullet's own arrays use malloc and are not counted, as the stats
-// leave Bullet's pair cache out).
+// GridBroadphaseStats::memoryBytes and peakBytes against the heap itself (counting_heap.h), so the figures
+// the README's memory targets rest on are checked against what was really allocated (through operator new:
+// the broad phase's vectors; Bullet's own arrays use malloc and are not counted, as the stats leave Bullet's
+// pair cache out).
 #include <btBulletCollisionCommon.h>
 #include <gtest/gtest.h>
 #include <tbb/global_control.h>
 
-#include <algorithm>
-#include <atomic>
 #include <cstddef>
 #include <cstdint>
-#include <cstdlib>
-#include <new>
 #include <random>
 #include <vector>
 
+#include "counting_heap.h"
 #include "gpucol/grid_broadphase.h"
 
 namespace {
 
-std::atomic<std::size_t> g_live{0};
-std::atomic<std::size_t> g_mark{0};
-
-/// Each block carries its size in a header of kHeader bytes (a multiple of every fundamental alignment).
-constexpr std::size_t kHeader = alignof(std::max_align_t);
-
-void* countedAlloc(std::size_t bytes, std::size_t align) {
-  const std::size_t header = std::max(kHeader, align);
-  void* base = align > kHeader ? std::aligned_alloc(align, (header + bytes + align - 1) / align * align)
-                               : std::malloc(header + bytes);
-  if (!base) return nullptr;
-  unsigned char* user = static_cast<unsigned char*>(base) + header;
-  reinterpret_cast<std::size_t*>(user)[-1] = bytes;
-  reinterpret_cast<std::size_t*>(user)[-2] = header;
-  const std::size_t live = g_live.fetch_add(bytes) + bytes;
-  std::size_t mark = g_mark.load();
-  while (live > mark && !g_mark.compare_exchange_weak(mark, live)) {
-  }
-  return user;
-}
-
-void countedFree(void* p) noexcept {
-  if (!p) return;
-  unsigned char* user = static_cast<unsigned char*>(p);
-  g_live.fetch_sub(reinterpret_cast<std::size_t*>(user)[-1]);
-  std::free(user - reinterpret_cast<std::size_t*>(user)[-2]);
-}
-
-void* countedNew(std::size_t bytes, std::size_t align) {
-  void* p = countedAlloc(bytes, align);
-  if (!p) throw std::bad_alloc();
-  return p;
-}
-
-}  // namespace
-
-void* operator new(std::size_t n) {
-  return countedNew(n, kHeader);
-}
-void* operator new[](std::size_t n) {
-  return countedNew(n, kHeader);
-}
-void* operator new(std::size_t n, const std::nothrow_t&) noexcept {
-  return countedAlloc(n, kHeader);
-}
-void* operator new[](std::size_t n, const std::nothrow_t&) noexcept {
-  return countedAlloc(n, kHeader);
-}
-void* operator new(std::size_t n, std::align_val_t a) {
-  return countedNew(n, std::size_t(a));
-}
-void* operator new[](std::size_t n, std::align_val_t a) {
-  return countedNew(n, std::size_t(a));
-}
-void* operator new(std::size_t n, std::align_val_t a, const std::nothrow_t&) noexcept {
-  return countedAlloc(n, std::size_t(a));
-}
-void* operator new[](std::size_t n, std::align_val_t a, const std::nothrow_t&) noexcept {
-  return countedAlloc(n, std::size_t(a));
-}
-void operator delete(void* p) noexcept {
-  countedFree(p);
-}
-void operator delete[](void* p) noexcept {
-  countedFree(p);
-}
-void operator delete(void* p, std::size_t) noexcept {
-  countedFree(p);
-}
-void operator delete[](void* p, std::size_t) noexcept {
-  countedFree(p);
-}
-void operator delete(void* p, std::align_val_t) noexcept {
-  countedFree(p);
-}
-void operator delete[](void* p, std::align_val_t) noexcept {
-  countedFree(p);
-}
-void operator delete(void* p, std::size_t, std::align_val_t) noexcept {
-  countedFree(p);
-}
-void operator delete[](void* p, std::size_t, std::align_val_t) noexcept {
-  countedFree(p);
-}
-void operator delete(void* p, const std::nothrow_t&) noexcept {
-  countedFree(p);
-}
-void operator delete[](void* p, const std::nothrow_t&) noexcept {
-  countedFree(p);
-}
-void operator delete(void* p, std::align_val_t, const std::nothrow_t&) noexcept {
-  countedFree(p);
-}
-void operator delete[](void* p, std::align_val_t, const std::nothrow_t&) noexcept {
-  countedFree(p);
-}
-
-namespace {
-
-/// What one step allocated: the change in live bytes, and the high-water mark above the start.
-struct HeapOfStep {
-  std::ptrdiff_t kept = 0;
-  std::ptrdiff_t mark = 0;
-};
-
-template <typename Step>
-HeapOfStep measure(Step&& step) {
-  const std::size_t before = g_live.load();
-  g_mark.store(before);
-  step();
-  return {std::ptrdiff_t(g_live.load()) - std::ptrdiff_t(before), std::ptrdiff_t(g_mark.load() - before)};
-}
+using gpucol::test::HeapOfStep;
+using gpucol::test::measureHeap;
 
 /// `count` random boxes of half sizes 0.2-1.2 in a cube of half side `side` (denser when smaller): a first
 /// step, two where every box moves a little (full searches; the pairs barely change, so Bullet's pair
@@ -142,13 +28,17 @@ HeapOfStep measure(Step&& step) {
 /// - the stats' peak above what they hold after the step is the heap's high-water mark above what it kept,
 ///   within `kSlack` bytes either way (allocations the stats do not count: small lists of a few entries,
 ///   TBB's and the test's own), so it neither misses memory nor counts memory that never was there.
-void expectStatsMatchTheHeap(int count, float side, std::uint64_t minPairs) {
+/// `homeCells`: GridBroadphaseTuning::homeCells (the rest default).
+void expectStatsMatchTheHeap(int count, float side, std::uint64_t minPairs, bool homeCells = true) {
   constexpr std::ptrdiff_t kSlack = 16 * 1024;
   btDefaultCollisionConfiguration configuration;
   btCollisionDispatcher dispatcher(&configuration);
   gpucol::Config config;
   config.broadphaseBackend = gpucol::Backend::Cpu;  // no OpenCL set-up in the heap's figures
   gpucol::GridBroadphase bp(config);                // default tuning: boxes read in place, slab search
+  gpucol::GridBroadphaseTuning tuning;
+  tuning.homeCells = homeCells;
+  bp.setTuning(tuning);
   std::mt19937 rng(23);
   std::uniform_real_distribution<float> pos(-side, side), size(0.2f, 1.2f);
   const std::size_t n = std::size_t(count);
@@ -158,13 +48,13 @@ void expectStatsMatchTheHeap(int count, float side, std::uint64_t minPairs) {
     const btVector3 c(pos(rng), pos(rng), pos(rng)), h(size(rng), size(rng), size(rng));
     lo[i] = c - h, hi[i] = c + h;
   }
-  const HeapOfStep created = measure([&] {
+  const HeapOfStep created = measureHeap([&] {
     for (std::size_t i = 0; i < n; ++i)
       proxies[i] = bp.createProxy(lo[i], hi[i], BOX_SHAPE_PROXYTYPE, nullptr, 1, -1, &dispatcher);
   });
   std::ptrdiff_t heldBefore = 0;
   for (int step = 0; step < 5; ++step) {
-    const HeapOfStep heap = measure([&] {
+    const HeapOfStep heap = measureHeap([&] {
       const btVector3 d(0.001f * float(step), 0.0f, 0.0f);
       for (std::size_t i = 0; step > 0 && i < n; i += step < 3 ? 1 : 100)
         bp.setAabb(proxies[i], lo[i] + d, hi[i] + d, &dispatcher);
@@ -206,6 +96,12 @@ TEST(StepMemory, SparseCloudOnOneThreadAsTheHeapSeesIt) {
 TEST(StepMemory, DensePileAsTheHeapSeesIt) {
   // About 15 pairs per proxy: the step's pair lists make the peak.
   expectStatsMatchTheHeap(20000, 12.0f, 200000);
+}
+
+TEST(StepMemory, DensePileWithoutHomeCellsAsTheHeapSeesIt) {
+  // Each box in every cell it overlaps: this pile then has too few cell layers for slabs and is searched
+  // as a whole grid.
+  expectStatsMatchTheHeap(20000, 12.0f, 200000, false);
 }
 
 }  // namespace
