@@ -7,6 +7,7 @@
 #include <tbb/global_control.h>
 
 #include <algorithm>
+#include <cmath>
 #include <cstdint>
 #include <cstring>
 #include <functional>
@@ -777,6 +778,53 @@ TEST(GridPairFinder, SearchByHomeCellFarAwayAndFlat) {
     EXPECT_EQ(pairs, gpucol::findPairsBruteForce(scene->view()));
     EXPECT_TRUE(finder->stats().homeCells);
   }
+}
+
+/// Random scenes of boxes of about one size, where the search by home cell serves (from 4,096 binned boxes):
+/// dense and sparse, on a lattice of touching boxes, flat, far from the origin, with a few wider boxes,
+/// points, holes, static boxes, filters and sometimes a ground; the same pairs as brute force under the
+/// automatic tiling and with slabs always, at the default slab size and at a random one.
+TEST(GridPairFinder, SearchByHomeCellOnRandomScenes) {
+  int byHomeCell = 0;
+  for (std::uint32_t seed = 0; seed < 16; ++seed) {
+    std::mt19937 rng(seed);
+    auto uniform = [&](float lo, float hi) { return std::uniform_real_distribution<float>(lo, hi)(rng); };
+    const int n = 4200 + int(rng() % 3000);
+    const float half = uniform(0.05f, 2.0f);
+    const float side = half * std::cbrt(float(n)) * uniform(0.6f, 4.0f);  // about 60 to 0.2 pairs per box
+    const float origin = rng() % 4 == 0 ? uniform(-1e6f, 1e6f) : 0.0f;
+    const bool lattice = rng() % 3 == 0, flat = rng() % 5 == 0;
+    Scene s;
+    for (int i = 0; i < n; ++i) {
+      float c[3], h[3];
+      for (int a = 0; a < 3; ++a) {
+        c[a] = origin + uniform(-side, side);
+        h[a] = half * uniform(0.6f, 1.0f);
+        if (lattice) c[a] = origin + std::round((c[a] - origin) / (2 * half)) * 2 * half, h[a] = half;
+      }
+      if (flat) c[1] = origin;
+      if (rng() % 200 == 0) h[rng() % 3] *= uniform(1.0f, 6.0f);  // wider than the cells
+      if (rng() % 300 == 0) h[0] = h[1] = h[2] = 0.0f;             // a point
+      const std::uint8_t flag = rng() % 50 == 0   ? 0                 // a hole
+                                : rng() % 20 == 0 ? gpucol::kProxyActive | gpucol::kProxyStatic
+                                                  : gpucol::kProxyActive;
+      s.add(c[0], c[1], c[2], h[0], h[1], h[2], flag, rng() % 10 == 0 ? 2 : 1, rng() % 10 == 0 ? ~2 : -1);
+    }
+    if (rng() % 4 == 0) s.add(origin, origin, origin, side, 0.5f, side);  // a ground through the middle
+    const std::vector<std::uint64_t> reference = gpucol::findPairsBruteForce(s.view());
+    auto finder = gpucol::makeCpuPairFinder();
+    for (auto tiling : {gpucol::SlabTiling::Auto, gpucol::SlabTiling::Always}) {
+      gpucol::PairFinderOptions o;
+      o.slabTiling = tiling;
+      if (rng() % 2) o.slabBoxes = 64 + rng() % 2000;
+      std::vector<std::uint64_t> pairs;
+      finder->findPairs(s.view(), o, pairs);
+      ASSERT_EQ(pairs, reference) << "seed " << seed << " tiling " << int(tiling) << " byHomeCell "
+                                  << finder->stats().homeCells << " wide " << finder->stats().wideBoxes;
+      byHomeCell += finder->stats().homeCells;
+    }
+  }
+  EXPECT_GE(byHomeCell, 16) << "most of these scenes are searched by home cell";
 }
 
 /// SlabTiling::Auto and AnySize search a scene of fewer than 2,048 binned boxes in whatever slabs its grid
