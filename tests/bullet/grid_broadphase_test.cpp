@@ -119,13 +119,16 @@ std::vector<Box> createAndStep(gpucol::GridBroadphase& bp, int count, float side
   return boxes;
 }
 
-void runSteps(gpucol::GridBroadphase& bp, btOverlappingPairCache* cache, int count, std::uint32_t seed) {
+/// `count` random boxes in a cube of half side `side` through 8 rounds of a step, moves, adds and removes, and
+/// a second step: after each, the cache holds the brute-force pairs and the surviving pairs keep their entries.
+void runSteps(gpucol::GridBroadphase& bp, btOverlappingPairCache* cache, int count, std::uint32_t seed,
+              float side = 12.0f) {
   std::mt19937 rng(seed);
   std::vector<Box> boxes(count);
   btDefaultCollisionConfiguration configuration;
   btCollisionDispatcher dispatcher(&configuration);
   for (int i = 0; i < count; ++i) {
-    randomBox(rng, boxes[i], 12.0f);
+    randomBox(rng, boxes[i], side);
     if (i % 7 == 0)
       boxes[i].group = btBroadphaseProxy::StaticFilter, boxes[i].mask = btBroadphaseProxy::AllFilter;
     if (i % 11 == 0) boxes[i].group = 64, boxes[i].mask = 64;
@@ -147,7 +150,7 @@ void runSteps(gpucol::GridBroadphase& bp, btOverlappingPairCache* cache, int cou
           bp.destroyProxy(b.proxy, &dispatcher);
           b.proxy = nullptr;
         } else {
-          randomBox(rng, b, 12.0f);
+          randomBox(rng, b, side);
           addProxy(bp, boxes, i, &dispatcher);
         }
       } else if (b.proxy && !(b.group & btBroadphaseProxy::StaticFilter)) {
@@ -180,6 +183,18 @@ TEST(GridBroadphase, PairCacheMatchesBruteForceOverStepsGrid) {
   gpucol::GridBroadphase bp(config);
   runSteps(bp, bp.getOverlappingPairCache(), 1500, 1);
   EXPECT_TRUE(bp.stats().usedGrid);
+}
+
+TEST(GridBroadphase, PairCacheMatchesBruteForceOverStepsByHomeCell) {
+  // Enough boxes of about one size (half sides 0.2-1.2) for the search by home cell (the default, from 4,096
+  // binned boxes), whose cell is as large as the largest box (2.4) where the size rule's is twice the median
+  // (about 4).
+  gpucol::Config config;
+  config.broadphaseBackend = gpucol::Backend::Cpu;
+  gpucol::GridBroadphase bp(config);
+  runSteps(bp, bp.getOverlappingPairCache(), 6000, 3, 19.0f);  // 4,500 proxies left after the removals
+  EXPECT_TRUE(bp.stats().usedGrid);
+  EXPECT_LT(bp.stats().cellSize, 2.5f) << "searched by home cell";
 }
 
 TEST(GridBroadphase, PairCacheMatchesBruteForceOverStepsNoGrid) {
