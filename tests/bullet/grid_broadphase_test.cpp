@@ -192,7 +192,7 @@ TEST(GridBroadphase, PairCacheMatchesBruteForceOverStepsByHomeCell) {
   gpucol::Config config;
   config.broadphaseBackend = gpucol::Backend::Cpu;
   gpucol::GridBroadphase bp(config);
-  runSteps(bp, bp.getOverlappingPairCache(), 6000, 3, 19.0f);  // 4,500 proxies left after the removals
+  runSteps(bp, bp.getOverlappingPairCache(), 6000, 3, 19.0f);  // about 4,500 left after the removals
   EXPECT_TRUE(bp.stats().usedGrid);
   EXPECT_LT(bp.stats().cellSize, 2.5f) << "searched by home cell";
 }
