@@ -113,9 +113,10 @@ Grid chooseGrid(const ProxyArrays& p, const std::vector<std::uint32_t>& active,
   const float median = extentScratch[samples / 2];
   // The home grid's cell: the largest sampled extent up to kHomeExtentRatio times the median (after
   // nth_element those lie above it), and how many sampled boxes are larger.
+  const bool homeWanted = home && options.homeCells && options.cellSizeRule == CellSizeRule::Size;
   float homeExtent = median;
   std::size_t larger = 0;
-  for (std::size_t i = samples / 2; i < samples; ++i) {
+  for (std::size_t i = samples / 2; homeWanted && i < samples; ++i) {
     const float e = extentScratch[i];
     if (e <= kHomeExtentRatio * median)
       homeExtent = std::max(homeExtent, e);
@@ -217,8 +218,7 @@ Grid chooseGrid(const ProxyArrays& p, const std::vector<std::uint32_t>& active,
   if (binned.empty()) return g;
   // Coarsen until the cell index fits 32 bits: exactness never depends on the cell size.
   while (!fitDims(box.lo, box.hi, cell, g)) cell *= 2.0f;
-  if (home && options.homeCells && options.cellSizeRule == CellSizeRule::Size && homeExtent > 0.0f &&
-      float(larger) <= kHomeLargerShare * float(samples)) {
+  if (homeWanted && homeExtent > 0.0f && float(larger) <= kHomeLargerShare * float(samples)) {
     Grid h;
     h.sizedCell = sizedCell;
     if (fitDims(box.lo, box.hi, homeExtent * kHomeCellMargin, h) &&

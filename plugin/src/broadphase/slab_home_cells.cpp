@@ -47,11 +47,11 @@ SlabSearchCounts SlabSearch::searchSlabByHomeCellOn(std::size_t slab, const Prox
   // Stages 4-5: each box's home cell, counted; then the boxes copied in cell order (start[c]..start[c + 1]
   // is cell c's once placing has moved each cell's start up to its end).
   resizeExact(t.entries, m);
-  t.wide.clear();
   resizeExact(t.cellStart, std::size_t(cells) + 2);
   std::fill(t.cellStart.begin(), t.cellStart.end(), 0u);
   std::uint32_t* start = t.cellStart.data();
   const std::uint32_t* member = m_members.data() + begin;
+  std::size_t wideCount = 0;
   for (std::size_t j = 0; j < m; ++j) {
     if (j + kBoxPrefetchAhead < m) p.prefetchBox(member[j + kBoxPrefetchAhead]);
     const BoxCorners b = p.box(member[j]);  // the corners alone: the filters are read when placing
@@ -59,7 +59,7 @@ SlabSearchCounts SlabSearch::searchSlabByHomeCellOn(std::size_t slab, const Prox
     // A member reaches the slab, so a box of at most two cells per axis starts in layer a0 - 1 or above.
     if (cellU(b.hi[U]) - u > 1 || cellV(b.hi[V]) - v > 1 || cellA(b.hi[A]) - layer > 1 || layer + 1 < a0) {
       t.entries[j] = kWideBox;
-      t.wide.push_back(std::uint32_t(j));
+      ++wideCount;
       continue;
     }
     const std::uint32_t c = u + du * (v + dv * (layer + 1 - a0));
@@ -67,7 +67,12 @@ SlabSearchCounts SlabSearch::searchSlabByHomeCellOn(std::size_t slab, const Prox
     ++start[c + 2];
   }
   for (std::size_t c = 2; c < std::size_t(cells) + 2; ++c) start[c] += start[c - 1];
-  const std::uint32_t placed = std::uint32_t(m - t.wide.size());
+  // The wide boxes listed at their number (a list grown by push_back would hold its old and new arrays at
+  // once, which the thread's byte count does not see).
+  resizeExact(t.wide, wideCount);
+  for (std::size_t j = 0, w = 0; w < wideCount; ++j)
+    if (t.entries[j] == kWideBox) t.wide[w++] = std::uint32_t(j);
+  const std::uint32_t placed = std::uint32_t(m - wideCount);
   resizeExact(t.sorted, placed);
   // Read again rather than copied in member order first: that copy was most of a small scene's peak.
   for (std::size_t j = 0; j < m; ++j) {

@@ -113,10 +113,11 @@ class SlabSearch {
   /// those not yet added to the buckets' piece `slab`.
   SlabSearchCounts searchSlab(std::size_t slab, const ProxyArrays& p, const std::vector<std::uint32_t>& huge,
                               const Grid& g, Scratch& t, PairBuckets* buckets);
-  /// searchSlab by home cell (slab_home_cells.cpp), for slabs cut across axis A.
+  /// searchSlab by home cell (slab_home_cells.cpp): searchSlabByHomeCellOn for the slab axis m_axis.
   SlabSearchCounts searchSlabByHomeCell(std::size_t slab, const ProxyArrays& p,
                                         const std::vector<std::uint32_t>& huge, const Grid& g, Scratch& t,
                                         PairBuckets* buckets);
+  /// searchSlabByHomeCell for slabs cut across axis A.
   template <int A>
   SlabSearchCounts searchSlabByHomeCellOn(std::size_t slab, const ProxyArrays& p,
                                           const std::vector<std::uint32_t>& huge, const Grid& g, Scratch& t,

@@ -516,9 +516,9 @@ struct GridBroadphase::Impl {
     o.output = tuning.bitMaskOutput ? PairOutput::BitMask : PairOutput::Compacted;
     o.mappingSqrt = tuning.newtonSqrt ? MappingSqrt::Newton : MappingSqrt::Double;
     o.hugeCellLimit = tuning.hugeCellLimit;
+    o.homeCells = tuning.homeCells;
     // Boxes read in place ask for the least memory: slabs at every size (at 1M boxes the whole-grid search's
     // own working memory is larger than the copy of the boxes that reading in place saves).
-    o.homeCells = tuning.homeCells;
     o.slabTiling = !tuning.slabSearch                            ? SlabTiling::Off
                    : kProxyBoxesAreFloats && tuning.boxesInPlace ? SlabTiling::AnySize
                                                                  : SlabTiling::Auto;
