@@ -9,7 +9,7 @@
 namespace gpucol::opencl {
 
 /// A device buffer that grows on demand (by a quarter more than asked, so steady growth reallocates rarely)
-/// and is reused between calls; it never shrinks.
+/// and is reused between calls; it shrinks only when released.
 struct DeviceArray {
   cl::Buffer buffer;      ///< The buffer (empty until the first ensure).
   std::size_t bytes = 0;  ///< Its size.
@@ -36,6 +36,12 @@ struct DeviceArray {
     ensure(context, wanted);
     if (oldBytes > 0 && bytes != oldBytes) queue.enqueueCopyBuffer(old, buffer, 0, 0, oldBytes);
     return buffer;
+  }
+  /// Drops the buffer (the device frees it once the commands that use it are done); the next ensure
+  /// allocates afresh.
+  void release() {
+    buffer = cl::Buffer();
+    bytes = 0;
   }
 
  private:

@@ -64,8 +64,8 @@ std::vector<cl::Device> allDevices(std::vector<DeviceCandidate>& candidates) {
   return devices;
 }
 
-// The probe of opencl_started.h: the chosen device's type from the device lists, once per filter (the lists do
-// not change while the process runs).
+// The probe of opencl_started.h: the chosen device's type from the device lists, once per filter (the lists
+// do not change while the process runs).
 bool probeChosenDeviceIsGpu(const std::string& configured) {
   static std::mutex mutex;
   static std::map<std::string, bool> answers;
@@ -90,6 +90,16 @@ const bool kProbeInstalled = [] {
   chosenDeviceIsGpuProbe() = probeChosenDeviceIsGpu;
   return true;
 }();
+
+/// CL_DEVICE_HOST_UNIFIED_MEMORY, deprecated since OpenCL 2.0: a driver that no longer answers it is taken
+/// to share the host's memory unless its device is a GPU.
+bool hostUnifiedMemory(const cl::Device& device, bool isGpu) {
+  try {
+    return device.getInfo<CL_DEVICE_HOST_UNIFIED_MEMORY>() != CL_FALSE;
+  } catch (const cl::Error&) {
+    return !isGpu;
+  }
+}
 
 std::string hexHash(const char* source) {
   const std::size_t h = std::hash<std::string>{}(source);
@@ -122,6 +132,7 @@ OpenClContext::OpenClContext(const std::string& filter) {
     m_device = devices[*chosen];
     m_deviceName = candidates[*chosen].deviceName;
     m_isGpu = candidates[*chosen].isGpu;
+    m_sharesHostMemory = hostUnifiedMemory(m_device, m_isGpu);
     m_context = cl::Context(m_device);
     m_queue = cl::CommandQueue(m_context, m_device);
   });

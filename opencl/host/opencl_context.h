@@ -41,6 +41,9 @@ class OpenClContext {
   const std::string& deviceName() const { return m_deviceName; }
   /// True when the device is a GPU.
   bool isGpu() const { return m_isGpu; }
+  /// True when the device's memory is the host's (a CPU device, or a GPU that shares the host's memory):
+  /// its buffers then take the process's memory.
+  bool sharesHostMemory() const { return m_sharesHostMemory; }
 
   /// The program `name` built from `source` with `options`, built once per (name, options, source
   /// hash) and cached for the life of the process (Boost.Compute's rule). A failed build throws an
@@ -65,6 +68,7 @@ class OpenClContext {
   cl::CommandQueue m_queue;
   std::string m_deviceName;
   bool m_isGpu = false;
+  bool m_sharesHostMemory = true;
 
   mutable std::mutex m_programMutex;
   std::map<std::string, cl::Program> m_programs;

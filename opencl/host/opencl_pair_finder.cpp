@@ -7,6 +7,7 @@
 #include <algorithm>
 #include <cmath>
 #include <cstddef>
+#include <initializer_list>
 #include <limits>
 #include <stdexcept>
 #include <string>
@@ -63,7 +64,13 @@ struct Bins {
 class OpenClPairFinder final : public PairFinder {
  public:
   OpenClPairFinder(OpenClContext& context, const OpenClPairFinderTuning& tuning)
-      : m_context(context), m_tuning(tuning), m_scan(context), m_sort(context) {}
+      : m_context(context),
+        m_tuning(tuning),
+        m_releases(
+            tuning.release == OpenClPairFinderTuning::BufferRelease::Always ||
+            (tuning.release == OpenClPairFinderTuning::BufferRelease::Auto && context.sharesHostMemory())),
+        m_scan(context),
+        m_sort(context) {}
   /// Waits for the queue: a write not waited for reads the finder's host lists until the queue runs it (a
   /// step cut short by an OpenCL error may leave some queued). clFinish, which throws nothing; its error, on
   /// a queue that already failed, changes nothing here.
@@ -100,6 +107,10 @@ class OpenClPairFinder final : public PairFinder {
   void incremental(const ProxyArrays& p, const PairFinderOptions& options, Kernels& k,
                    std::vector<std::uint64_t>& pairs);
   bool pairsFit(std::uint32_t& capacity);
+  std::size_t heldBytes() const;
+  void notePeak();
+  void releaseEarly(std::initializer_list<DeviceArray*> arrays, bool sortScratch);
+  void releaseUnkept();
   void readPairs(cl_uint slotBits, std::vector<std::uint64_t>& pairs);
   void setProxyArgs(cl::Kernel& kernel);
   void launch(cl::Kernel& kernel, std::uint64_t items);
@@ -107,6 +118,7 @@ class OpenClPairFinder final : public PairFinder {
 
   OpenClContext& m_context;
   OpenClPairFinderTuning m_tuning;
+  bool m_releases;  // OpenClPairFinderTuning::release, resolved for the device
   OpenClScan m_scan;
   OpenClRadixSort m_sort;
   Kernels m_kernels[2];
@@ -249,14 +261,14 @@ void OpenClPairFinder::bin(Kernels& k, const std::vector<std::uint32_t>& slots, 
   }
   const cl_uint zero = 0;
   q.enqueueFillBuffer(m_overflow.ensure(c, 4), zero, 0, 4);
-  q.enqueueWriteBuffer(b.slots.ensure(c, b.count * 4), CL_FALSE, 0, b.count * 4, slots.data());
+  q.enqueueWriteBuffer(b.slots.ensureFitted(c, b.count * 4), CL_FALSE, 0, b.count * 4, slots.data());
   const std::uint64_t cells = std::uint64_t(grid.dimX) * grid.dimY * grid.dimZ;
   if (sortsByCounting(cells, b.count)) {
     // Stages 4-6 on a dense grid of at most 2^19 cells, as the CPU finder: a counting sort over the cells
     // (each cell's count, scanned into its first entry, then each entry placed), and the runs are the filled
     // cells. No (cell, slot) keys are written.
     const cl_uint cellCount = cl_uint(cells);
-    q.enqueueFillBuffer(b.counts.ensure(c, (cells + 1) * 4), zero, 0, (cells + 1) * 4);
+    q.enqueueFillBuffer(b.counts.ensureFitted(c, (cells + 1) * 4), zero, 0, (cells + 1) * 4);
     setProxyArgs(k.countOrPlaceEntries);
     // Counting writes no entry: any buffer stands for the entries' argument.
     setKernelArgs(k.countOrPlaceEntries, kProxyArgs, m_grid.buffer, b.slots.buffer, b.count, b.counts.buffer,
@@ -264,41 +276,46 @@ void OpenClPairFinder::bin(Kernels& k, const std::vector<std::uint32_t>& slots, 
     launch(k.countOrPlaceEntries, b.count);
     b.keys = m_scan.exclusiveScan(b.counts.buffer, cells + 1);
     setKernelArgs(k.countOrPlaceEntries, kProxyArgs + 4, cl_uint(1),
-                  b.keySlots.ensure(c, std::size_t(b.keys) * 4));
+                  b.keySlots.ensureFitted(c, std::size_t(b.keys) * 4));
     launch(k.countOrPlaceEntries, b.keys == 0 ? 0 : b.count);
-    setKernelArgs(k.markFilledCells, 0, b.counts.buffer, cellCount, b.runHeads.ensure(c, cells * 4));
+    setKernelArgs(k.markFilledCells, 0, b.counts.buffer, cellCount, b.runHeads.ensureFitted(c, cells * 4));
     launch(k.markFilledCells, cells);
     b.runs = m_scan.exclusiveScan(b.runHeads.buffer, cells);
     setKernelArgs(k.writeFilledCells, 0, b.counts.buffer, cellCount, b.runHeads.buffer, b.runs,
-                  b.runStart.ensure(c, (std::size_t(b.runs) + 1) * 4),
-                  b.runCell.ensure(c, std::size_t(b.runs) * 4));
+                  b.runStart.ensureFitted(c, (std::size_t(b.runs) + 1) * 4),
+                  b.runCell.ensureFitted(c, std::size_t(b.runs) * 4));
     launch(k.writeFilledCells, cells);
+    releaseEarly({&b.counts, &b.cellKeys, &b.runHeads}, false);  // what only led to the runs
   } else {
     // Stage 4: count cells per box, scan, fill (cell, slot) entries.
     setProxyArgs(k.countCells);
     setKernelArgs(k.countCells, kProxyArgs, m_grid.buffer, b.slots.buffer, b.count,
-                  b.counts.ensure(c, b.count * 4), m_overflow.buffer);
+                  b.counts.ensureFitted(c, b.count * 4), m_overflow.buffer);
     launch(k.countCells, b.count);
     b.keys = m_scan.exclusiveScan(b.counts.buffer, b.count);
     setProxyArgs(k.writeKeys);
     setKernelArgs(k.writeKeys, kProxyArgs, m_grid.buffer, b.slots.buffer, b.count, b.counts.buffer,
-                  b.cellKeys.ensure(c, std::size_t(b.keys) * 8),
-                  b.keySlots.ensure(c, std::size_t(b.keys) * 4));
+                  b.cellKeys.ensureFitted(c, std::size_t(b.keys) * 8),
+                  b.keySlots.ensureFitted(c, std::size_t(b.keys) * 4));
     launch(k.writeKeys, b.keys == 0 ? 0 : b.count);
+    releaseEarly({&b.counts}, false);  // the entries' offsets
     // Stage 5 on a sparse or large grid: radix sort by cell.
     m_sort.sort(b.cellKeys.buffer, b.keySlots.buffer, b.keys, indexBits(cells));
+    releaseEarly({}, true);  // the pair sort's is 12 bytes per pair, usually far fewer than the entries
     // Stage 6: runs of equal cells.
-    setKernelArgs(k.markRuns, 0, b.cellKeys.buffer, b.keys, b.runHeads.ensure(c, std::size_t(b.keys) * 4));
+    setKernelArgs(k.markRuns, 0, b.cellKeys.buffer, b.keys,
+                  b.runHeads.ensureFitted(c, std::size_t(b.keys) * 4));
     launch(k.markRuns, b.keys);
     b.runs = m_scan.exclusiveScan(b.runHeads.buffer, b.keys);
     setKernelArgs(k.writeRuns, 0, b.cellKeys.buffer, b.keys, b.runHeads.buffer, b.runs,
-                  b.runStart.ensure(c, (std::size_t(b.runs) + 1) * 4),
-                  b.runCell.ensure(c, std::size_t(b.runs) * 4));
+                  b.runStart.ensureFitted(c, (std::size_t(b.runs) + 1) * 4),
+                  b.runCell.ensureFitted(c, std::size_t(b.runs) * 4));
     launch(k.writeRuns, b.keys);
+    releaseEarly({&b.counts, &b.cellKeys, &b.runHeads}, false);  // what only led to the runs
   }
   // Stage 6: m(m-1)/2 candidates per run, scanned.
-  setKernelArgs(k.countRunPairs, 0, b.runStart.buffer, b.runs, b.runPairs.ensure(c, std::size_t(b.runs) * 4),
-                m_overflow.buffer);
+  setKernelArgs(k.countRunPairs, 0, b.runStart.buffer, b.runs,
+                b.runPairs.ensureFitted(c, std::size_t(b.runs) * 4), m_overflow.buffer);
   launch(k.countRunPairs, b.runs);
   b.candidates = m_scan.exclusiveScan(b.runPairs.buffer, b.runs);
   cl_uint overflow = 0;
@@ -307,6 +324,19 @@ void OpenClPairFinder::bin(Kernels& k, const std::vector<std::uint32_t>& slots, 
     throw std::overflow_error(
         "gpucol OpenCL pair finder: a box or a cell exceeds 2^32 - 1 entries or candidates");
   }
+}
+
+void OpenClPairFinder::releaseEarly(std::initializer_list<DeviceArray*> arrays, bool sortScratch) {
+  // The search's peak is in binning: its intermediates go as soon as they are used, before the candidates
+  // are tested. The device frees each buffer once the commands that use it are done.
+  if (!m_releases) return;
+  notePeak();
+  for (DeviceArray* a : arrays) a->release();
+  if (sortScratch) m_sort.releaseScratch();
+}
+
+void OpenClPairFinder::notePeak() {
+  m_stats.peakScratchBytes = std::max(m_stats.peakScratchBytes, heldBytes());
 }
 
 void OpenClPairFinder::testBins(Kernels& k, Bins& b, const cl::Buffer& out, std::uint32_t capacity,
@@ -363,7 +393,7 @@ void OpenClPairFinder::readPairs(cl_uint slotBits, std::vector<std::uint64_t>& p
   cl::CommandQueue& q = m_context.queue();
   const std::uint32_t found = m_lastPairs;
   if (found > 1) {
-    m_sort.sort(m_pairs.buffer, m_pairValues.ensure(m_context.context(), std::size_t(found) * 4), found,
+    m_sort.sort(m_pairs.buffer, m_pairValues.ensureFitted(m_context.context(), std::size_t(found) * 4), found,
                 2 * slotBits);
   }
   // Read into the output itself and widened there: no host copy of the compressed keys (8 bytes a pair).
@@ -386,6 +416,7 @@ void OpenClPairFinder::findPairs(const ProxyArrays& p, const PairFinderOptions& 
   m_stats = PairFinderStats{};
   pairs.clear();
   m_active.clear();
+  m_active.reserve(p.count);  // at its full size at once: released after every search
   for (std::uint32_t s = 0; s < p.count; ++s) {
     if (p.flags[s] & kProxyActive) {
       m_active.push_back(s);
@@ -395,42 +426,76 @@ void OpenClPairFinder::findPairs(const ProxyArrays& p, const PairFinderOptions& 
   // finished (an OpenCL error or an early return leaves them out of step with `p`).
   const bool canKeep = keepGrid(p, options);
   m_kept = false;
-  if (m_active.size() < 2) {
-    return;
-  }
   translateClErrors("OpenCL grid pair search", [&] {
-    Kernels& k = kernels(options.mappingSqrt == MappingSqrt::Newton);
-    m_counter.ensure(m_context.context(), 4);
-    m_overflow.ensure(m_context.context(), 4);
-    if (canKeep) {
-      incremental(p, options, k, pairs);
-      m_kept = true;
-    } else {
-      fullSearch(p, options, k, pairs);
+    if (m_active.size() >= 2) {
+      Kernels& k = kernels(options.mappingSqrt == MappingSqrt::Newton);
+      m_counter.ensure(m_context.context(), 4);
+      m_overflow.ensure(m_context.context(), 4);
+      if (canKeep) {
+        incremental(p, options, k, pairs);
+        m_kept = true;
+      } else {
+        fullSearch(p, options, k, pairs);
+      }
+      if (m_kept) m_keptPairs.assign(pairs.begin(), pairs.end());
+      m_stats.rebinnedProxies = std::uint32_t(m_active.size()) - m_stats.restingProxies;
     }
-    if (m_kept) {
-      m_keptPairs.assign(pairs.begin(), pairs.end());
-    } else {
-      std::vector<std::uint64_t>().swap(m_keptPairs);
-    }
+    notePeak();
+    releaseUnkept();
   });
-  m_stats.rebinnedProxies = std::uint32_t(m_active.size()) - m_stats.restingProxies;
-  // The scan's and the sort's scratch are the finder's too: the pair sort keeps 12 bytes per pair of its
-  // largest sort, and on a sparse grid the cell sort 12 per entry.
+  m_stats.scratchBytes = heldBytes();
+}
+
+std::size_t OpenClPairFinder::heldBytes() const {
+  // The scan's and the sort's scratch are the finder's too: the pair sort's is 12 bytes per pair of its
+  // largest sort, and on a sparse grid the cell sort's 12 per entry.
   std::size_t bytes = m_bins.bytes() + m_movedBins.bytes() + m_scan.bytes() + m_sort.bytes();
   for (const DeviceArray* a :
        {&m_boxes, &m_flags, &m_grid, &m_activeBuf, &m_hugeBuf, &m_isHugeBuf, &m_pairs, &m_pairValues,
         &m_counter, &m_overflow, &m_restingBuf, &m_updatesBuf, &m_movedHugeBuf, &m_isMovedHugeBuf}) {
     bytes += a->bytes;
   }
-  // And the host's lists, which it keeps between calls as well.
-  m_stats.scratchBytes = bytes + m_resting.capacity() + m_isHuge.capacity() +
-                         m_extent.capacity() * sizeof(float) +
-                         m_updates.capacity() * sizeof(GpucolProxyUpdate) +
-                         (m_active.capacity() + m_binned.capacity() + m_huge.capacity() + m_moved.capacity() +
-                          m_movedBinned.capacity() + m_movedHuge.capacity()) *
-                             sizeof(std::uint32_t) +
-                         (m_keptPairs.capacity() + m_carried.capacity() + m_found.capacity()) * 8;
+  // And the host's lists.
+  return bytes + m_resting.capacity() + m_isHuge.capacity() + m_extent.capacity() * sizeof(float) +
+         m_updates.capacity() * sizeof(GpucolProxyUpdate) +
+         (m_active.capacity() + m_binned.capacity() + m_huge.capacity() + m_moved.capacity() +
+          m_movedBinned.capacity() + m_movedHuge.capacity()) *
+             sizeof(std::uint32_t) +
+         (m_keptPairs.capacity() + m_carried.capacity() + m_found.capacity()) * 8;
+}
+
+void OpenClPairFinder::releaseUnkept() {
+  // Between searches the finder holds only what the next one reuses, as the CPU finder does: stage 11's kept
+  // grid (the boxes, flags and resting marks on the device, the entries and runs the moved proxies are
+  // tested against, the huge list and the last pairs) when this search kept one. A full search writes every
+  // box again, so without a kept grid even the boxes go. The host's lists go in any case; the device's
+  // buffers where the finder releases them (OpenClPairFinderTuning::release). The next search allocates
+  // afresh (measured: measurement history, "OpenCL memory between steps").
+  m_context.queue().finish();  // writes not waited for read the host lists until they run
+  for (auto* v : {&m_active, &m_binned, &m_huge, &m_moved, &m_movedBinned, &m_movedHuge}) {
+    std::vector<std::uint32_t>().swap(*v);
+  }
+  std::vector<std::uint8_t>().swap(m_isHuge);
+  std::vector<float>().swap(m_extent);
+  std::vector<GpucolProxyUpdate>().swap(m_updates);
+  std::vector<std::uint64_t>().swap(m_carried);
+  std::vector<std::uint64_t>().swap(m_found);
+  if (!m_kept) {
+    std::vector<std::uint8_t>().swap(m_resting);
+    std::vector<std::uint64_t>().swap(m_keptPairs);
+  }
+  if (!m_releases) return;
+  for (DeviceArray* a : {&m_activeBuf, &m_isHugeBuf, &m_pairs, &m_pairValues, &m_updatesBuf, &m_movedHugeBuf,
+                         &m_isMovedHugeBuf, &m_bins.slots, &m_bins.runPairs}) {
+    a->release();
+  }
+  m_movedBins = Bins{};
+  m_sort.releaseScratch();
+  if (!m_kept) {
+    m_bins = Bins{};
+    for (DeviceArray* a : {&m_boxes, &m_flags, &m_hugeBuf, &m_restingBuf}) a->release();
+    m_syncedCount = 0;
+  }
 }
 
 bool OpenClPairFinder::keepGrid(const ProxyArrays& p, const PairFinderOptions& options) {
@@ -474,7 +539,7 @@ void OpenClPairFinder::sendChanges(const ProxyArrays& p, Kernels& k) {
   const std::uint32_t count = std::uint32_t(m_updates.size());
   if (count > 0) {
     const std::size_t bytes = std::size_t(count) * sizeof(GpucolProxyUpdate);
-    q.enqueueWriteBuffer(m_updatesBuf.ensure(c, bytes), CL_FALSE, 0, bytes, m_updates.data());
+    q.enqueueWriteBuffer(m_updatesBuf.ensureFitted(c, bytes), CL_FALSE, 0, bytes, m_updates.data());
     setKernelArgs(k.updateProxies, 0, m_boxes.buffer, m_flags.buffer, m_restingBuf.buffer,
                   m_updatesBuf.buffer, count);
     launch(k.updateProxies, count);
@@ -510,8 +575,10 @@ void OpenClPairFinder::fullSearch(const ProxyArrays& p, const PairFinderOptions&
     if (!m_huge.empty()) {
       const std::uint32_t hugeCount = std::uint32_t(m_huge.size());
       uploadActive();
-      q.enqueueWriteBuffer(m_hugeBuf.ensure(c, hugeCount * 4), CL_FALSE, 0, hugeCount * 4, m_huge.data());
-      q.enqueueWriteBuffer(m_isHugeBuf.ensure(c, activeCount), CL_FALSE, 0, activeCount, m_isHuge.data());
+      q.enqueueWriteBuffer(m_hugeBuf.ensureFitted(c, hugeCount * 4), CL_FALSE, 0, hugeCount * 4,
+                           m_huge.data());
+      q.enqueueWriteBuffer(m_isHugeBuf.ensureFitted(c, activeCount), CL_FALSE, 0, activeCount,
+                           m_isHuge.data());
     }
   } else {
     uploadActive();
@@ -523,7 +590,7 @@ void OpenClPairFinder::fullSearch(const ProxyArrays& p, const PairFinderOptions&
   std::uint32_t capacity = std::max<std::uint32_t>(1024, m_lastPairs + m_lastPairs / 4);
   for (;;) {
     q.enqueueFillBuffer(m_counter.buffer, zero, 0, 4);
-    const cl::Buffer& out = m_pairs.ensure(c, std::size_t(capacity) * 8);
+    const cl::Buffer& out = m_pairs.ensureFitted(c, std::size_t(capacity) * 8);
     if (useGrid) {
       testBins(k, m_bins, out, capacity, slotBits);
       testHuge(k, m_hugeBuf, std::uint32_t(m_huge.size()), m_isHugeBuf, out, capacity, slotBits);
@@ -604,15 +671,16 @@ void OpenClPairFinder::incremental(const ProxyArrays& p, const PairFinderOptions
     }
     q.enqueueWriteBuffer(m_activeBuf.ensureFitted(c, activeCount * 4), CL_FALSE, 0, activeCount * 4,
                          m_active.data());
-    q.enqueueWriteBuffer(m_isMovedHugeBuf.ensure(c, activeCount), CL_FALSE, 0, activeCount, m_isHuge.data());
-    q.enqueueWriteBuffer(m_movedHugeBuf.ensure(c, hugeCount * 4), CL_FALSE, 0, hugeCount * 4,
+    q.enqueueWriteBuffer(m_isMovedHugeBuf.ensureFitted(c, activeCount), CL_FALSE, 0, activeCount,
+                         m_isHuge.data());
+    q.enqueueWriteBuffer(m_movedHugeBuf.ensureFitted(c, hugeCount * 4), CL_FALSE, 0, hugeCount * 4,
                          m_movedHuge.data());
   }
 
   std::uint32_t capacity = std::max<std::uint32_t>(1024, m_lastPairs + m_lastPairs / 4);
   for (;;) {
     q.enqueueFillBuffer(m_counter.buffer, zero, 0, 4);
-    const cl::Buffer& out = m_pairs.ensure(c, std::size_t(capacity) * 8);
+    const cl::Buffer& out = m_pairs.ensureFitted(c, std::size_t(capacity) * 8);
     if (binnedCount > 0) {
       setProxyArgs(k.testMoved);
       setKernelArgs(k.testMoved, kProxyArgs, m_grid.buffer, m_restingBuf.buffer, m_bins.runStart.buffer,

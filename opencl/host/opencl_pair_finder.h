@@ -9,11 +9,20 @@
 
 namespace gpucol::opencl {
 
-/// Launch shapes of the OpenCL pair finder; the defaults are chosen from the device. Tests set them to
-/// run the GPU shapes on a CPU device and the other way round.
+/// Launch shapes and buffer policy of the OpenCL pair finder; the defaults are chosen from the device. Tests
+/// set them to run the GPU shapes on a CPU device and the other way round.
 struct OpenClPairFinderTuning {
   /// Candidates each work-item of grid_test_candidates takes; 0: 1 on a GPU, a long run on a CPU device.
   std::uint32_t candidatesPerItem = 0;
+  /// Whether the device buffers a search needs only while it runs are freed as soon as it is done with
+  /// them: binning's intermediates before the candidates are tested, the rest after the search, and the
+  /// boxes too when no grid is kept for the next search (stage 11's kept grid stays). Auto: where the
+  /// device's memory is the host's (OpenClContext::sharesHostMemory), so that between steps the broad phase
+  /// holds about what its CPU path holds; a discrete GPU keeps and reuses them (its memory is not the
+  /// host's, and allocating it afresh every step costs driver calls). The finder's host lists are freed
+  /// after every search whatever this says.
+  enum class BufferRelease { Auto, Always, Never };
+  BufferRelease release = BufferRelease::Auto;
 };
 
 /// Stage 5 on the device: whether the finder sorts the entries of a grid of `cells` cells holding `binned`

@@ -86,6 +86,13 @@ std::size_t OpenClRadixSort::bytes() const {
          m_scan.bytes();
 }
 
+void OpenClRadixSort::releaseScratch() {
+  m_keysTemp = cl::Buffer();
+  m_valuesTemp = cl::Buffer();
+  m_counts = cl::Buffer();
+  m_tempCapacity = m_countsCapacity = 0;
+}
+
 void OpenClRadixSort::sort(std::vector<std::uint64_t>& keys, std::vector<std::uint32_t>& values,
                            unsigned keyBits) {
   if (keys.size() != values.size()) {

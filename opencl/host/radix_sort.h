@@ -11,7 +11,7 @@ namespace gpucol::opencl {
 
 /// Stable radix sort of (uint64 key, uint32 value) pairs on an OpenCL device, 4 bits per pass, each
 /// work-item counting and scattering one chunk in order, digit offsets from OpenClScan. Keeps its scratch
-/// buffers between calls (grown, never shrunk); one object per thread.
+/// buffers between calls (grown, shrunk only by releaseScratch); one object per thread.
 class OpenClRadixSort {
  public:
   /// Builds (or takes from the cache) the sort program of `context`.
@@ -28,6 +28,9 @@ class OpenClRadixSort {
   /// Device bytes of the scratch buffers it keeps: the second key and value arrays (12 bytes per element of
   /// the longest sort so far), the digit counts, and its scan's.
   std::size_t bytes() const;
+
+  /// Drops the second key and value arrays and the digit counts (the next sort allocates them again).
+  void releaseScratch();
 
  private:
   OpenClContext& m_context;

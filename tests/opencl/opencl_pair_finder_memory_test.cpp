@@ -8,6 +8,7 @@
 #include <malloc.h>
 #endif
 
+#include <algorithm>
 #include <chrono>
 #include <cmath>
 #include <cstddef>
@@ -91,13 +92,16 @@ std::size_t settledHeapBytes(OpenClContext& context) {
 
 /// Steps a fresh finder over `cloud` (moving every `every`-th box between steps) and checks, after each
 /// step, the heap it added against its scratch bytes and the pair list it returned.
-void expectHeapExplained(OpenClContext& context, Cloud cloud, std::size_t every, const std::string& what) {
+void expectHeapExplained(
+    OpenClContext& context, Cloud cloud, std::size_t every, const std::string& what,
+    OpenClPairFinderTuning::BufferRelease release = OpenClPairFinderTuning::BufferRelease::Auto) {
 #if defined(__GLIBC__) && !defined(__SANITIZE_ADDRESS__)
   // A GPU's buffers are not in the host's heap, and another CPU runtime may map its own memory.
   const cl::Platform platform(context.device().getInfo<CL_DEVICE_PLATFORM>());
   if (platform.getInfo<CL_PLATFORM_NAME>() != "Portable Computing Language" || context.isGpu()) {
     GTEST_SKIP() << what << ": the heap holds the device's buffers only on PoCL's CPU device";
   }
+  EXPECT_TRUE(context.sharesHostMemory()) << "PoCL's CPU device: its buffers are the process's memory";
   PairFinderOptions options;
   // The context's programs and the driver's first allocations, before the count starts. The warm-up finder
   // stays alive, so that none of its buffers is freed after the count has started (destroyed, under load,
@@ -113,23 +117,38 @@ void expectHeapExplained(OpenClContext& context, Cloud cloud, std::size_t every,
   std::vector<std::uint64_t>().swap(pairs);
   pairs.reserve(1);
   const std::size_t before = settledHeapBytes(context);
-  std::unique_ptr<PairFinder> finder = makePairFinder(Config{});
+  std::unique_ptr<PairFinder> finder = makePairFinder(Config{}, {0, release});
   ASSERT_NE(finder, nullptr);
   for (int step = 0; step < 4; ++step, cloud.move(every, 0.05f)) {
     finder->findPairs(cloud.view(), options, pairs);
-    const std::ptrdiff_t added = std::ptrdiff_t(heapBytes() - before);
+    // Settled: the finder releases its per-search buffers at the end of each search.
+    const std::ptrdiff_t added = std::ptrdiff_t(settledHeapBytes(context) - before);
     const std::ptrdiff_t counted = std::ptrdiff_t(finder->stats().scratchBytes + pairs.capacity() * 8);
     EXPECT_NEAR(double(added), double(counted), double(kUncountedSlack))
         << what << ", step " << step << ": the heap grew by " << added << " bytes, the finder counts "
         << finder->stats().scratchBytes << " and its pair list holds " << pairs.capacity() * 8;
     EXPECT_GT(pairs.size(), 0u) << what;
+    const PairFinderStats& stats = finder->stats();
+    // The search's high-water mark is still reported once its buffers are gone: every box was on the device
+    // (GpucolProxyBox, 32 bytes), and it held at least what it keeps.
+    EXPECT_GE(stats.peakScratchBytes, std::max(stats.scratchBytes, cloud.flags.size() * 32))
+        << what << ", step " << step;
+    // A search that keeps no grid leaves nothing per proxy behind (PoCL's memory is the host's, so Auto
+    // releases): the next one writes every box again.
+    if (!stats.incremental && every == 1 && release != OpenClPairFinderTuning::BufferRelease::Never) {
+      EXPECT_LT(stats.scratchBytes, 64u * 1024) << what << ", step " << step;
+    }
+    // One that keeps its buffers keeps at least the boxes.
+    if (release == OpenClPairFinderTuning::BufferRelease::Never) {
+      EXPECT_GE(stats.scratchBytes, cloud.flags.size() * 32) << what << ", step " << step;
+    }
     // The first step moves every box, the second keeps the grid, the others search the moved boxes alone.
     if (every > 1 && step >= 2) {
       EXPECT_TRUE(finder->stats().incremental) << what << ", step " << step;
     }
   }
 #else
-  (void)context, (void)cloud, (void)every;
+  (void)context, (void)cloud, (void)every, (void)release;
   GTEST_SKIP() << what << ": needs glibc's mallinfo2 over the driver's own allocations (not under ASan)";
 #endif
 }
@@ -137,6 +156,14 @@ void expectHeapExplained(OpenClContext& context, Cloud cloud, std::size_t every,
 TEST(OpenClPairFinderMemory, ScratchBytesExplainTheHeapOfADenseGrid) {
   GPUCOL_REQUIRE_OPENCL(context);
   expectHeapExplained(context, Cloud(60000, 0.0f, 11), 1, "60K boxes, all moving");
+}
+
+TEST(OpenClPairFinderMemory, ScratchBytesExplainTheHeapOfAFinderKeepingItsBuffers) {
+  GPUCOL_REQUIRE_OPENCL(context);
+  expectHeapExplained(context, Cloud(60000, 0.0f, 14), 1, "60K boxes, all moving, buffers kept",
+                      OpenClPairFinderTuning::BufferRelease::Never);
+  expectHeapExplained(context, Cloud(60000, 0.0f, 15), 100, "60K boxes, 1% moving, buffers kept",
+                      OpenClPairFinderTuning::BufferRelease::Never);
 }
 
 TEST(OpenClPairFinderMemory, ScratchBytesExplainTheHeapWhileTheGridIsKept) {

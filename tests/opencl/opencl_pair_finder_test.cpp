@@ -12,6 +12,8 @@
 namespace gpucol::opencl {
 namespace {
 
+constexpr OpenClPairFinderTuning::BufferRelease kKeepBuffers = OpenClPairFinderTuning::BufferRelease::Never;
+
 /// A scene as the structure of arrays that ProxyArrays views.
 struct Scene {
   std::vector<float> minX, minY, minZ, maxX, maxY, maxZ;
@@ -64,9 +66,10 @@ void expectMatchesReferences(const Scene& scene, const std::string& what,
                              std::uint32_t bruteForceBelow = 1000) {
   OpenClContext* context = OpenClContext::tryGet();
   ASSERT_NE(context, nullptr);
-  // The device's own launch shape, one candidate per item (a GPU's), and an odd chunk length.
+  // The device's own launch shape, one candidate per item (a GPU's), and an odd chunk length with the
+  // buffers kept between searches (a discrete GPU's policy) rather than released.
   static std::unique_ptr<PairFinder> finders[3] = {makePairFinder(Config{}), makePairFinder(Config{}, {1}),
-                                                   makePairFinder(Config{}, {7})};
+                                                   makePairFinder(Config{}, {7, kKeepBuffers})};
   std::unique_ptr<PairFinder> cpu = makeCpuPairFinder();
   const ProxyArrays proxies = scene.view();
   const std::vector<std::uint64_t> expected = findPairsBruteForce(proxies);
@@ -198,14 +201,16 @@ TEST(OpenClPairFinder, GrowsItsOutputAcrossSteps) {
   expectMatchesReferences(uniformScene(2000, 20.0f, 1.5f, 13), "dense");
 }
 
-/// Stage 11 over steps: OpenCL finders (three launch shapes) and a CPU finder see the same scene and the
-/// same `moved` flags each step. Each OpenCL finder's pairs must equal the CPU finder's (bit for bit, same
-/// order) and brute force, and its resting/re-binned counts and path (grid, incremental) the CPU finder's.
+/// Stage 11 over steps: OpenCL finders (three launch shapes, the last keeping its buffers) and a CPU finder
+/// see the same scene and the same `moved` flags each step. Each OpenCL finder's pairs must equal the CPU
+/// finder's (bit for bit, same order) and brute force, and its resting/re-binned counts and path (grid,
+/// incremental) the CPU finder's.
 class SteppedFinders {
  public:
   explicit SteppedFinders(const PairFinderOptions& options)
       : m_options(options),
-        m_gpu{makePairFinder(Config{}), makePairFinder(Config{}, {1}), makePairFinder(Config{}, {7})},
+        m_gpu{makePairFinder(Config{}), makePairFinder(Config{}, {1}),
+              makePairFinder(Config{}, {7, kKeepBuffers})},
         m_cpu(makeCpuPairFinder()) {}
 
   /// One search of every finder; `moved` may be nullptr (anything may have changed). Returns the OpenCL
