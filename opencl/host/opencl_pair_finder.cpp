@@ -369,7 +369,7 @@ void OpenClPairFinder::testHuge(Kernels& k, const DeviceArray& huge, std::uint32
   setProxyArgs(k.testHuge);
   setKernelArgs(k.testHuge, kProxyArgs, huge.buffer, hugeCount, m_activeBuf.buffer, activeCount,
                 isHuge.buffer, slotBits, out, capacity, m_counter.buffer);
-  launchStrided(k.testHuge, std::uint64_t(hugeCount) * activeCount);
+  launchStrided(k.testHuge, activeCount);
 }
 
 /// Reads the pair counter after a pass: true when the pairs found fit `capacity` (m_lastPairs set), else

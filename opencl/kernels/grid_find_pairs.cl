@@ -296,21 +296,27 @@ __kernel void grid_test_candidates(PROXY_PARAMS, __global const GpucolGridParams
 }
 
 // Stage 3: every huge box against every other active box; a pair of two huge boxes belongs to the row of
-// the lower slot. isHuge is per active index.
+// the lower slot. isHuge is per active index. Each item takes active boxes (stepping by the global size) and
+// tests each against every huge box: the few huge boxes stay in cache and the active boxes are read once.
+// Walking huge box by huge box instead read all active boxes once per huge box (1.6 GB for 50 huge boxes
+// among 1M) and took about 375 ms a step on PoCL against 60 this way.
 __kernel void grid_test_huge(PROXY_PARAMS, __global const uint* huge, const uint hugeCount,
                              __global const uint* active, const uint activeCount, __global const uchar* isHuge,
                              const uint slotBits, __global ulong* pairs, const uint capacity,
                              volatile __global uint* pairCount) {
-  const ulong total = (ulong)hugeCount * activeCount;
-  for (ulong t = get_global_id(0); t < total; t += get_global_size(0)) {
-    const uint sh = huge[t / activeCount];
-    const uint ai = (uint)(t % activeCount);
+  for (ulong ai = get_global_id(0); ai < activeCount; ai += get_global_size(0)) {
     const uint s = active[ai];
-    if (s == sh || (isHuge[ai] && s < sh)) {
-      continue;
-    }
-    if (accept_pair(PROXY_ARGS, sh, s)) {
-      append_pair(min(sh, s), max(sh, s), slotBits, pairs, capacity, pairCount);
+    const bool alsoHuge = isHuge[ai] != 0;
+    const GpucolProxyBox b = boxes[s];
+    for (uint h = 0; h < hugeCount; ++h) {
+      const uint sh = huge[h];
+      if (s == sh || (alsoHuge && s < sh)) {
+        continue;
+      }
+      const GpucolProxyBox hb = boxes[sh];
+      if (boxes_overlap(hb, b) && filters_accept(hb, b, flags, sh, s)) {
+        append_pair(min(sh, s), max(sh, s), slotBits, pairs, capacity, pairCount);
+      }
     }
   }
 }
