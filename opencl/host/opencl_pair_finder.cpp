@@ -285,7 +285,7 @@ void OpenClPairFinder::bin(Kernels& k, const std::vector<std::uint32_t>& slots, 
                   b.runStart.ensureFitted(c, (std::size_t(b.runs) + 1) * 4),
                   b.runCell.ensureFitted(c, std::size_t(b.runs) * 4));
     launch(k.writeFilledCells, cells);
-    releaseEarly({&b.counts, &b.cellKeys, &b.runHeads}, false);  // what only led to the runs
+    releaseEarly({&b.counts, &b.runHeads}, false);  // what only led to the runs
   } else {
     // Stage 4: count cells per box, scan, fill (cell, slot) entries.
     setProxyArgs(k.countCells);
@@ -311,7 +311,7 @@ void OpenClPairFinder::bin(Kernels& k, const std::vector<std::uint32_t>& slots, 
                   b.runStart.ensureFitted(c, (std::size_t(b.runs) + 1) * 4),
                   b.runCell.ensureFitted(c, std::size_t(b.runs) * 4));
     launch(k.writeRuns, b.keys);
-    releaseEarly({&b.counts, &b.cellKeys, &b.runHeads}, false);  // what only led to the runs
+    releaseEarly({&b.cellKeys, &b.runHeads}, false);  // what only led to the runs (the counts went above)
   }
   // Stage 6: m(m-1)/2 candidates per run, scanned.
   setKernelArgs(k.countRunPairs, 0, b.runStart.buffer, b.runs,
