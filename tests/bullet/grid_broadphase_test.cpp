@@ -261,6 +261,42 @@ TEST(GridBroadphase, OpenClKeepsItsGridWhileProxiesAreAdded) {
   EXPECT_EQ(incrementalSteps, steps) << "every step after the first keeps the grid";
 }
 
+/// Every proxy destroyed, the pool reset (Bullet's btCollisionWorld does so when it is emptied), then a new,
+/// larger set of proxies in the same broad phase: the finder reads the new proxies' boxes, never the blocks
+/// the reset freed.
+void expectPairsAfterResetPool(const gpucol::Config& config) {
+  gpucol::GridBroadphase bp(config);
+  btDefaultCollisionConfiguration configuration;
+  btCollisionDispatcher dispatcher(&configuration);
+  std::mt19937 rng(41);
+  std::vector<Box> first = createAndStep(bp, 1200, 12.0f, rng, &dispatcher);
+  ASSERT_EQ(cachePairs(bp.getOverlappingPairCache()), bruteForce(first));
+  for (Box& b : first) bp.destroyProxy(b.proxy, &dispatcher), b.proxy = nullptr;
+  bp.calculateOverlappingPairs(&dispatcher);
+  ASSERT_EQ(bp.getOverlappingPairCache()->getNumOverlappingPairs(), 0);
+  bp.resetPool(&dispatcher);
+  for (int round = 0; round < 2; ++round) {
+    std::vector<Box> second = createAndStep(bp, 1500, 10.0f, rng, &dispatcher);
+    ASSERT_GT(bruteForce(second).size(), 100u) << "scene too sparse";
+    EXPECT_EQ(cachePairs(bp.getOverlappingPairCache()), bruteForce(second)) << "round " << round;
+    for (Box& b : second) bp.destroyProxy(b.proxy, &dispatcher), b.proxy = nullptr;
+    bp.calculateOverlappingPairs(&dispatcher);
+    bp.resetPool(&dispatcher);
+  }
+}
+
+TEST(GridBroadphase, ProxiesCreatedAfterResetPoolAreSearched) {
+  gpucol::Config config;
+  config.bruteForceBelow = 100;
+  config.broadphaseBackend = gpucol::Backend::Cpu;
+  expectPairsAfterResetPool(config);
+}
+
+TEST(GridBroadphase, ProxiesCreatedAfterResetPoolAreSearchedOnOpenCl) {
+  if (!haveOpenClPairFinder()) GTEST_SKIP() << "no OpenCL pair finder (built without OpenCL, or no device)";
+  expectPairsAfterResetPool(openClGridConfig());
+}
+
 /// Creates a proxy for each box (its index as client object) in `bp` and steps, then moves every box 0.001
 /// along x and steps again: every proxy moves and few pairs change, so that step's peak is the search's.
 void stepAndNudge(gpucol::GridBroadphase& bp, const std::vector<Box>& boxes, btDispatcher* dispatcher) {

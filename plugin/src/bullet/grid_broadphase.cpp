@@ -919,6 +919,7 @@ void GridBroadphase::resetPool(btDispatcher* /*dispatcher*/) {
   Impl& d = *m_impl;
   if (d.liveCount != 0) return;
   std::vector<std::unique_ptr<GridProxy[]>>().swap(d.blocks);
+  std::vector<const unsigned char*>().swap(d.blockBytes);  // the finders' view of the blocks just freed
   d.slotCount = 0;
   std::vector<std::int32_t>().swap(d.group);
   std::vector<std::int32_t>().swap(d.mask);
