@@ -68,6 +68,9 @@ struct BoxCorners {
   float hi[3];
 };
 
+/// BoxRecords offset of a field the records do not hold.
+constexpr std::uint32_t kNoRecordField = ~std::uint32_t(0);
+
 /// Boxes kept in the caller's own records instead of six arrays (GridBroadphase's proxies, so that no copy of
 /// every box is made for the CPU finder): slot s's record starts at blocks[s >> blockBits] + (s mod
 /// 2^blockBits) * stride bytes and holds the min corner as three floats at byte minOffset and the max corner
@@ -78,6 +81,14 @@ struct BoxRecords {
   std::uint32_t stride = 0;
   std::uint32_t minOffset = 0;
   std::uint32_t maxOffset = 0;
+  /// Optional: where the record holds the slot's filter group and mask as int32 (the same values as
+  /// ProxyArrays::group and mask); kNoRecordField where it does not.
+  std::uint32_t groupOffset = kNoRecordField;
+  std::uint32_t maskOffset = kNoRecordField;
+  /// Optional: the bytes from blocks[0] over which the blocks lie end to end (block i starts at blocks[0] + i
+  /// * (stride << blockBits) for every block that starts below it); 0 where unknown. A device that shares the
+  /// host's memory reads the records there in place.
+  std::size_t contiguousBytes = 0;
 };
 
 /// Boxes ahead of the one read whose record is prefetched (ProxyArrays::prefetchBox) where slots are read

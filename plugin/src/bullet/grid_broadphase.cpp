@@ -20,7 +20,9 @@
 #include <cstdio>
 #include <iostream>
 #include <limits>
+#include <memory>
 #include <mutex>
+#include <new>
 #include <stdexcept>
 #include <string>
 #include <type_traits>
@@ -33,6 +35,7 @@
 #include "broadphase/query_grid.h"
 #include "bullet/measured_backend_choice.h"
 #include "bullet/warn_once.h"
+#include "memory/reserved_blocks.h"
 #include "opencl/host/opencl_started.h"
 
 namespace gpucol {
@@ -43,9 +46,12 @@ constexpr std::uint32_t kScanGrain = 16384;
 
 /// Proxies per storage block: 2^8 proxies of 56 bytes, 14 KiB (small scenes do not pay for a large last
 /// block: 4096 per block held 229 bytes per proxy at 1,000 proxies); a slot's proxy is found by a shift and a
-/// mask, and blocks never move, so the addresses Bullet holds stay valid.
+/// mask, and blocks never move, so the addresses Bullet holds stay valid. The blocks lie end to end in one
+/// reserved range (memory/reserved_blocks.h) with room for every slot number, so that an OpenCL device
+/// sharing the host's memory reads all the boxes in place through one buffer.
 constexpr std::uint32_t kBlockBits = 8;
 constexpr std::uint32_t kBlockSize = 1u << kBlockBits;
+constexpr std::size_t kMaxBlocks = (std::size_t(1) << 32) >> kBlockBits;
 
 /// Bits of Impl::state, per slot.
 constexpr std::uint8_t kLive = 1;       // holds a live proxy
@@ -72,6 +78,7 @@ constexpr std::uint32_t kScanPerCandidate = 4;
 struct GridProxy : btBroadphaseProxy {
   std::uint32_t slot = 0;
 };
+static_assert(std::is_trivially_destructible<GridProxy>::value, "proxy blocks are freed without destructors");
 
 /// GridBroadphaseTuning::boxesInPlace reads the proxies' boxes as floats (BoxRecords), so it needs Bullet
 /// built in single precision; otherwise every finder gets float copies.
@@ -116,8 +123,7 @@ struct GridBroadphase::Impl {
 
   // Held between steps: the proxies (the only copy of each box), the filters as of the last scan (a change
   // is a move), a state byte per slot, the free slots and the last step's pairs.
-  std::vector<std::unique_ptr<GridProxy[]>> blocks;
-  std::vector<const unsigned char*> blockBytes;  // blocks[i].get() as bytes, for BoxRecords
+  std::unique_ptr<ReservedBlocks> blocks;  // made with the first proxy
   std::uint32_t slotCount = 0;
   std::vector<std::int32_t> group, mask;
   std::vector<std::uint8_t> state;
@@ -169,8 +175,14 @@ struct GridBroadphase::Impl {
   std::vector<std::uint64_t> removedKeys;  // pairs to remove from the cache (sorted)
   std::vector<std::uint64_t> addedKeys;    // pairs to offer to the cache (sorted)
 
-  GridProxy& proxy(std::uint32_t s) { return blocks[s >> kBlockBits][s & (kBlockSize - 1)]; }
-  const GridProxy& proxy(std::uint32_t s) const { return blocks[s >> kBlockBits][s & (kBlockSize - 1)]; }
+  GridProxy& proxy(std::uint32_t s) {
+    return static_cast<GridProxy*>(blocks->block(s >> kBlockBits))[s & (kBlockSize - 1)];
+  }
+  const GridProxy& proxy(std::uint32_t s) const {
+    return static_cast<const GridProxy*>(blocks->block(s >> kBlockBits))[s & (kBlockSize - 1)];
+  }
+  /// Blocks of proxies (none before the first proxy).
+  std::size_t blockCount() const { return blocks ? blocks->size() : 0; }
   /// Before a slot is appended: the per-slot arrays grow by a quarter, in whole blocks, rather than double
   /// (what push_back does): their spare capacity is held between steps, and doubling left 6,384 empty slots
   /// of 9 bytes at 10,000 proxies (5.7 bytes per proxy). Growing by a quarter still copies each slot a
@@ -308,11 +320,15 @@ struct GridBroadphase::Impl {
     const GridProxy probe;
     auto bytesOf = [](const void* p) { return static_cast<const unsigned char*>(p); };
     BoxRecords r;
-    r.blocks = blockBytes.data();
+    r.blocks = blocks ? blocks->table() : nullptr;
     r.blockBits = kBlockBits;
     r.stride = sizeof(GridProxy);
     r.minOffset = std::uint32_t(bytesOf(static_cast<const btScalar*>(probe.m_aabbMin)) - bytesOf(&probe));
     r.maxOffset = std::uint32_t(bytesOf(static_cast<const btScalar*>(probe.m_aabbMax)) - bytesOf(&probe));
+    // The scan has copied each proxy's filter into group and mask by the time a finder reads the records.
+    r.groupOffset = std::uint32_t(bytesOf(&probe.m_collisionFilterGroup) - bytesOf(&probe));
+    r.maskOffset = std::uint32_t(bytesOf(&probe.m_collisionFilterMask) - bytesOf(&probe));
+    r.contiguousBytes = blocks ? blocks->contiguousBytes() : 0;
     return r;
   }
 
@@ -531,8 +547,7 @@ struct GridBroadphase::Impl {
   /// Bytes held between steps (GridBroadphaseStats::memoryBytes): proxy blocks, block table, filters, state,
   /// free-slot lists, the last pair list and its refused part, and the finder's kept memory.
   std::size_t heldBytes() const {
-    std::size_t bytes = blocks.size() * kBlockSize * sizeof(GridProxy) +
-                        (blocks.capacity() + blockBytes.capacity()) * sizeof(void*);
+    std::size_t bytes = blockCount() * kBlockSize * sizeof(GridProxy) + (blocks ? blocks->tableBytes() : 0);
     bytes += (group.capacity() + mask.capacity()) * sizeof(std::int32_t) + state.capacity();
     bytes += (freeSlots.capacity() + pendingFree.capacity()) * sizeof(std::uint32_t);
     bytes += current.bytes() + refused.capacity() * sizeof(std::uint64_t);
@@ -569,9 +584,10 @@ btBroadphaseProxy* GridBroadphase::createProxy(const btVector3& aabbMin, const b
     if (d.slotCount >= 0xffffffffu)
       throw std::length_error("gpucol::GridBroadphase: more than 2^32 - 1 proxies");
     slot = d.slotCount++;
-    if ((slot >> kBlockBits) >= d.blocks.size()) {
-      d.blocks.emplace_back(new GridProxy[kBlockSize]);
-      d.blockBytes.push_back(reinterpret_cast<const unsigned char*>(d.blocks.back().get()));
+    if ((slot >> kBlockBits) >= d.blockCount()) {
+      if (!d.blocks) d.blocks = std::make_unique<ReservedBlocks>(kBlockSize * sizeof(GridProxy), kMaxBlocks);
+      auto* block = static_cast<GridProxy*>(d.blocks->add());
+      for (std::uint32_t i = 0; i < kBlockSize; ++i) new (block + i) GridProxy();
     }
     d.growSlots();
     d.group.push_back(0), d.mask.push_back(0), d.state.push_back(0);
@@ -918,8 +934,7 @@ void GridBroadphase::getBroadphaseAabb(btVector3& aabbMin, btVector3& aabbMax) c
 void GridBroadphase::resetPool(btDispatcher* /*dispatcher*/) {
   Impl& d = *m_impl;
   if (d.liveCount != 0) return;
-  std::vector<std::unique_ptr<GridProxy[]>>().swap(d.blocks);
-  std::vector<const unsigned char*>().swap(d.blockBytes);  // the finders' view of the blocks just freed
+  d.blocks.reset();
   d.slotCount = 0;
   std::vector<std::int32_t>().swap(d.group);
   std::vector<std::int32_t>().swap(d.mask);
