@@ -9,6 +9,7 @@
 #include <cstddef>
 #include <initializer_list>
 #include <limits>
+#include <map>
 #include <stdexcept>
 #include <string>
 
@@ -69,6 +70,7 @@ class OpenClPairFinder final : public PairFinder {
         m_releases(
             tuning.release == OpenClPairFinderTuning::BufferRelease::Always ||
             (tuning.release == OpenClPairFinderTuning::BufferRelease::Auto && context.sharesHostMemory())),
+        m_baseAlignment(context.device().getInfo<CL_DEVICE_MEM_BASE_ADDR_ALIGN>() / 8),
         m_scan(context),
         m_sort(context) {}
   /// Waits for the queue: a write not waited for reads the finder's host lists until the queue runs it (a
@@ -92,7 +94,9 @@ class OpenClPairFinder final : public PairFinder {
     cl::Kernel countCells, writeKeys, countOrPlaceEntries, markFilledCells, writeFilledCells, markRuns,
         writeRuns, countRunPairs, testCandidates, testHuge, bruteTest, updateProxies, testMoved;
   };
-  Kernels& kernels(bool newton);
+  Kernels& kernels(bool newton, const ProxyArrays& p);
+  bool readsRecordsInPlace(const ProxyArrays& p) const;
+  void bindRecords(const ProxyArrays& p);
   void chooseGrid(const ProxyArrays& p, const PairFinderOptions& options, GpucolGridParams& g);
   static GpucolProxyBox deviceBox(const ProxyArrays& p, std::uint32_t s);
   void upload(const ProxyArrays& p);
@@ -118,23 +122,26 @@ class OpenClPairFinder final : public PairFinder {
 
   OpenClContext& m_context;
   OpenClPairFinderTuning m_tuning;
-  bool m_releases;  // OpenClPairFinderTuning::release, resolved for the device
+  bool m_releases;               // OpenClPairFinderTuning::release, resolved for the device
+  std::uintptr_t m_baseAlignment;  // bytes: where a host address the device takes as its own must start
   OpenClScan m_scan;
   OpenClRadixSort m_sort;
-  Kernels m_kernels[2];
-  bool m_kernelsBuilt[2] = {false, false};
+  std::map<std::string, Kernels> m_kernels;  // by build options (square root, where the boxes are read)
   PairFinderStats m_stats;
 
   std::vector<std::uint32_t> m_active, m_binned, m_huge;
   std::vector<std::uint8_t> m_isHuge;
   std::vector<float> m_extent;
   DeviceArray m_boxes, m_flags;  // every slot's GpucolProxyBox and flags
+  bool m_inPlace = false;        // this search reads the boxes in the caller's records (readsRecordsInPlace)
+  cl::Buffer m_records;          // the records as the device's buffer, for this search only
   DeviceArray m_grid, m_activeBuf, m_hugeBuf, m_isHugeBuf, m_pairs, m_pairValues, m_counter, m_overflow;
   Bins m_bins;                    // the last full grid search's entries and runs (kept for stage 11)
   std::uint32_t m_lastPairs = 0;  // pairs the device found in the last search (sizes the next output)
 
   // Stage 11: what the device keeps of the last full grid search, and what changed since.
   bool m_kept = false;                     // m_bins, m_grid, m_hugeBuf and m_restingBuf describe that search
+  bool m_keptInPlace = false;              // it read the boxes in place (m_boxes holds none)
   PairFinderOptions m_keptOptions;         // the options it ran with
   GpucolGridParams m_keptGrid{};           // its grid
   float m_keptCell = 0;                    // its cell edge (stage 3's test for moved proxies)
@@ -152,11 +159,20 @@ class OpenClPairFinder final : public PairFinder {
   Bins m_movedBins;  // the binned moved proxies' own entries on the kept grid
 };
 
-OpenClPairFinder::Kernels& OpenClPairFinder::kernels(bool newton) {
-  Kernels& k = m_kernels[newton ? 1 : 0];
-  if (!m_kernelsBuilt[newton ? 1 : 0]) {
-    cl::Program program = m_context.program("grid_find_pairs", kernels::grid_find_pairs,
-                                            newton ? "-DGPUCOL_MAPPING_NEWTON" : "");
+OpenClPairFinder::Kernels& OpenClPairFinder::kernels(bool newton, const ProxyArrays& p) {
+  std::string options = newton ? "-DGPUCOL_MAPPING_NEWTON" : "";
+  if (m_inPlace) {
+    const BoxRecords& r = p.records;
+    options += " -DGPUCOL_RECORD_STRIDE=" + std::to_string(r.stride) +
+               " -DGPUCOL_RECORD_MIN=" + std::to_string(r.minOffset) +
+               " -DGPUCOL_RECORD_MAX=" + std::to_string(r.maxOffset) +
+               " -DGPUCOL_RECORD_GROUP=" + std::to_string(r.groupOffset) +
+               " -DGPUCOL_RECORD_MASK=" + std::to_string(r.maskOffset);
+  }
+  const auto [found, isNew] = m_kernels.try_emplace(options);
+  Kernels& k = found->second;
+  if (isNew) {
+    cl::Program program = m_context.program("grid_find_pairs", kernels::grid_find_pairs, options);
     k.countCells = cl::Kernel(program, "grid_count_cells");
     k.writeKeys = cl::Kernel(program, "grid_write_keys");
     k.countOrPlaceEntries = cl::Kernel(program, "grid_count_or_place_entries");
@@ -170,9 +186,31 @@ OpenClPairFinder::Kernels& OpenClPairFinder::kernels(bool newton) {
     k.bruteTest = cl::Kernel(program, "brute_test_pairs");
     k.updateProxies = cl::Kernel(program, "grid_update_proxies");
     k.testMoved = cl::Kernel(program, "grid_test_moved");
-    m_kernelsBuilt[newton ? 1 : 0] = true;
   }
   return k;
+}
+
+bool OpenClPairFinder::readsRecordsInPlace(const ProxyArrays& p) const {
+  const BoxRecords& r = p.records;
+  if (!m_tuning.recordsInPlace || !m_context.sharesHostMemory() || p.minX != nullptr || r.blocks == nullptr ||
+      p.count == 0 || r.groupOffset == kNoRecordField || r.maskOffset == kNoRecordField) {
+    return false;
+  }
+  // Slot s's record at blocks[0] + s * stride for every slot; fields the kernels load as 4-byte words; and an
+  // address the device uses as it is (elsewhere a driver may copy the memory, which is what this avoids).
+  return std::uint64_t(p.count) * r.stride <= r.contiguousBytes &&
+         (r.stride | r.minOffset | r.maxOffset | r.groupOffset | r.maskOffset) % 4 == 0 &&
+         reinterpret_cast<std::uintptr_t>(r.blocks[0]) % std::max<std::uintptr_t>(m_baseAlignment, 1) == 0;
+}
+
+void OpenClPairFinder::bindRecords(const ProxyArrays& p) {
+  // A buffer over the host's records, made afresh for every search: made after the host last wrote them, it
+  // holds what they hold now on any implementation (one that caches a copy takes it at creation), and none
+  // is held between searches over memory the caller may free.
+  const std::size_t bytes = std::size_t(p.count) * p.records.stride;
+  m_records = cl::Buffer(m_context.context(), CL_MEM_READ_ONLY | CL_MEM_USE_HOST_PTR, bytes,
+                         const_cast<unsigned char*>(p.records.blocks[0]));
+  m_stats.recordsReadInPlace = true;
 }
 
 void OpenClPairFinder::chooseGrid(const ProxyArrays& p, const PairFinderOptions& options,
@@ -207,6 +245,13 @@ void OpenClPairFinder::upload(const ProxyArrays& p) {
   const cl::Context& c = m_context.context();
   cl::CommandQueue& q = m_context.queue();
   const std::size_t n = p.count;
+  q.enqueueWriteBuffer(m_flags.ensureFitted(c, n), CL_FALSE, 0, n, p.flags);
+  m_syncedCount = p.count;
+  if (m_inPlace) {
+    m_boxes.release();  // a copy from a search that could not read them in place
+    bindRecords(p);
+    return;
+  }
   // Written through a mapping, not from a host copy of every box: on a CPU device the mapping is the
   // buffer itself, so the boxes are gathered once and held once.
   const std::size_t bytes = n * sizeof(GpucolProxyBox);
@@ -218,12 +263,10 @@ void OpenClPairFinder::upload(const ProxyArrays& p) {
                       for (std::uint32_t s = r.begin(); s < r.end(); ++s) out[s] = deviceBox(p, s);
                     });
   q.enqueueUnmapMemObject(boxes, out);
-  q.enqueueWriteBuffer(m_flags.ensureFitted(c, n), CL_FALSE, 0, n, p.flags);
-  m_syncedCount = p.count;
 }
 
 void OpenClPairFinder::setProxyArgs(cl::Kernel& kernel) {
-  kernel.setArg(0, m_boxes.buffer);
+  kernel.setArg(0, m_inPlace ? m_records : m_boxes.buffer);
   kernel.setArg(1, m_flags.buffer);
 }
 
@@ -422,13 +465,14 @@ void OpenClPairFinder::findPairs(const ProxyArrays& p, const PairFinderOptions& 
       m_active.push_back(s);
     }
   }
+  m_inPlace = readsRecordsInPlace(p);
   // Whatever happens below, the device's arrays and kept grid are only trusted again once this search has
   // finished (an OpenCL error or an early return leaves them out of step with `p`).
   const bool canKeep = keepGrid(p, options);
   m_kept = false;
   translateClErrors("OpenCL grid pair search", [&] {
     if (m_active.size() >= 2) {
-      Kernels& k = kernels(options.mappingSqrt == MappingSqrt::Newton);
+      Kernels& k = kernels(options.mappingSqrt == MappingSqrt::Newton, p);
       m_counter.ensure(m_context.context(), 4);
       m_overflow.ensure(m_context.context(), 4);
       if (canKeep) {
@@ -438,6 +482,7 @@ void OpenClPairFinder::findPairs(const ProxyArrays& p, const PairFinderOptions& 
         fullSearch(p, options, k, pairs);
       }
       if (m_kept) m_keptPairs.assign(pairs.begin(), pairs.end());
+      m_keptInPlace = m_inPlace;
       m_stats.rebinnedProxies = std::uint32_t(m_active.size()) - m_stats.restingProxies;
     }
     notePeak();
@@ -472,6 +517,7 @@ void OpenClPairFinder::releaseUnkept() {
   // buffers where the finder releases them (OpenClPairFinderTuning::release). The next search allocates
   // afresh (measured: measurement history, "OpenCL memory between steps").
   m_context.queue().finish();  // writes not waited for read the host lists until they run
+  m_records = cl::Buffer();
   for (auto* v : {&m_active, &m_binned, &m_huge, &m_moved, &m_movedBinned, &m_movedHuge}) {
     std::vector<std::uint32_t>().swap(*v);
   }
@@ -502,7 +548,8 @@ bool OpenClPairFinder::keepGrid(const ProxyArrays& p, const PairFinderOptions& o
   // Stage 11, as the CPU finder decides it: the kept grid serves while the options that shape it are the
   // same, `moved` is known, and few active proxies changed since it was built (new slots among them: the
   // device's arrays grow to hold them in sendChanges).
-  if (!m_kept || p.moved == nullptr || m_active.size() < options.bruteForceBelow || m_active.size() < 2 ||
+  if (!m_kept || m_inPlace != m_keptInPlace || p.moved == nullptr || m_active.size() < options.bruteForceBelow ||
+      m_active.size() < 2 ||
       options.cellSizeRule != m_keptOptions.cellSizeRule ||
       options.hugeCellLimit != m_keptOptions.hugeCellLimit || p.count < m_syncedCount) {
     return false;
@@ -533,15 +580,19 @@ void OpenClPairFinder::sendChanges(const ProxyArrays& p, Kernels& k) {
   const cl::Context& c = m_context.context();
   cl::CommandQueue& q = m_context.queue();
   // New slots: the arrays grow, keeping what they hold (every new slot is among the updates).
-  m_boxes.ensureKeeping(c, q, std::size_t(p.count) * sizeof(GpucolProxyBox));
+  if (m_inPlace) {
+    bindRecords(p);
+  } else {
+    m_boxes.ensureKeeping(c, q, std::size_t(p.count) * sizeof(GpucolProxyBox));
+  }
   m_flags.ensureKeeping(c, q, p.count);
   m_restingBuf.ensureKeeping(c, q, p.count);
   const std::uint32_t count = std::uint32_t(m_updates.size());
   if (count > 0) {
     const std::size_t bytes = std::size_t(count) * sizeof(GpucolProxyUpdate);
     q.enqueueWriteBuffer(m_updatesBuf.ensureFitted(c, bytes), CL_FALSE, 0, bytes, m_updates.data());
-    setKernelArgs(k.updateProxies, 0, m_boxes.buffer, m_flags.buffer, m_restingBuf.buffer,
-                  m_updatesBuf.buffer, count);
+    setKernelArgs(k.updateProxies, 0, m_inPlace ? m_records : m_boxes.buffer, m_flags.buffer,
+                  m_restingBuf.buffer, m_updatesBuf.buffer, count);
     launch(k.updateProxies, count);
   }
   m_syncedCount = p.count;

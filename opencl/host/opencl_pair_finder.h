@@ -23,6 +23,11 @@ struct OpenClPairFinderTuning {
   /// after every search whatever this says.
   enum class BufferRelease { Auto, Always, Never };
   BufferRelease release = BufferRelease::Auto;
+  /// Whether the kernels read the boxes in the caller's records (BoxRecords: GridBroadphase's proxies) where
+  /// they can, instead of a copy of every box on the device: where the device's memory is the host's, and the
+  /// records lie end to end (contiguousBytes) with their filters, at an address the device takes as its own
+  /// (CL_DEVICE_MEM_BASE_ADDR_ALIGN). Otherwise, and always on a discrete GPU, the boxes are copied.
+  bool recordsInPlace = true;
 };
 
 /// Stage 5 on the device: whether the finder sorts the entries of a grid of `cells` cells holding `binned`

@@ -14,8 +14,31 @@
 // Binning and the dedupe rule must compute the same cell for the same float: no contraction, no fast math.
 #pragma OPENCL FP_CONTRACT OFF
 
-// Every slot's box and filter (grid_params.h), and its flags.
+#ifdef GPUCOL_RECORD_STRIDE
+// Every slot's box and filter read in place in the host's records (a device that shares the host's memory:
+// GridBroadphase's proxies), GPUCOL_RECORD_STRIDE bytes per slot with the fields at the byte offsets the
+// host defines; and every slot's flags.
+#define PROXY_PARAMS __global const uchar *boxes, __global const uchar *flags
+#define WRITABLE_BOXES_PARAM __global const uchar *boxes
+GpucolProxyBox load_box(__global const uchar* boxes, const uint s) {
+  __global const uchar* r = boxes + (size_t)s * GPUCOL_RECORD_STRIDE;
+  __global const float* lo = (__global const float*)(r + GPUCOL_RECORD_MIN);
+  __global const float* hi = (__global const float*)(r + GPUCOL_RECORD_MAX);
+  GpucolProxyBox b;
+  b.minX = lo[0], b.minY = lo[1], b.minZ = lo[2];
+  b.maxX = hi[0], b.maxY = hi[1], b.maxZ = hi[2];
+  b.group = *(__global const int*)(r + GPUCOL_RECORD_GROUP);
+  b.mask = *(__global const int*)(r + GPUCOL_RECORD_MASK);
+  return b;
+}
+#else
+// Every slot's box and filter in the device's copy (grid_params.h), and its flags.
 #define PROXY_PARAMS __global const GpucolProxyBox *boxes, __global const uchar *flags
+#define WRITABLE_BOXES_PARAM __global GpucolProxyBox *boxes
+GpucolProxyBox load_box(__global const GpucolProxyBox* boxes, const uint s) {
+  return boxes[s];
+}
+#endif
 #define PROXY_ARGS boxes, flags
 
 // Stage 8: overlap on all three axes, touching counts.
@@ -33,7 +56,7 @@ bool filters_accept(const GpucolProxyBox a, const GpucolProxyBox b, __global con
 
 // Stage 8: overlap and filter of slots sa and sb.
 bool accept_pair(PROXY_PARAMS, const uint sa, const uint sb) {
-  const GpucolProxyBox a = boxes[sa], b = boxes[sb];
+  const GpucolProxyBox a = load_box(boxes, sa), b = load_box(boxes, sb);
   return boxes_overlap(a, b) && filters_accept(a, b, flags, sa, sb);
 }
 
@@ -102,7 +125,7 @@ __kernel void grid_count_cells(PROXY_PARAMS, __global const GpucolGridParams* gr
   }
   const uint s = binned[i];
   const GpucolGridParams g = *grid;
-  const CellRange span = cell_range(boxes[s], g);
+  const CellRange span = cell_range(load_box(boxes, s), g);
   const ulong count = (ulong)(span.hi[0] - span.lo[0] + 1u) * (span.hi[1] - span.lo[1] + 1u) *
                       (span.hi[2] - span.lo[2] + 1u);
   if (count > 0xffffffffUL) {
@@ -122,7 +145,7 @@ __kernel void grid_write_keys(PROXY_PARAMS, __global const GpucolGridParams* gri
   }
   const uint s = binned[i];
   const GpucolGridParams g = *grid;
-  const CellRange span = cell_range(boxes[s], g);
+  const CellRange span = cell_range(load_box(boxes, s), g);
   uint o = keyOffsets[i];
   for (uint z = span.lo[2]; z <= span.hi[2]; ++z) {
     for (uint y = span.lo[1]; y <= span.hi[1]; ++y) {
@@ -154,7 +177,7 @@ __kernel void grid_count_or_place_entries(PROXY_PARAMS, __global const GpucolGri
   }
   const uint s = binned[i];
   const GpucolGridParams g = *grid;
-  const CellRange span = cell_range(boxes[s], g);
+  const CellRange span = cell_range(load_box(boxes, s), g);
   for (uint z = span.lo[2]; z <= span.hi[2]; ++z) {
     for (uint y = span.lo[1]; y <= span.hi[1]; ++y) {
       const uint row = (z * g.dimY + y) * g.dimX;  // a dense grid's cells fit 32 bits
@@ -266,11 +289,11 @@ __kernel void grid_test_candidates(PROXY_PARAMS, __global const GpucolGridParams
   while (k < end) {
     // Row i: box a is read once for its candidates (i, j), j < m, that fall in this chunk.
     const uint a = keySlots[start + (uint)i];
-    const GpucolProxyBox boxA = boxes[a];
+    const GpucolProxyBox boxA = load_box(boxes, a);
     const uint rowEnd = (uint)min((ulong)end, (ulong)k + (m - j));
     for (; k < rowEnd; ++k, ++j) {
       const uint b = keySlots[start + (uint)j];
-      const GpucolProxyBox boxB = boxes[b];
+      const GpucolProxyBox boxB = load_box(boxes, b);
       if (boxes_overlap(boxA, boxB) && filters_accept(boxA, boxB, flags, a, b) &&
           overlap_cell(boxA, boxB, g) == (ulong)runCell[run]) {
         append_pair(min(a, b), max(a, b), slotBits, pairs, capacity, pairCount);
@@ -307,13 +330,13 @@ __kernel void grid_test_huge(PROXY_PARAMS, __global const uint* huge, const uint
   for (ulong ai = get_global_id(0); ai < activeCount; ai += get_global_size(0)) {
     const uint s = active[ai];
     const bool alsoHuge = isHuge[ai] != 0;
-    const GpucolProxyBox b = boxes[s];
+    const GpucolProxyBox b = load_box(boxes, s);
     for (uint h = 0; h < hugeCount; ++h) {
       const uint sh = huge[h];
       if (s == sh || (alsoHuge && s < sh)) {
         continue;
       }
-      const GpucolProxyBox hb = boxes[sh];
+      const GpucolProxyBox hb = load_box(boxes, sh);
       if (boxes_overlap(hb, b) && filters_accept(hb, b, flags, sh, s)) {
         append_pair(min(sh, s), max(sh, s), slotBits, pairs, capacity, pairCount);
       }
@@ -338,14 +361,16 @@ __kernel void brute_test_pairs(PROXY_PARAMS, __global const uint* active, const 
 
 // Stage 11: writes the slots that changed since the last search into the kept arrays and marks them as no
 // longer resting (their entries in the kept cells, and their pairs of the last search, are stale).
-__kernel void grid_update_proxies(__global GpucolProxyBox* boxes, __global uchar* flags, __global uchar* resting,
+__kernel void grid_update_proxies(WRITABLE_BOXES_PARAM, __global uchar* flags, __global uchar* resting,
                                   __global const GpucolProxyUpdate* updates, const uint updateCount) {
   const uint i = get_global_id(0);
   if (i >= updateCount) {
     return;
   }
   const GpucolProxyUpdate u = updates[i];
+#ifndef GPUCOL_RECORD_STRIDE  // read in place, the record holds the box already
   boxes[u.slot] = u.box;
+#endif
   flags[u.slot] = (uchar)u.flags;
   resting[u.slot] = 0u;
 }
@@ -368,7 +393,7 @@ __kernel void grid_test_moved(PROXY_PARAMS, __global const GpucolGridParams* gri
   }
   const uint sm = moved[i];
   const GpucolGridParams g = *grid;
-  const GpucolProxyBox boxM = boxes[sm];
+  const GpucolProxyBox boxM = load_box(boxes, sm);
   const CellRange span = cell_range(boxM, g);
   for (uint z = span.lo[2]; z <= span.hi[2]; ++z) {
     for (uint y = span.lo[1]; y <= span.hi[1]; ++y) {
@@ -390,7 +415,7 @@ __kernel void grid_test_moved(PROXY_PARAMS, __global const GpucolGridParams* gri
           if (!resting[s]) {
             continue;
           }
-          const GpucolProxyBox box = boxes[s];
+          const GpucolProxyBox box = load_box(boxes, s);
           if (boxes_overlap(boxM, box) && filters_accept(boxM, box, flags, sm, s) &&
               overlap_cell(boxM, box, g) == (ulong)c) {
             append_pair(min(sm, s), max(sm, s), slotBits, pairs, capacity, pairCount);

@@ -22,7 +22,9 @@
 #include "broadphase/grid_choice.h"
 #include "broadphase/grid_pair_finder.h"
 #include "opencl/host/opencl_pair_finder.h"
+#include "opencl/host/scan.h"
 #include "opencl_test_device.h"
+#include "proxy_records.h"
 
 namespace gpucol::opencl {
 namespace {
@@ -58,6 +60,14 @@ struct Cloud {
         for (float* x : {&corner[0][i], &corner[3][i]}) *x += step;
     }
   }
+  /// Writes every box and filter into `records`.
+  void writeInto(ProxyRecords& records) const {
+    for (std::size_t i = 0; i < flags.size(); ++i) {
+      const float lo[3] = {corner[0][i], corner[1][i], corner[2][i]};
+      const float hi[3] = {corner[3][i], corner[4][i], corner[5][i]};
+      records.set(i, lo, hi, group[i], mask[i]);
+    }
+  }
   ProxyArrays view() const {
     ProxyArrays p;
     p.count = std::uint32_t(flags.size());
@@ -91,10 +101,13 @@ std::size_t settledHeapBytes(OpenClContext& context) {
 #endif
 
 /// Steps a fresh finder over `cloud` (moving every `every`-th box between steps) and checks, after each
-/// step, the heap it added against its scratch bytes and the pair list it returned.
+/// step, the heap it added against its scratch bytes and the pair list it returned. `inRecords`: the boxes
+/// are given as records end to end (proxy_records.h), which the finder reads in place: the heap then shows
+/// that the driver made no copy of them either.
 void expectHeapExplained(
     OpenClContext& context, Cloud cloud, std::size_t every, const std::string& what,
-    OpenClPairFinderTuning::BufferRelease release = OpenClPairFinderTuning::BufferRelease::Auto) {
+    OpenClPairFinderTuning::BufferRelease release = OpenClPairFinderTuning::BufferRelease::Auto,
+    bool inRecords = false) {
 #if defined(__GLIBC__) && !defined(__SANITIZE_ADDRESS__)
   // A GPU's buffers are not in the host's heap, and another CPU runtime may map its own memory.
   const cl::Platform platform(context.device().getInfo<CL_DEVICE_PLATFORM>());
@@ -109,10 +122,20 @@ void expectHeapExplained(
   std::unique_ptr<PairFinder> warm = makePairFinder(Config{});
   ASSERT_NE(warm, nullptr);
   std::vector<std::uint64_t> pairs;
+  ProxyRecords records(inRecords ? cloud.flags.size() : 0);
+  auto input = [&](const Cloud& c) {
+    if (!inRecords) return c.view();
+    c.writeInto(records);
+    ProxyArrays p =
+        records.view(ProxyRecords::Blocks::EndToEnd, c.group.data(), c.mask.data(), c.flags.data());
+    p.moved = c.moved.data();
+    return p;
+  };
   {
+    // The same input as below, so that the programs it builds (one per way of reading the boxes) are built.
     Cloud copy = cloud;
     for (int step = 0; step < 3; ++step, copy.move(every, 0.05f))
-      warm->findPairs(copy.view(), options, pairs);
+      warm->findPairs(input(copy), options, pairs);
   }
   std::vector<std::uint64_t>().swap(pairs);
   pairs.reserve(1);
@@ -120,7 +143,7 @@ void expectHeapExplained(
   std::unique_ptr<PairFinder> finder = makePairFinder(Config{}, {0, release});
   ASSERT_NE(finder, nullptr);
   for (int step = 0; step < 4; ++step, cloud.move(every, 0.05f)) {
-    finder->findPairs(cloud.view(), options, pairs);
+    finder->findPairs(input(cloud), options, pairs);
     // Settled: the finder releases its per-search buffers at the end of each search.
     const std::ptrdiff_t added = std::ptrdiff_t(settledHeapBytes(context) - before);
     const std::ptrdiff_t counted = std::ptrdiff_t(finder->stats().scratchBytes + pairs.capacity() * 8);
@@ -129,9 +152,10 @@ void expectHeapExplained(
         << finder->stats().scratchBytes << " and its pair list holds " << pairs.capacity() * 8;
     EXPECT_GT(pairs.size(), 0u) << what;
     const PairFinderStats& stats = finder->stats();
+    EXPECT_EQ(stats.recordsReadInPlace, inRecords) << what << ", step " << step;
     // The search's high-water mark is still reported once its buffers are gone: every box was on the device
-    // (GpucolProxyBox, 32 bytes), and it held at least what it keeps.
-    EXPECT_GE(stats.peakScratchBytes, std::max(stats.scratchBytes, cloud.flags.size() * 32))
+    // (GpucolProxyBox, 32 bytes) unless it read them in place, and it held at least what it keeps.
+    EXPECT_GE(stats.peakScratchBytes, std::max(stats.scratchBytes, inRecords ? 0 : cloud.flags.size() * 32))
         << what << ", step " << step;
     // A search that keeps no grid leaves nothing per proxy behind (PoCL's memory is the host's, so Auto
     // releases): the next one writes every box again.
@@ -139,7 +163,7 @@ void expectHeapExplained(
       EXPECT_LT(stats.scratchBytes, 64u * 1024) << what << ", step " << step;
     }
     // One that keeps its buffers keeps at least the boxes.
-    if (release == OpenClPairFinderTuning::BufferRelease::Never) {
+    if (release == OpenClPairFinderTuning::BufferRelease::Never && !inRecords) {
       EXPECT_GE(stats.scratchBytes, cloud.flags.size() * 32) << what << ", step " << step;
     }
     // The first step moves every box, the second keeps the grid, the others search the moved boxes alone.
@@ -148,7 +172,7 @@ void expectHeapExplained(
     }
   }
 #else
-  (void)context, (void)cloud, (void)every, (void)release;
+  (void)context, (void)cloud, (void)every, (void)release, (void)inRecords;
   GTEST_SKIP() << what << ": needs glibc's mallinfo2 over the driver's own allocations (not under ASan)";
 #endif
 }
@@ -164,6 +188,52 @@ TEST(OpenClPairFinderMemory, ScratchBytesExplainTheHeapOfAFinderKeepingItsBuffer
                       OpenClPairFinderTuning::BufferRelease::Never);
   expectHeapExplained(context, Cloud(60000, 0.0f, 15), 100, "60K boxes, 1% moving, buffers kept",
                       OpenClPairFinderTuning::BufferRelease::Never);
+}
+
+TEST(OpenClPairFinderMemory, HostMemoryIsReadInPlaceWhereTheDeviceSharesIt) {
+  // What the finder's memory figures assume when it reads the caller's records in place: a buffer made over
+  // host memory (CL_MEM_USE_HOST_PTR) on a device that shares the host's memory is that memory, with no copy
+  // at any time. Here a scan over such a buffer writes straight into the host's array, and the heap grows by
+  // no copy of it.
+  GPUCOL_REQUIRE_OPENCL(context);
+#if defined(__GLIBC__) && !defined(__SANITIZE_ADDRESS__)
+  const cl::Platform platform(context.device().getInfo<CL_DEVICE_PLATFORM>());
+  if (platform.getInfo<CL_PLATFORM_NAME>() != "Portable Computing Language" || context.isGpu()) {
+    GTEST_SKIP() << "the heap holds the device's buffers only on PoCL's CPU device";
+  }
+  constexpr std::size_t kValues = std::size_t(1) << 22;  // 16 MB
+  std::unique_ptr<std::uint32_t[]> values(new std::uint32_t[kValues]);
+  OpenClScan scan(context);
+  {
+    // The scan's program and scratch, before the count starts.
+    cl::Buffer warm(context.context(), CL_MEM_READ_WRITE, kValues * 4);
+    context.queue().enqueueFillBuffer(warm, cl_uint(1), 0, kValues * 4);
+    scan.exclusiveScan(warm, kValues);
+  }
+  std::fill(values.get(), values.get() + kValues, 1u);
+  const std::size_t before = settledHeapBytes(context);
+  cl::Buffer buffer(context.context(), CL_MEM_READ_WRITE | CL_MEM_USE_HOST_PTR, kValues * 4, values.get());
+  EXPECT_EQ(scan.exclusiveScan(buffer, kValues), std::uint64_t(kValues));
+  context.queue().finish();
+  EXPECT_LT(std::ptrdiff_t(heapBytes()) - std::ptrdiff_t(before), std::ptrdiff_t(kValues)) << "a copy was made";
+  // No read, no map: the device wrote into the host's array itself.
+  EXPECT_EQ(values[0], 0u);
+  EXPECT_EQ(values[2], 2u);
+  EXPECT_EQ(values[kValues - 1], std::uint32_t(kValues - 1));
+#else
+  GTEST_SKIP() << "needs glibc's mallinfo2 over the driver's own allocations (not under ASan)";
+#endif
+}
+
+TEST(OpenClPairFinderMemory, ScratchBytesExplainTheHeapWithBoxesReadInPlace) {
+  GPUCOL_REQUIRE_OPENCL(context);
+  using Release = OpenClPairFinderTuning::BufferRelease;
+  expectHeapExplained(context, Cloud(60000, 0.0f, 16), 1, "60K boxes in records, all moving", Release::Auto,
+                      true);
+  expectHeapExplained(context, Cloud(60000, 0.0f, 17), 100, "60K boxes in records, 1% moving", Release::Auto,
+                      true);
+  expectHeapExplained(context, Cloud(60000, 0.0f, 18), 100, "60K boxes in records, 1% moving, buffers kept",
+                      Release::Never, true);
 }
 
 TEST(OpenClPairFinderMemory, ScratchBytesExplainTheHeapWhileTheGridIsKept) {

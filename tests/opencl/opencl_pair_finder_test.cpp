@@ -8,6 +8,7 @@
 
 #include "broadphase/grid_pair_finder.h"
 #include "opencl_test_device.h"
+#include "proxy_records.h"
 
 namespace gpucol::opencl {
 namespace {
@@ -35,6 +36,16 @@ struct Scene {
     return p;
   }
 };
+
+/// A scene's boxes and filters as records (proxy_records.h).
+ProxyRecords recordsOf(const Scene& s) {
+  ProxyRecords records(s.flags.size());
+  for (std::size_t i = 0; i < s.flags.size(); ++i) {
+    const float lo[3] = {s.minX[i], s.minY[i], s.minZ[i]}, hi[3] = {s.maxX[i], s.maxY[i], s.maxZ[i]};
+    records.set(i, lo, hi, s.group[i], s.mask[i]);
+  }
+  return records;
+}
 
 Scene uniformScene(std::size_t n, float world, float half, std::uint32_t seed, float offset = 0.0f) {
   std::mt19937 random(seed);
@@ -73,23 +84,36 @@ void expectMatchesReferences(const Scene& scene, const std::string& what,
   std::unique_ptr<PairFinder> cpu = makeCpuPairFinder();
   const ProxyArrays proxies = scene.view();
   const std::vector<std::uint64_t> expected = findPairsBruteForce(proxies);
+  // The boxes in six arrays, and in records read in place (where the device shares the host's memory) or
+  // copied from them.
+  const ProxyRecords records = recordsOf(scene);
+  const ProxyArrays views[3] = {
+      proxies,
+      records.view(ProxyRecords::Blocks::EndToEnd, proxies.group, proxies.mask, proxies.flags),
+      records.view(ProxyRecords::Blocks::Apart, proxies.group, proxies.mask, proxies.flags)};
   for (std::unique_ptr<PairFinder>& gpu : finders) {
     ASSERT_NE(gpu, nullptr);
-    for (MappingSqrt root : {MappingSqrt::Double, MappingSqrt::Newton}) {
-      for (std::uint32_t below : {std::uint32_t(0), bruteForceBelow}) {
-        PairFinderOptions options;
-        options.bruteForceBelow = below;
-        options.mappingSqrt = root;
-        std::vector<std::uint64_t> fromGpu, fromCpu;
-        gpu->findPairs(proxies, options, fromGpu);
-        cpu->findPairs(proxies, options, fromCpu);
-        if (below == 0 && proxies.count >= 2) {
-          EXPECT_TRUE(gpu->stats().usedGrid) << what << ": the grid path was not taken";
+    for (int v = 0; v < 3; ++v) {
+      const std::string how = what + (v == 0 ? "" : v == 1 ? ", records end to end" : ", records apart");
+      for (MappingSqrt root : {MappingSqrt::Double, MappingSqrt::Newton}) {
+        for (std::uint32_t below : {std::uint32_t(0), bruteForceBelow}) {
+          PairFinderOptions options;
+          options.bruteForceBelow = below;
+          options.mappingSqrt = root;
+          std::vector<std::uint64_t> fromGpu, fromCpu;
+          gpu->findPairs(views[v], options, fromGpu);
+          cpu->findPairs(proxies, options, fromCpu);
+          if (below == 0 && proxies.count >= 2) {
+            EXPECT_TRUE(gpu->stats().usedGrid) << how << ": the grid path was not taken";
+          }
+          if (proxies.count >= 2) {
+            EXPECT_EQ(gpu->stats().recordsReadInPlace, v == 1 && context->sharesHostMemory()) << how;
+          }
+          EXPECT_EQ(fromGpu.size(), expected.size()) << how << ", bruteForceBelow " << below;
+          EXPECT_TRUE(fromGpu == expected)
+              << how << ": OpenCL pairs differ from brute force, bruteForceBelow " << below;
+          EXPECT_TRUE(fromGpu == fromCpu) << how << ": OpenCL pairs differ from the CPU finder";
         }
-        EXPECT_EQ(fromGpu.size(), expected.size()) << what << ", bruteForceBelow " << below;
-        EXPECT_TRUE(fromGpu == expected)
-            << what << ": OpenCL pairs differ from brute force, bruteForceBelow " << below;
-        EXPECT_TRUE(fromGpu == fromCpu) << what << ": OpenCL pairs differ from the CPU finder";
       }
     }
   }
@@ -201,16 +225,17 @@ TEST(OpenClPairFinder, GrowsItsOutputAcrossSteps) {
   expectMatchesReferences(uniformScene(2000, 20.0f, 1.5f, 13), "dense");
 }
 
-/// Stage 11 over steps: OpenCL finders (three launch shapes, the last keeping its buffers) and a CPU finder
-/// see the same scene and the same `moved` flags each step. Each OpenCL finder's pairs must equal the CPU
-/// finder's (bit for bit, same order) and brute force, and its resting/re-binned counts and path (grid,
-/// incremental) the CPU finder's.
+/// Stage 11 over steps: OpenCL finders (three launch shapes, the last keeping its buffers, and a fourth that
+/// reads the boxes in records, in place where the device shares the host's memory) and a CPU finder see the
+/// same scene and the same `moved` flags each step. Each OpenCL finder's pairs must equal the CPU finder's
+/// (bit for bit, same order) and brute force, and its resting/re-binned counts and path (grid, incremental)
+/// the CPU finder's.
 class SteppedFinders {
  public:
   explicit SteppedFinders(const PairFinderOptions& options)
       : m_options(options),
         m_gpu{makePairFinder(Config{}), makePairFinder(Config{}, {1}),
-              makePairFinder(Config{}, {7, kKeepBuffers})},
+              makePairFinder(Config{}, {7, kKeepBuffers}), makePairFinder(Config{})},
         m_cpu(makeCpuPairFinder()) {}
 
   /// One search of every finder; `moved` may be nullptr (anything may have changed). Returns the OpenCL
@@ -223,9 +248,16 @@ class SteppedFinders {
     const std::vector<std::uint64_t> expected = findPairsBruteForce(view);
     EXPECT_TRUE(fromCpu == expected) << what << ": the CPU finder differs from brute force";
     const PairFinderStats& cpu = m_cpu->stats();
+    const ProxyRecords records = recordsOf(scene);
+    ProxyArrays recordsView = records.view(ProxyRecords::Blocks::EndToEnd, view.group, view.mask, view.flags);
+    recordsView.moved = moved;
     for (std::unique_ptr<PairFinder>& gpu : m_gpu) {
       std::vector<std::uint64_t> fromGpu;
-      gpu->findPairs(view, m_options, fromGpu);
+      const bool inRecords = &gpu == &m_gpu[3];
+      gpu->findPairs(inRecords ? recordsView : view, m_options, fromGpu);
+      if (inRecords && view.count >= 2 && cpu.usedGrid) {
+        EXPECT_EQ(gpu->stats().recordsReadInPlace, OpenClContext::tryGet()->sharesHostMemory()) << what;
+      }
       EXPECT_EQ(fromGpu.size(), expected.size()) << what;
       EXPECT_TRUE(fromGpu == fromCpu) << what << ": OpenCL pairs differ from the CPU finder";
       EXPECT_TRUE(fromGpu == expected) << what << ": OpenCL pairs differ from brute force";
@@ -240,7 +272,7 @@ class SteppedFinders {
 
  private:
   PairFinderOptions m_options;
-  std::unique_ptr<PairFinder> m_gpu[3];
+  std::unique_ptr<PairFinder> m_gpu[4];
   std::unique_ptr<PairFinder> m_cpu;
 };
 

@@ -243,6 +243,9 @@ struct PairFinderStats {
   bool slabAxisKept = false;
   /// True when the slab search read its boxes in place (SlabBoxReading) instead of copying them.
   bool slabBoxesInPlace = false;
+  /// True when an OpenCL finder's kernels read the boxes in ProxyArrays::records in place, with no copy of
+  /// them on the device.
+  bool recordsReadInPlace = false;
   /// True when the slab search paired boxes by home cell (PairFinderOptions::homeCells) on a grid of its own
   /// (cellSize and dims give that grid's).
   bool homeCells = false;
