@@ -102,10 +102,12 @@ class OpenClPairFinder final : public PairFinder {
   void upload(const ProxyArrays& p);
   bool keepGrid(const ProxyArrays& p, const PairFinderOptions& options);
   void sendChanges(const ProxyArrays& p, Kernels& k);
-  void bin(Kernels& k, const std::vector<std::uint32_t>& slots, const GpucolGridParams& grid, Bins& b);
+  void bin(Kernels& k, const std::vector<std::uint32_t>& slots, const GpucolGridParams& grid, Bins& b,
+           bool slotsAfterBinning);
   void testBins(Kernels& k, Bins& b, const cl::Buffer& out, std::uint32_t capacity, cl_uint slotBits);
   void testHuge(Kernels& k, const DeviceArray& huge, std::uint32_t hugeCount, const DeviceArray& isHuge,
-                const cl::Buffer& out, std::uint32_t capacity, cl_uint slotBits);
+                std::uint32_t activeCount, const cl::Buffer& out, std::uint32_t capacity, cl_uint slotBits);
+  bool fewMoved(const ProxyArrays& p) const;
   void fullSearch(const ProxyArrays& p, const PairFinderOptions& options, Kernels& k,
                   std::vector<std::uint64_t>& pairs);
   void incremental(const ProxyArrays& p, const PairFinderOptions& options, Kernels& k,
@@ -135,7 +137,8 @@ class OpenClPairFinder final : public PairFinder {
   DeviceArray m_boxes, m_flags;  // every slot's GpucolProxyBox and flags
   bool m_inPlace = false;        // this search reads the boxes in the caller's records (readsRecordsInPlace)
   cl::Buffer m_records;          // the records as the device's buffer, for this search only
-  DeviceArray m_grid, m_activeBuf, m_hugeBuf, m_isHugeBuf, m_pairs, m_pairValues, m_counter, m_overflow;
+  DeviceArray m_grid, m_activeBuf, m_hugeBuf, m_isHugeBuf, m_pairs, m_counter, m_overflow;
+  std::uint32_t m_activeCount = 0;  // active slots of this search (m_active, freed once uploaded)
   Bins m_bins;                    // the last full grid search's entries and runs (kept for stage 11)
   std::uint32_t m_lastPairs = 0;  // pairs the device found in the last search (sizes the next output)
 
@@ -148,12 +151,12 @@ class OpenClPairFinder final : public PairFinder {
   std::uint32_t m_keptHugeCount = 0;       // its huge proxies, in m_hugeBuf
   std::uint32_t m_syncedCount = 0;         // slots whose boxes, filters and flags the device arrays hold
   std::vector<std::uint8_t> m_resting;     // per slot: active in that search and unchanged since
-  std::vector<std::uint64_t> m_keptPairs;  // the pairs of the previous search
+  bool m_callerKeepsPairs = false;         // the pairs of that search are the caller's ProxyArrays::lastPairs
+  std::vector<std::uint64_t> m_keptPairs;  // else our copy of them
   std::vector<std::uint32_t> m_moved;      // active slots changed since that search, ascending
   std::vector<std::uint32_t> m_movedBinned;  // of those, the binned ones
   std::vector<std::uint32_t> m_movedHuge;    // and the huge ones
   std::vector<GpucolProxyUpdate> m_updates;  // slots to write into the device's arrays this search
-  std::vector<std::uint64_t> m_carried;      // pairs of two resting proxies, carried over
   std::vector<std::uint64_t> m_found;        // pairs with a moved proxy, found on the device
   DeviceArray m_restingBuf, m_updatesBuf, m_movedHugeBuf, m_isMovedHugeBuf;
   Bins m_movedBins;  // the binned moved proxies' own entries on the kept grid
@@ -294,7 +297,7 @@ void OpenClPairFinder::launchStrided(cl::Kernel& kernel, std::uint64_t items) {
 }
 
 void OpenClPairFinder::bin(Kernels& k, const std::vector<std::uint32_t>& slots, const GpucolGridParams& grid,
-                           Bins& b) {
+                           Bins& b, bool slotsAfterBinning) {
   const cl::Context& c = m_context.context();
   cl::CommandQueue& q = m_context.queue();
   b.count = std::uint32_t(slots.size());
@@ -321,6 +324,7 @@ void OpenClPairFinder::bin(Kernels& k, const std::vector<std::uint32_t>& slots, 
     setKernelArgs(k.countOrPlaceEntries, kProxyArgs + 4, cl_uint(1),
                   b.keySlots.ensureFitted(c, std::size_t(b.keys) * 4));
     launch(k.countOrPlaceEntries, b.keys == 0 ? 0 : b.count);
+    if (!slotsAfterBinning) releaseEarly({&b.slots}, false);  // the entries hold them now
     setKernelArgs(k.markFilledCells, 0, b.counts.buffer, cellCount, b.runHeads.ensureFitted(c, cells * 4));
     launch(k.markFilledCells, cells);
     b.runs = m_scan.exclusiveScan(b.runHeads.buffer, cells);
@@ -342,6 +346,7 @@ void OpenClPairFinder::bin(Kernels& k, const std::vector<std::uint32_t>& slots, 
                   b.keySlots.ensureFitted(c, std::size_t(b.keys) * 4));
     launch(k.writeKeys, b.keys == 0 ? 0 : b.count);
     releaseEarly({&b.counts}, false);  // the entries' offsets
+    if (!slotsAfterBinning) releaseEarly({&b.slots}, false);
     // Stage 5 on a sparse or large grid: radix sort by cell.
     m_sort.sort(b.cellKeys.buffer, b.keySlots.buffer, b.keys, indexBits(cells));
     releaseEarly({}, true);  // the pair sort's is 12 bytes per pair, usually far fewer than the entries
@@ -403,12 +408,11 @@ void OpenClPairFinder::testBins(Kernels& k, Bins& b, const cl::Buffer& out, std:
 }
 
 void OpenClPairFinder::testHuge(Kernels& k, const DeviceArray& huge, std::uint32_t hugeCount,
-                                const DeviceArray& isHuge, const cl::Buffer& out, std::uint32_t capacity,
-                                cl_uint slotBits) {
+                                const DeviceArray& isHuge, std::uint32_t activeCount, const cl::Buffer& out,
+                                std::uint32_t capacity, cl_uint slotBits) {
   if (hugeCount == 0) {
     return;
   }
-  const std::uint32_t activeCount = std::uint32_t(m_active.size());
   setProxyArgs(k.testHuge);
   setKernelArgs(k.testHuge, kProxyArgs, huge.buffer, hugeCount, m_activeBuf.buffer, activeCount,
                 isHuge.buffer, slotBits, out, capacity, m_counter.buffer);
@@ -436,8 +440,7 @@ void OpenClPairFinder::readPairs(cl_uint slotBits, std::vector<std::uint64_t>& p
   cl::CommandQueue& q = m_context.queue();
   const std::uint32_t found = m_lastPairs;
   if (found > 1) {
-    m_sort.sort(m_pairs.buffer, m_pairValues.ensureFitted(m_context.context(), std::size_t(found) * 4), found,
-                2 * slotBits);
+    m_sort.sortKeys(m_pairs.buffer, found, 2 * slotBits);
   }
   // Read into the output itself and widened there: no host copy of the compressed keys (8 bytes a pair).
   pairs.resize(found);
@@ -465,13 +468,14 @@ void OpenClPairFinder::findPairs(const ProxyArrays& p, const PairFinderOptions& 
       m_active.push_back(s);
     }
   }
+  m_activeCount = std::uint32_t(m_active.size());
   m_inPlace = readsRecordsInPlace(p);
   // Whatever happens below, the device's arrays and kept grid are only trusted again once this search has
   // finished (an OpenCL error or an early return leaves them out of step with `p`).
   const bool canKeep = keepGrid(p, options);
   m_kept = false;
   translateClErrors("OpenCL grid pair search", [&] {
-    if (m_active.size() >= 2) {
+    if (m_activeCount >= 2) {
       Kernels& k = kernels(options.mappingSqrt == MappingSqrt::Newton, p);
       m_counter.ensure(m_context.context(), 4);
       m_overflow.ensure(m_context.context(), 4);
@@ -481,9 +485,12 @@ void OpenClPairFinder::findPairs(const ProxyArrays& p, const PairFinderOptions& 
       } else {
         fullSearch(p, options, k, pairs);
       }
-      if (m_kept) m_keptPairs.assign(pairs.begin(), pairs.end());
+      // The next search carries pairs over from the caller's copy of these when it keeps one (not held
+      // twice), else from ours.
+      m_callerKeepsPairs = m_kept && p.lastPairs != nullptr;
+      if (m_kept && !m_callerKeepsPairs) m_keptPairs.assign(pairs.begin(), pairs.end());
       m_keptInPlace = m_inPlace;
-      m_stats.rebinnedProxies = std::uint32_t(m_active.size()) - m_stats.restingProxies;
+      m_stats.rebinnedProxies = m_activeCount - m_stats.restingProxies;
     }
     notePeak();
     releaseUnkept();
@@ -496,8 +503,7 @@ std::size_t OpenClPairFinder::heldBytes() const {
   // largest sort, and on a sparse grid the cell sort's 12 per entry.
   std::size_t bytes = m_bins.bytes() + m_movedBins.bytes() + m_scan.bytes() + m_sort.bytes();
   for (const DeviceArray* a :
-       {&m_boxes, &m_flags, &m_grid, &m_activeBuf, &m_hugeBuf, &m_isHugeBuf, &m_pairs, &m_pairValues,
-        &m_counter, &m_overflow, &m_restingBuf, &m_updatesBuf, &m_movedHugeBuf, &m_isMovedHugeBuf}) {
+       {&m_boxes, &m_flags, &m_grid, &m_activeBuf, &m_hugeBuf, &m_isHugeBuf, &m_pairs, &m_counter, &m_overflow, &m_restingBuf, &m_updatesBuf, &m_movedHugeBuf, &m_isMovedHugeBuf}) {
     bytes += a->bytes;
   }
   // And the host's lists.
@@ -506,7 +512,7 @@ std::size_t OpenClPairFinder::heldBytes() const {
          (m_active.capacity() + m_binned.capacity() + m_huge.capacity() + m_moved.capacity() +
           m_movedBinned.capacity() + m_movedHuge.capacity()) *
              sizeof(std::uint32_t) +
-         (m_keptPairs.capacity() + m_carried.capacity() + m_found.capacity()) * 8;
+         (m_keptPairs.capacity() + m_found.capacity()) * 8;
 }
 
 void OpenClPairFinder::releaseUnkept() {
@@ -524,14 +530,11 @@ void OpenClPairFinder::releaseUnkept() {
   std::vector<std::uint8_t>().swap(m_isHuge);
   std::vector<float>().swap(m_extent);
   std::vector<GpucolProxyUpdate>().swap(m_updates);
-  std::vector<std::uint64_t>().swap(m_carried);
   std::vector<std::uint64_t>().swap(m_found);
-  if (!m_kept) {
-    std::vector<std::uint8_t>().swap(m_resting);
-    std::vector<std::uint64_t>().swap(m_keptPairs);
-  }
+  if (!m_kept) std::vector<std::uint8_t>().swap(m_resting);
+  if (!m_kept || m_callerKeepsPairs) std::vector<std::uint64_t>().swap(m_keptPairs);
   if (!m_releases) return;
-  for (DeviceArray* a : {&m_activeBuf, &m_isHugeBuf, &m_pairs, &m_pairValues, &m_updatesBuf, &m_movedHugeBuf,
+  for (DeviceArray* a : {&m_activeBuf, &m_isHugeBuf, &m_pairs, &m_updatesBuf, &m_movedHugeBuf,
                          &m_isMovedHugeBuf, &m_bins.slots, &m_bins.runPairs}) {
     a->release();
   }
@@ -548,8 +551,8 @@ bool OpenClPairFinder::keepGrid(const ProxyArrays& p, const PairFinderOptions& o
   // Stage 11, as the CPU finder decides it: the kept grid serves while the options that shape it are the
   // same, `moved` is known, and few active proxies changed since it was built (new slots among them: the
   // device's arrays grow to hold them in sendChanges).
-  if (!m_kept || m_inPlace != m_keptInPlace || p.moved == nullptr || m_active.size() < options.bruteForceBelow ||
-      m_active.size() < 2 ||
+  if (!m_kept || m_inPlace != m_keptInPlace || p.moved == nullptr || (m_callerKeepsPairs && !p.lastPairs) ||
+      m_active.size() < options.bruteForceBelow || m_active.size() < 2 ||
       options.cellSizeRule != m_keptOptions.cellSizeRule ||
       options.hugeCellLimit != m_keptOptions.hugeCellLimit || p.count < m_syncedCount) {
     return false;
@@ -598,12 +601,24 @@ void OpenClPairFinder::sendChanges(const ProxyArrays& p, Kernels& k) {
   m_syncedCount = p.count;
 }
 
+bool OpenClPairFinder::fewMoved(const ProxyArrays& p) const {
+  // Stage 11: keep this grid after a first search (nothing is known about motion yet) or when few proxies
+  // changed since the last one, as the CPU finder does; where most move, the next search is a full one.
+  if (p.moved == nullptr) return true;
+  const std::size_t limit = std::size_t(kIncrementalFraction * double(m_activeCount));
+  std::size_t moved = 0;
+  for (std::uint32_t s : m_active) {
+    if (p.moved[s] && ++moved > limit) return false;
+  }
+  return true;
+}
+
 void OpenClPairFinder::fullSearch(const ProxyArrays& p, const PairFinderOptions& options, Kernels& k,
                                   std::vector<std::uint64_t>& pairs) {
   const cl::Context& c = m_context.context();
   cl::CommandQueue& q = m_context.queue();
   upload(p);
-  const std::uint32_t activeCount = std::uint32_t(m_active.size());
+  const std::uint32_t activeCount = m_activeCount;
   const cl_uint slotBits = indexBits(p.count);
   const cl_uint zero = 0;
   // The active list goes to the device only for the kernels that walk it: brute force and huge boxes.
@@ -613,6 +628,9 @@ void OpenClPairFinder::fullSearch(const ProxyArrays& p, const PairFinderOptions&
   };
 
   const bool useGrid = activeCount >= options.bruteForceBelow;
+  // Whether this grid is kept for the next search is known now, so that what it would not reuse goes as soon
+  // as this search is done with it.
+  const bool keep = useGrid && fewMoved(p);
   GpucolGridParams grid{};
   m_bins.count = m_bins.candidates = 0;
   m_huge.clear();
@@ -620,9 +638,6 @@ void OpenClPairFinder::fullSearch(const ProxyArrays& p, const PairFinderOptions&
     m_stats.usedGrid = true;
     chooseGrid(p, options, grid);
     q.enqueueWriteBuffer(m_grid.ensure(c, sizeof grid), CL_FALSE, 0, sizeof grid, &grid);
-    bin(k, m_binned, grid, m_bins);
-    m_stats.keys = m_bins.keys;
-    m_stats.candidates = m_bins.candidates + std::uint64_t(m_huge.size()) * activeCount;
     if (!m_huge.empty()) {
       const std::uint32_t hugeCount = std::uint32_t(m_huge.size());
       uploadActive();
@@ -631,6 +646,14 @@ void OpenClPairFinder::fullSearch(const ProxyArrays& p, const PairFinderOptions&
       q.enqueueWriteBuffer(m_isHugeBuf.ensureFitted(c, activeCount), CL_FALSE, 0, activeCount,
                            m_isHuge.data());
     }
+    bin(k, m_binned, grid, m_bins, false);
+    // The host's lists of every proxy are on the device now (waited for: the writes read them until done).
+    q.finish();
+    for (auto* v : {&m_active, &m_binned}) std::vector<std::uint32_t>().swap(*v);
+    std::vector<std::uint8_t>().swap(m_isHuge);
+    std::vector<float>().swap(m_extent);
+    m_stats.keys = m_bins.keys;
+    m_stats.candidates = m_bins.candidates + std::uint64_t(m_huge.size()) * activeCount;
   } else {
     uploadActive();
     m_stats.candidates = gpucol_pair_count(activeCount);
@@ -644,7 +667,7 @@ void OpenClPairFinder::fullSearch(const ProxyArrays& p, const PairFinderOptions&
     const cl::Buffer& out = m_pairs.ensureFitted(c, std::size_t(capacity) * 8);
     if (useGrid) {
       testBins(k, m_bins, out, capacity, slotBits);
-      testHuge(k, m_hugeBuf, std::uint32_t(m_huge.size()), m_isHugeBuf, out, capacity, slotBits);
+      testHuge(k, m_hugeBuf, std::uint32_t(m_huge.size()), m_isHugeBuf, activeCount, out, capacity, slotBits);
     } else {
       setProxyArgs(k.bruteTest);
       setKernelArgs(k.bruteTest, kProxyArgs, m_activeBuf.buffer, activeCount,
@@ -653,28 +676,17 @@ void OpenClPairFinder::fullSearch(const ProxyArrays& p, const PairFinderOptions&
     }
     if (pairsFit(capacity)) break;
   }
+  // The pair sort's scratch is the search's last peak: what neither it nor the next search uses goes first.
+  releaseEarly({&m_bins.runPairs, &m_activeBuf, &m_isHugeBuf}, false);
+  if (!keep) releaseEarly({&m_bins.keySlots, &m_bins.runStart, &m_bins.runCell}, false);
   readPairs(slotBits, pairs);
 
-  // Stage 11: keep this grid after a first search (nothing is known about motion yet) or when few proxies
-  // changed since the last one, as the CPU finder does; where most move, the next search is a full one.
-  bool few = p.moved == nullptr;
-  if (!few) {
-    const std::size_t limit = std::size_t(kIncrementalFraction * double(m_active.size()));
-    std::size_t moved = 0;
-    few = true;
-    for (std::uint32_t s : m_active) {
-      if (p.moved[s] && ++moved > limit) {
-        few = false;
-        break;
-      }
-    }
-  }
-  if (useGrid && few) {
+  if (keep) {
     m_keptOptions = options;
     m_keptGrid = grid;
     m_keptHugeCount = std::uint32_t(m_huge.size());
-    m_resting.assign(p.count, 0);
-    for (std::uint32_t s : m_active) m_resting[s] = 1;
+    m_resting.resize(p.count);
+    for (std::uint32_t s = 0; s < p.count; ++s) m_resting[s] = p.flags[s] & kProxyActive;
     // Waited for: no read of this step comes after it, and the next step's keepGrid edits m_resting (and may
     // reallocate it) on the host before anything waits on the queue. Not waited for, PoCL's thread was seen
     // reading the list after the finder had freed it (AddressSanitizer, ClusteredScene).
@@ -692,7 +704,7 @@ void OpenClPairFinder::incremental(const ProxyArrays& p, const PairFinderOptions
   m_stats.incremental = true;
   m_stats.cellSize = m_keptCell;
   m_stats.dims[0] = grid.dimX, m_stats.dims[1] = grid.dimY, m_stats.dims[2] = grid.dimZ;
-  m_stats.restingProxies = std::uint32_t(m_active.size() - m_moved.size());
+  m_stats.restingProxies = m_activeCount - std::uint32_t(m_moved.size());
   sendChanges(p, k);
   const cl_uint slotBits = indexBits(p.count);
   const cl_uint zero = 0;
@@ -707,12 +719,12 @@ void OpenClPairFinder::incremental(const ProxyArrays& p, const PairFinderOptions
   const std::uint32_t binnedCount = std::uint32_t(m_movedBinned.size());
   const std::uint32_t hugeCount = std::uint32_t(m_movedHuge.size());
   m_hugeBuf.ensure(c, 4);  // a valid argument even when the kept search had no huge box
-  bin(k, m_movedBinned, grid, m_movedBins);
+  bin(k, m_movedBinned, grid, m_movedBins, true);
   m_stats.keys = m_movedBins.keys;
   m_stats.candidates = m_movedBins.candidates;
+  const std::uint32_t activeCount = m_activeCount;
   if (hugeCount > 0) {
     // grid_test_huge over the active list, with the moved huge boxes marked per active index.
-    const std::uint32_t activeCount = std::uint32_t(m_active.size());
     m_isHuge.assign(activeCount, 0);
     for (std::size_t i = 0, h = 0; i < activeCount && h < hugeCount; ++i) {
       if (m_active[i] == m_movedHuge[h]) {
@@ -741,21 +753,40 @@ void OpenClPairFinder::incremental(const ProxyArrays& p, const PairFinderOptions
       launch(k.testMoved, binnedCount);
     }
     testBins(k, m_movedBins, out, capacity, slotBits);
-    testHuge(k, m_movedHugeBuf, hugeCount, m_isMovedHugeBuf, out, capacity, slotBits);
+    testHuge(k, m_movedHugeBuf, hugeCount, m_isMovedHugeBuf, activeCount, out, capacity, slotBits);
     if (pairsFit(capacity)) break;
   }
+  std::vector<std::uint32_t>().swap(m_active);  // on the device where needed (pairsFit waited for the writes)
   // The new pairs, sorted on the device, merged with the carried ones: pairs of two resting proxies are
   // those of the last search (neither box nor filter changed). Every new pair has a moved proxy, so the two
-  // lists never share a pair.
-  m_carried.clear();
-  for (std::uint64_t key : m_keptPairs) {
-    if (m_resting[std::uint32_t(key >> 32)] && m_resting[std::uint32_t(key)]) {
-      m_carried.push_back(key);
+  // lists never share a pair. The carried pairs go straight into `pairs`, sized exactly, and the new ones are
+  // merged in from the back: no second list of the carried pairs.
+  readPairs(slotBits, m_found);
+  auto resting = [&](std::uint64_t key) {
+    return m_resting[std::uint32_t(key >> 32)] && m_resting[std::uint32_t(key)];
+  };
+  auto forEachLast = [&](auto&& f) {
+    if (m_callerKeepsPairs) {
+      p.lastPairs->forEach(f);
+    } else {
+      for (std::uint64_t key : m_keptPairs) f(key);
+    }
+  };
+  std::size_t carried = 0;
+  forEachLast([&](std::uint64_t key) { carried += resting(key); });
+  pairs.reserve(carried + m_found.size());
+  forEachLast([&](std::uint64_t key) {
+    if (resting(key)) pairs.push_back(key);
+  });
+  std::size_t fromCarried = carried, fromNew = m_found.size();
+  pairs.resize(carried + fromNew);
+  for (std::size_t to = pairs.size(); fromNew > 0;) {
+    if (fromCarried > 0 && pairs[fromCarried - 1] > m_found[fromNew - 1]) {
+      pairs[--to] = pairs[--fromCarried];
+    } else {
+      pairs[--to] = m_found[--fromNew];
     }
   }
-  readPairs(slotBits, m_found);
-  pairs.resize(m_carried.size() + m_found.size());
-  std::merge(m_carried.begin(), m_carried.end(), m_found.begin(), m_found.end(), pairs.begin());
 }
 
 }  // namespace

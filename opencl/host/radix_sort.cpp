@@ -19,6 +19,7 @@ OpenClRadixSort::OpenClRadixSort(OpenClContext& context) : m_context(context), m
     cl::Program program = m_context.program("radix_sort", kernels::radix_sort);
     m_count = cl::Kernel(program, "radix_count");
     m_scatter = cl::Kernel(program, "radix_scatter");
+    m_scatterKeys = cl::Kernel(program, "radix_scatter_keys");
     m_groupSize = std::min(m_context.workGroupSize(m_count), m_context.workGroupSize(m_scatter));
     // Enough chunks to fill the device a few times over; more would only lengthen the counts to scan.
     const std::size_t units = m_context.device().getInfo<CL_DEVICE_MAX_COMPUTE_UNITS>();
@@ -28,6 +29,15 @@ OpenClRadixSort::OpenClRadixSort(OpenClContext& context) : m_context(context), m
 
 void OpenClRadixSort::sort(const cl::Buffer& keys, const cl::Buffer& values, std::size_t n,
                            unsigned keyBits) {
+  sortPasses(keys, &values, n, keyBits);
+}
+
+void OpenClRadixSort::sortKeys(const cl::Buffer& keys, std::size_t n, unsigned keyBits) {
+  sortPasses(keys, nullptr, n, keyBits);
+}
+
+void OpenClRadixSort::sortPasses(const cl::Buffer& keys, const cl::Buffer* values, std::size_t n,
+                                 unsigned keyBits) {
   if (keyBits == 0 || keyBits > 64) {
     throw std::invalid_argument("OpenClRadixSort: keyBits must be in 1..64, got " + std::to_string(keyBits));
   }
@@ -48,13 +58,18 @@ void OpenClRadixSort::sort(const cl::Buffer& keys, const cl::Buffer& values, std
       m_counts = cl::Buffer(m_context.context(), CL_MEM_READ_WRITE, chunks * kRadix * sizeof(cl_uint));
       m_countsCapacity = chunks * kRadix;
     }
-    if (m_tempCapacity < n) {
+    if (m_keysCapacity < n) {
+      m_keysTemp = cl::Buffer();  // freed before its successor is made
       m_keysTemp = cl::Buffer(m_context.context(), CL_MEM_READ_WRITE, n * sizeof(cl_ulong));
+      m_keysCapacity = n;
+    }
+    if (values != nullptr && m_valuesCapacity < n) {
+      m_valuesTemp = cl::Buffer();
       m_valuesTemp = cl::Buffer(m_context.context(), CL_MEM_READ_WRITE, n * sizeof(cl_uint));
-      m_tempCapacity = n;
+      m_valuesCapacity = n;
     }
     cl::Buffer keysFrom = keys;
-    cl::Buffer valuesFrom = values;
+    cl::Buffer valuesFrom = values != nullptr ? *values : cl::Buffer();
     cl::Buffer keysTo = m_keysTemp;
     cl::Buffer valuesTo = m_valuesTemp;
     unsigned passes = 0;
@@ -67,30 +82,37 @@ void OpenClRadixSort::sort(const cl::Buffer& keys, const cl::Buffer& values, std
                     static_cast<cl_uint>(chunkLength), static_cast<cl_uint>(chunks), m_counts);
       queue.enqueueNDRangeKernel(m_count, cl::NullRange, cl::NDRange(global), cl::NDRange(m_groupSize));
       m_scan.exclusiveScan(m_counts, digits * chunks);
-      setKernelArgs(m_scatter, 0, keysFrom, valuesFrom, keysTo, valuesTo, static_cast<cl_uint>(n),
-                    static_cast<cl_uint>(shift), digitMask, static_cast<cl_uint>(chunkLength),
-                    static_cast<cl_uint>(chunks), m_counts);
-      queue.enqueueNDRangeKernel(m_scatter, cl::NullRange, cl::NDRange(global), cl::NDRange(m_groupSize));
+      if (values != nullptr) {
+        setKernelArgs(m_scatter, 0, keysFrom, valuesFrom, keysTo, valuesTo, static_cast<cl_uint>(n),
+                      static_cast<cl_uint>(shift), digitMask, static_cast<cl_uint>(chunkLength),
+                      static_cast<cl_uint>(chunks), m_counts);
+        queue.enqueueNDRangeKernel(m_scatter, cl::NullRange, cl::NDRange(global), cl::NDRange(m_groupSize));
+      } else {
+        setKernelArgs(m_scatterKeys, 0, keysFrom, keysTo, static_cast<cl_uint>(n), static_cast<cl_uint>(shift),
+                      digitMask, static_cast<cl_uint>(chunkLength), static_cast<cl_uint>(chunks), m_counts);
+        queue.enqueueNDRangeKernel(m_scatterKeys, cl::NullRange, cl::NDRange(global),
+                                   cl::NDRange(m_groupSize));
+      }
       std::swap(keysFrom, keysTo);
       std::swap(valuesFrom, valuesTo);
     }
     if (passes % 2 == 1) {
       queue.enqueueCopyBuffer(keysFrom, keys, 0, 0, n * sizeof(cl_ulong));
-      queue.enqueueCopyBuffer(valuesFrom, values, 0, 0, n * sizeof(cl_uint));
+      if (values != nullptr) queue.enqueueCopyBuffer(valuesFrom, *values, 0, 0, n * sizeof(cl_uint));
     }
   });
 }
 
 std::size_t OpenClRadixSort::bytes() const {
-  return m_tempCapacity * (sizeof(cl_ulong) + sizeof(cl_uint)) + m_countsCapacity * sizeof(cl_uint) +
-         m_scan.bytes();
+  return m_keysCapacity * sizeof(cl_ulong) + m_valuesCapacity * sizeof(cl_uint) +
+         m_countsCapacity * sizeof(cl_uint) + m_scan.bytes();
 }
 
 void OpenClRadixSort::releaseScratch() {
   m_keysTemp = cl::Buffer();
   m_valuesTemp = cl::Buffer();
   m_counts = cl::Buffer();
-  m_tempCapacity = m_countsCapacity = 0;
+  m_keysCapacity = m_valuesCapacity = m_countsCapacity = 0;
 }
 
 void OpenClRadixSort::sort(std::vector<std::uint64_t>& keys, std::vector<std::uint32_t>& values,
@@ -111,6 +133,20 @@ void OpenClRadixSort::sort(std::vector<std::uint64_t>& keys, std::vector<std::ui
     sort(k, v, n, keyBits);
     queue.enqueueReadBuffer(k, CL_FALSE, 0, n * sizeof(cl_ulong), keys.data());
     queue.enqueueReadBuffer(v, CL_TRUE, 0, n * sizeof(cl_uint), values.data());
+  });
+}
+
+void OpenClRadixSort::sortKeys(std::vector<std::uint64_t>& keys, unsigned keyBits) {
+  if (keys.size() <= 1) {
+    return;
+  }
+  translateClErrors("OpenCL radix sort of a host vector of keys", [&] {
+    const std::size_t n = keys.size();
+    cl::Buffer k(m_context.context(), CL_MEM_READ_WRITE, n * sizeof(cl_ulong));
+    cl::CommandQueue& queue = m_context.queue();
+    queue.enqueueWriteBuffer(k, CL_FALSE, 0, n * sizeof(cl_ulong), keys.data());
+    sortKeys(k, n, keyBits);
+    queue.enqueueReadBuffer(k, CL_TRUE, 0, n * sizeof(cl_ulong), keys.data());
   });
 }
 

@@ -1,11 +1,13 @@
-// Stable least-significant-digit radix sort of (ulong key, uint value) pairs, up to 4 bits per pass.
+// Stable least-significant-digit radix sort of (ulong key, uint value) pairs, or of keys alone, up to 4 bits
+// per pass.
 // Each work-item owns one chunk of consecutive elements and walks it in order, so the sort needs no local
 // memory and no barriers (PoCL's CPU device runs barrier-heavy tile sorts slowly, and a GPU keeps enough
 // items in flight with short chunks):
 //  radix_count:   digit histogram of each chunk, written digit-major (counts[digit * chunks + chunk]), so
 //                 that one exclusive scan of the whole array (scan.cl) gives every chunk's first output
 //                 slot for every digit with chunks of equal digit kept in order — the sort is stable.
-//  radix_scatter: walks its chunk again in order and writes each element to its digit's next slot.
+//  radix_scatter: walks its chunk again in order and writes each element to its digit's next slot
+//                 (radix_scatter_keys: keys without values).
 
 #define RADIX 16u
 
@@ -48,5 +50,24 @@ __kernel void radix_scatter(__global const ulong* keysIn, __global const uint* v
     const uint destination = next[(uint)(key >> shift) & digitMask]++;
     keysOut[destination] = key;
     valuesOut[destination] = valuesIn[i];
+  }
+}
+
+__kernel void radix_scatter_keys(__global const ulong* keysIn, __global ulong* keysOut, const uint n,
+                                 const uint shift, const uint digitMask, const uint chunkLength,
+                                 const uint chunks, __global const uint* offsets) {
+  const uint chunk = get_global_id(0);
+  if (chunk >= chunks) {
+    return;
+  }
+  uint next[RADIX];
+  for (uint d = 0u; d <= digitMask; ++d) {
+    next[d] = offsets[d * chunks + chunk];
+  }
+  const uint begin = chunk * chunkLength;
+  const uint end = min(n, begin + chunkLength);
+  for (uint i = begin; i < end; ++i) {
+    const ulong key = keysIn[i];
+    keysOut[next[(uint)(key >> shift) & digitMask]++] = key;
   }
 }

@@ -7,6 +7,7 @@
 #include <vector>
 
 #include "broadphase/grid_pair_finder.h"
+#include "broadphase/packed_pairs.h"
 #include "opencl_test_device.h"
 #include "proxy_records.h"
 
@@ -226,7 +227,8 @@ TEST(OpenClPairFinder, GrowsItsOutputAcrossSteps) {
 }
 
 /// Stage 11 over steps: OpenCL finders (three launch shapes, the last keeping its buffers, and a fourth that
-/// reads the boxes in records, in place where the device shares the host's memory) and a CPU finder see the
+/// reads the boxes in records, in place where the device shares the host's memory, and carries pairs over
+/// from the test's coded copy of its last result, as from GridBroadphase's) and a CPU finder see the
 /// same scene and the same `moved` flags each step. Each OpenCL finder's pairs must equal the CPU finder's
 /// (bit for bit, same order) and brute force, and its resting/re-binned counts and path (grid, incremental)
 /// the CPU finder's.
@@ -251,10 +253,12 @@ class SteppedFinders {
     const ProxyRecords records = recordsOf(scene);
     ProxyArrays recordsView = records.view(ProxyRecords::Blocks::EndToEnd, view.group, view.mask, view.flags);
     recordsView.moved = moved;
+    recordsView.lastPairs = &m_lastOfRecordsFinder;
     for (std::unique_ptr<PairFinder>& gpu : m_gpu) {
       std::vector<std::uint64_t> fromGpu;
       const bool inRecords = &gpu == &m_gpu[3];
       gpu->findPairs(inRecords ? recordsView : view, m_options, fromGpu);
+      if (inRecords) m_lastOfRecordsFinder.assign(fromGpu);
       if (inRecords && view.count >= 2 && cpu.usedGrid) {
         EXPECT_EQ(gpu->stats().recordsReadInPlace, OpenClContext::tryGet()->sharesHostMemory()) << what;
       }
@@ -273,6 +277,7 @@ class SteppedFinders {
  private:
   PairFinderOptions m_options;
   std::unique_ptr<PairFinder> m_gpu[4];
+  PackedPairs m_lastOfRecordsFinder;  // the fourth finder's last result, coded
   std::unique_ptr<PairFinder> m_cpu;
 };
 

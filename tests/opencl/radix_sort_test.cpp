@@ -41,6 +41,17 @@ void expectSortMatchesStableSort(OpenClRadixSort& sorter, std::size_t n, unsigne
     }
   }
   EXPECT_EQ(mismatches, 0u) << "n = " << n;
+  // Keys alone (sortKeys): the same keys in the same order.
+  std::vector<std::uint64_t> keysAlone = keys;
+  sorter.sortKeys(keysAlone, keyBits);
+  mismatches = 0;
+  for (std::size_t i = 0; i < n; ++i) {
+    if (keysAlone[i] != keys[order[i]] && mismatches++ < 5) {
+      ADD_FAILURE() << "keys alone, n = " << n << ", keyBits = " << keyBits << ": position " << i << " holds "
+                    << keysAlone[i] << ", expected " << keys[order[i]];
+    }
+  }
+  EXPECT_EQ(mismatches, 0u) << "keys alone, n = " << n;
 }
 
 TEST(OpenClRadixSort, MatchesStableSortOnAwkwardLengths) {
@@ -64,6 +75,24 @@ TEST(OpenClRadixSort, SortsOnlyTheRequestedLowBits) {
   expectSortMatchesStableSort(sorter, 10007, 34, ~std::uint64_t{0}, 13);
   EXPECT_THROW(sorter.sort(cl::Buffer(), cl::Buffer(), 10, 0), std::invalid_argument);
   EXPECT_THROW(sorter.sort(cl::Buffer(), cl::Buffer(), 10, 65), std::invalid_argument);
+}
+
+TEST(OpenClRadixSort, KeysAloneTakeNoValueScratch) {
+  GPUCOL_REQUIRE_OPENCL(context);
+  const std::size_t n = 100000;
+  std::vector<std::uint64_t> keys(n);
+  for (std::size_t i = 0; i < n; ++i) keys[i] = (i * 2654435761u) % 1000003u;
+  std::vector<std::uint32_t> values(n, 0);
+  std::vector<std::uint64_t> keysWithValues = keys;
+  OpenClRadixSort alone(context), withValues(context);
+  alone.sortKeys(keys, 20);
+  withValues.sort(keysWithValues, values, 20);
+  EXPECT_TRUE(std::is_sorted(keys.begin(), keys.end()));
+  EXPECT_EQ(keys, keysWithValues);
+  EXPECT_EQ(withValues.bytes() - alone.bytes(), n * 4) << "value arrays were made for keys alone";
+  EXPECT_GE(alone.bytes(), n * 8) << "the second key array";
+  alone.releaseScratch();
+  EXPECT_LT(alone.bytes(), n) << "only the scan's scratch stays";
 }
 
 TEST(OpenClRadixSort, MatchesStableSortOnAMillionPairs) {
