@@ -102,8 +102,8 @@ class OpenClPairFinder final : public PairFinder {
   void upload(const ProxyArrays& p);
   bool keepGrid(const ProxyArrays& p, const PairFinderOptions& options);
   void sendChanges(const ProxyArrays& p, Kernels& k);
-  void bin(Kernels& k, const std::vector<std::uint32_t>& slots, const GpucolGridParams& grid, Bins& b,
-           bool slotsAfterBinning);
+  void writeSlots(const std::vector<std::uint32_t>& slots, Bins& b);
+  void bin(Kernels& k, const GpucolGridParams& grid, Bins& b, bool slotsAfterBinning);
   void testBins(Kernels& k, Bins& b, const cl::Buffer& out, std::uint32_t capacity, cl_uint slotBits);
   void testHuge(Kernels& k, const DeviceArray& huge, std::uint32_t hugeCount, const DeviceArray& isHuge,
                 std::uint32_t activeCount, const cl::Buffer& out, std::uint32_t capacity, cl_uint slotBits);
@@ -139,6 +139,7 @@ class OpenClPairFinder final : public PairFinder {
   cl::Buffer m_records;          // the records as the device's buffer, for this search only
   DeviceArray m_grid, m_activeBuf, m_hugeBuf, m_isHugeBuf, m_pairs, m_counter, m_overflow;
   std::uint32_t m_activeCount = 0;  // active slots of this search (m_active, freed once uploaded)
+  const std::vector<std::uint64_t>* m_output = nullptr;  // findPairs' `pairs`, counted in the peak
   Bins m_bins;                    // the last full grid search's entries and runs (kept for stage 11)
   std::uint32_t m_lastPairs = 0;  // pairs the device found in the last search (sizes the next output)
 
@@ -296,18 +297,26 @@ void OpenClPairFinder::launchStrided(cl::Kernel& kernel, std::uint64_t items) {
   m_context.queue().enqueueNDRangeKernel(kernel, cl::NullRange, cl::NDRange(global), cl::NDRange(local));
 }
 
-void OpenClPairFinder::bin(Kernels& k, const std::vector<std::uint32_t>& slots, const GpucolGridParams& grid,
-                           Bins& b, bool slotsAfterBinning) {
+/// The binned proxies' slots into b.slots, not waited for (the caller keeps `slots` until the queue is done).
+void OpenClPairFinder::writeSlots(const std::vector<std::uint32_t>& slots, Bins& b) {
+  b.count = std::uint32_t(slots.size());
+  if (b.count > 0) {
+    m_context.queue().enqueueWriteBuffer(b.slots.ensureFitted(m_context.context(), b.count * 4), CL_FALSE, 0,
+                                         b.count * 4, slots.data());
+  }
+}
+
+/// Stages 4-6 of the b.count proxies in b.slots (writeSlots); `slotsAfterBinning`: b.slots stays (stage 11's
+/// moved proxies are tested from it), else it goes once the entries hold the slots.
+void OpenClPairFinder::bin(Kernels& k, const GpucolGridParams& grid, Bins& b, bool slotsAfterBinning) {
   const cl::Context& c = m_context.context();
   cl::CommandQueue& q = m_context.queue();
-  b.count = std::uint32_t(slots.size());
   b.keys = b.runs = b.candidates = 0;
   if (b.count == 0) {
     return;
   }
   const cl_uint zero = 0;
   q.enqueueFillBuffer(m_overflow.ensure(c, 4), zero, 0, 4);
-  q.enqueueWriteBuffer(b.slots.ensureFitted(c, b.count * 4), CL_FALSE, 0, b.count * 4, slots.data());
   const std::uint64_t cells = std::uint64_t(grid.dimX) * grid.dimY * grid.dimZ;
   if (sortsByCounting(cells, b.count)) {
     // Stages 4-6 on a dense grid of at most 2^19 cells, as the CPU finder: a counting sort over the cells
@@ -384,7 +393,10 @@ void OpenClPairFinder::releaseEarly(std::initializer_list<DeviceArray*> arrays, 
 }
 
 void OpenClPairFinder::notePeak() {
-  m_stats.peakScratchBytes = std::max(m_stats.peakScratchBytes, heldBytes());
+  // With the output as it stands (PairFinderStats::peakIncludesOutput): the finder's memory is largest while
+  // it bins, before there is any output.
+  const std::size_t output = m_output != nullptr ? m_output->capacity() * sizeof(std::uint64_t) : 0;
+  m_stats.peakScratchBytes = std::max(m_stats.peakScratchBytes, heldBytes() + output);
 }
 
 void OpenClPairFinder::testBins(Kernels& k, Bins& b, const cl::Buffer& out, std::uint32_t capacity,
@@ -451,6 +463,7 @@ void OpenClPairFinder::readPairs(cl_uint slotBits, std::vector<std::uint64_t>& p
   for (std::uint64_t& key : pairs) {
     key = ((key >> slotBits) << 32) | (key & lowMask);
   }
+  notePeak();  // the pairs on the device, the sort's scratch and the list read
 }
 
 void OpenClPairFinder::findPairs(const ProxyArrays& p, const PairFinderOptions& options,
@@ -460,6 +473,8 @@ void OpenClPairFinder::findPairs(const ProxyArrays& p, const PairFinderOptions& 
         "gpucol OpenCL pair finder: ProxyArrays with neither the six axis arrays nor records");
   }
   m_stats = PairFinderStats{};
+  m_stats.peakIncludesOutput = true;
+  m_output = &pairs;
   pairs.clear();
   m_active.clear();
   m_active.reserve(p.count);  // at its full size at once: released after every search
@@ -496,6 +511,7 @@ void OpenClPairFinder::findPairs(const ProxyArrays& p, const PairFinderOptions& 
     releaseUnkept();
   });
   m_stats.scratchBytes = heldBytes();
+  m_output = nullptr;
 }
 
 std::size_t OpenClPairFinder::heldBytes() const {
@@ -631,6 +647,14 @@ void OpenClPairFinder::fullSearch(const ProxyArrays& p, const PairFinderOptions&
   // Whether this grid is kept for the next search is known now, so that what it would not reuse goes as soon
   // as this search is done with it.
   const bool keep = useGrid && fewMoved(p);
+  // A kept grid's state: this search makes its own, at its size (keepGrid's list of the moved too).
+  notePeak();
+  std::vector<std::uint32_t>().swap(m_moved);
+  std::vector<std::uint8_t>().swap(m_resting);
+  if (m_releases) {
+    m_bins = Bins{};
+    m_restingBuf.release();
+  }
   GpucolGridParams grid{};
   m_bins.count = m_bins.candidates = 0;
   m_huge.clear();
@@ -646,12 +670,15 @@ void OpenClPairFinder::fullSearch(const ProxyArrays& p, const PairFinderOptions&
       q.enqueueWriteBuffer(m_isHugeBuf.ensureFitted(c, activeCount), CL_FALSE, 0, activeCount,
                            m_isHuge.data());
     }
-    bin(k, m_binned, grid, m_bins, false);
-    // The host's lists of every proxy are on the device now (waited for: the writes read them until done).
+    writeSlots(m_binned, m_bins);
+    // The host's lists of every proxy go before binning takes its memory, once on the device (waited for:
+    // the writes read them until done).
     q.finish();
+    notePeak();
     for (auto* v : {&m_active, &m_binned}) std::vector<std::uint32_t>().swap(*v);
     std::vector<std::uint8_t>().swap(m_isHuge);
     std::vector<float>().swap(m_extent);
+    bin(k, grid, m_bins, false);
     m_stats.keys = m_bins.keys;
     m_stats.candidates = m_bins.candidates + std::uint64_t(m_huge.size()) * activeCount;
   } else {
@@ -719,7 +746,8 @@ void OpenClPairFinder::incremental(const ProxyArrays& p, const PairFinderOptions
   const std::uint32_t binnedCount = std::uint32_t(m_movedBinned.size());
   const std::uint32_t hugeCount = std::uint32_t(m_movedHuge.size());
   m_hugeBuf.ensure(c, 4);  // a valid argument even when the kept search had no huge box
-  bin(k, m_movedBinned, grid, m_movedBins, true);
+  writeSlots(m_movedBinned, m_movedBins);
+  bin(k, grid, m_movedBins, true);
   m_stats.keys = m_movedBins.keys;
   m_stats.candidates = m_movedBins.candidates;
   const std::uint32_t activeCount = m_activeCount;
@@ -756,6 +784,7 @@ void OpenClPairFinder::incremental(const ProxyArrays& p, const PairFinderOptions
     testHuge(k, m_movedHugeBuf, hugeCount, m_isMovedHugeBuf, activeCount, out, capacity, slotBits);
     if (pairsFit(capacity)) break;
   }
+  notePeak();
   std::vector<std::uint32_t>().swap(m_active);  // on the device where needed (pairsFit waited for the writes)
   // The new pairs, sorted on the device, merged with the carried ones: pairs of two resting proxies are
   // those of the last search (neither box nor filter changed). Every new pair has a moved proxy, so the two
@@ -787,6 +816,7 @@ void OpenClPairFinder::incremental(const ProxyArrays& p, const PairFinderOptions
       pairs[--to] = m_found[--fromNew];
     }
   }
+  notePeak();  // the output beside the new pairs
 }
 
 }  // namespace
