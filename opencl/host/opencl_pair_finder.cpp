@@ -105,8 +105,8 @@ class OpenClPairFinder final : public PairFinder {
   void writeSlots(const std::vector<std::uint32_t>& slots, Bins& b);
   void bin(Kernels& k, const GpucolGridParams& grid, Bins& b, bool slotsAfterBinning);
   void testBins(Kernels& k, Bins& b, const cl::Buffer& out, std::uint32_t capacity, cl_uint slotBits);
-  void testHuge(Kernels& k, const DeviceArray& huge, std::uint32_t hugeCount, const DeviceArray& isHuge,
-                std::uint32_t activeCount, const cl::Buffer& out, std::uint32_t capacity, cl_uint slotBits);
+  void testHuge(Kernels& k, const DeviceArray& huge, std::uint32_t hugeCount, std::uint32_t slotCount,
+                const cl::Buffer& out, std::uint32_t capacity, cl_uint slotBits);
   bool fewMoved(const ProxyArrays& p) const;
   void fullSearch(const ProxyArrays& p, const PairFinderOptions& options, Kernels& k,
                   std::vector<std::uint64_t>& pairs);
@@ -124,7 +124,7 @@ class OpenClPairFinder final : public PairFinder {
 
   OpenClContext& m_context;
   OpenClPairFinderTuning m_tuning;
-  bool m_releases;               // OpenClPairFinderTuning::release, resolved for the device
+  bool m_releases;                 // OpenClPairFinderTuning::release, resolved for the device
   std::uintptr_t m_baseAlignment;  // bytes: where a host address the device takes as its own must start
   OpenClScan m_scan;
   OpenClRadixSort m_sort;
@@ -132,12 +132,11 @@ class OpenClPairFinder final : public PairFinder {
   PairFinderStats m_stats;
 
   std::vector<std::uint32_t> m_active, m_binned, m_huge;
-  std::vector<std::uint8_t> m_isHuge;
   std::vector<float> m_extent;
   DeviceArray m_boxes, m_flags;  // every slot's GpucolProxyBox and flags
   bool m_inPlace = false;        // this search reads the boxes in the caller's records (readsRecordsInPlace)
   cl::Buffer m_records;          // the records as the device's buffer, for this search only
-  DeviceArray m_grid, m_activeBuf, m_hugeBuf, m_isHugeBuf, m_pairs, m_counter, m_overflow;
+  DeviceArray m_grid, m_activeBuf, m_hugeBuf, m_pairs, m_counter, m_overflow;
   std::uint32_t m_activeCount = 0;  // active slots of this search (m_active, freed once uploaded)
   const std::vector<std::uint64_t>* m_output = nullptr;  // findPairs' `pairs`, counted in the peak
   Bins m_bins;                    // the last full grid search's entries and runs (kept for stage 11)
@@ -159,7 +158,7 @@ class OpenClPairFinder final : public PairFinder {
   std::vector<std::uint32_t> m_movedHuge;    // and the huge ones
   std::vector<GpucolProxyUpdate> m_updates;  // slots to write into the device's arrays this search
   std::vector<std::uint64_t> m_found;        // pairs with a moved proxy, found on the device
-  DeviceArray m_restingBuf, m_updatesBuf, m_movedHugeBuf, m_isMovedHugeBuf;
+  DeviceArray m_restingBuf, m_updatesBuf, m_movedHugeBuf;
   Bins m_movedBins;  // the binned moved proxies' own entries on the kept grid
 };
 
@@ -223,15 +222,7 @@ void OpenClPairFinder::chooseGrid(const ProxyArrays& p, const PairFinderOptions&
   // speed: whatever the grid, the pairs found are exactly the overlapping ones, because binning and the
   // dedupe rule use the same cell function on the device.
   const Grid grid = gpucol::chooseGrid(p, m_active, options, m_extent, m_binned, m_huge);
-  m_stats.hugeProxies = std::uint32_t(m_huge.size());
-  // Per active index: huge or not (m_huge is in m_active order, each slot once).
-  m_isHuge.assign(m_active.size(), 0);
-  for (std::size_t i = 0, h = 0; i < m_active.size() && h < m_huge.size(); ++i) {
-    if (m_active[i] == m_huge[h]) {
-      m_isHuge[i] = 1;
-      ++h;
-    }
-  }
+  m_stats.hugeProxies = std::uint32_t(m_huge.size());  // ascending, as grid_test_huge wants them
   g = GpucolGridParams{grid.origin[0], grid.origin[1], grid.origin[2], grid.invCell,
                        grid.dims[0],   grid.dims[1],   grid.dims[2],   0};
   m_keptCell = grid.cell;
@@ -420,15 +411,15 @@ void OpenClPairFinder::testBins(Kernels& k, Bins& b, const cl::Buffer& out, std:
 }
 
 void OpenClPairFinder::testHuge(Kernels& k, const DeviceArray& huge, std::uint32_t hugeCount,
-                                const DeviceArray& isHuge, std::uint32_t activeCount, const cl::Buffer& out,
-                                std::uint32_t capacity, cl_uint slotBits) {
+                                std::uint32_t slotCount, const cl::Buffer& out, std::uint32_t capacity,
+                                cl_uint slotBits) {
   if (hugeCount == 0) {
     return;
   }
   setProxyArgs(k.testHuge);
-  setKernelArgs(k.testHuge, kProxyArgs, huge.buffer, hugeCount, m_activeBuf.buffer, activeCount,
-                isHuge.buffer, slotBits, out, capacity, m_counter.buffer);
-  launchStrided(k.testHuge, activeCount);
+  setKernelArgs(k.testHuge, kProxyArgs, huge.buffer, hugeCount, slotCount, slotBits, out, capacity,
+                m_counter.buffer);
+  launchStrided(k.testHuge, slotCount);
 }
 
 /// Reads the pair counter after a pass: true when the pairs found fit `capacity` (m_lastPairs set), else
@@ -515,15 +506,15 @@ void OpenClPairFinder::findPairs(const ProxyArrays& p, const PairFinderOptions& 
 }
 
 std::size_t OpenClPairFinder::heldBytes() const {
-  // The scan's and the sort's scratch are the finder's too: the pair sort's is 12 bytes per pair of its
-  // largest sort, and on a sparse grid the cell sort's 12 per entry.
+  // The scan's and the sort's scratch are the finder's too: the pair sort's is 8 bytes per pair and its digit
+  // counts, and on a sparse grid the cell sort's 12 per entry.
   std::size_t bytes = m_bins.bytes() + m_movedBins.bytes() + m_scan.bytes() + m_sort.bytes();
-  for (const DeviceArray* a :
-       {&m_boxes, &m_flags, &m_grid, &m_activeBuf, &m_hugeBuf, &m_isHugeBuf, &m_pairs, &m_counter, &m_overflow, &m_restingBuf, &m_updatesBuf, &m_movedHugeBuf, &m_isMovedHugeBuf}) {
+  for (const DeviceArray* a : {&m_boxes, &m_flags, &m_grid, &m_activeBuf, &m_hugeBuf, &m_pairs, &m_counter,
+                               &m_overflow, &m_restingBuf, &m_updatesBuf, &m_movedHugeBuf}) {
     bytes += a->bytes;
   }
   // And the host's lists.
-  return bytes + m_resting.capacity() + m_isHuge.capacity() + m_extent.capacity() * sizeof(float) +
+  return bytes + m_resting.capacity() + m_extent.capacity() * sizeof(float) +
          m_updates.capacity() * sizeof(GpucolProxyUpdate) +
          (m_active.capacity() + m_binned.capacity() + m_huge.capacity() + m_moved.capacity() +
           m_movedBinned.capacity() + m_movedHuge.capacity()) *
@@ -543,15 +534,14 @@ void OpenClPairFinder::releaseUnkept() {
   for (auto* v : {&m_active, &m_binned, &m_huge, &m_moved, &m_movedBinned, &m_movedHuge}) {
     std::vector<std::uint32_t>().swap(*v);
   }
-  std::vector<std::uint8_t>().swap(m_isHuge);
   std::vector<float>().swap(m_extent);
   std::vector<GpucolProxyUpdate>().swap(m_updates);
   std::vector<std::uint64_t>().swap(m_found);
   if (!m_kept) std::vector<std::uint8_t>().swap(m_resting);
   if (!m_kept || m_callerKeepsPairs) std::vector<std::uint64_t>().swap(m_keptPairs);
   if (!m_releases) return;
-  for (DeviceArray* a : {&m_activeBuf, &m_isHugeBuf, &m_pairs, &m_updatesBuf, &m_movedHugeBuf,
-                         &m_isMovedHugeBuf, &m_bins.slots, &m_bins.runPairs}) {
+  for (DeviceArray* a :
+       {&m_activeBuf, &m_pairs, &m_updatesBuf, &m_movedHugeBuf, &m_bins.slots, &m_bins.runPairs}) {
     a->release();
   }
   m_movedBins = Bins{};
@@ -647,9 +637,11 @@ void OpenClPairFinder::fullSearch(const ProxyArrays& p, const PairFinderOptions&
   // Whether this grid is kept for the next search is known now, so that what it would not reuse goes as soon
   // as this search is done with it.
   const bool keep = useGrid && fewMoved(p);
-  // A kept grid's state: this search makes its own, at its size (keepGrid's list of the moved too).
+  // A kept grid's state: this search makes its own, at its size (keepGrid's lists of the moved and their
+  // updates too, made before it found too many).
   notePeak();
   std::vector<std::uint32_t>().swap(m_moved);
+  std::vector<GpucolProxyUpdate>().swap(m_updates);
   std::vector<std::uint8_t>().swap(m_resting);
   if (m_releases) {
     m_bins = Bins{};
@@ -664,11 +656,8 @@ void OpenClPairFinder::fullSearch(const ProxyArrays& p, const PairFinderOptions&
     q.enqueueWriteBuffer(m_grid.ensure(c, sizeof grid), CL_FALSE, 0, sizeof grid, &grid);
     if (!m_huge.empty()) {
       const std::uint32_t hugeCount = std::uint32_t(m_huge.size());
-      uploadActive();
       q.enqueueWriteBuffer(m_hugeBuf.ensureFitted(c, hugeCount * 4), CL_FALSE, 0, hugeCount * 4,
                            m_huge.data());
-      q.enqueueWriteBuffer(m_isHugeBuf.ensureFitted(c, activeCount), CL_FALSE, 0, activeCount,
-                           m_isHuge.data());
     }
     writeSlots(m_binned, m_bins);
     // The host's lists of every proxy go before binning takes its memory, once on the device (waited for:
@@ -676,7 +665,6 @@ void OpenClPairFinder::fullSearch(const ProxyArrays& p, const PairFinderOptions&
     q.finish();
     notePeak();
     for (auto* v : {&m_active, &m_binned}) std::vector<std::uint32_t>().swap(*v);
-    std::vector<std::uint8_t>().swap(m_isHuge);
     std::vector<float>().swap(m_extent);
     bin(k, grid, m_bins, false);
     m_stats.keys = m_bins.keys;
@@ -694,7 +682,7 @@ void OpenClPairFinder::fullSearch(const ProxyArrays& p, const PairFinderOptions&
     const cl::Buffer& out = m_pairs.ensureFitted(c, std::size_t(capacity) * 8);
     if (useGrid) {
       testBins(k, m_bins, out, capacity, slotBits);
-      testHuge(k, m_hugeBuf, std::uint32_t(m_huge.size()), m_isHugeBuf, activeCount, out, capacity, slotBits);
+      testHuge(k, m_hugeBuf, std::uint32_t(m_huge.size()), p.count, out, capacity, slotBits);
     } else {
       setProxyArgs(k.bruteTest);
       setKernelArgs(k.bruteTest, kProxyArgs, m_activeBuf.buffer, activeCount,
@@ -704,7 +692,7 @@ void OpenClPairFinder::fullSearch(const ProxyArrays& p, const PairFinderOptions&
     if (pairsFit(capacity)) break;
   }
   // The pair sort's scratch is the search's last peak: what neither it nor the next search uses goes first.
-  releaseEarly({&m_bins.runPairs, &m_activeBuf, &m_isHugeBuf}, false);
+  releaseEarly({&m_bins.runPairs, &m_activeBuf}, false);
   if (!keep) releaseEarly({&m_bins.keySlots, &m_bins.runStart, &m_bins.runCell}, false);
   readPairs(slotBits, pairs);
 
@@ -732,6 +720,8 @@ void OpenClPairFinder::incremental(const ProxyArrays& p, const PairFinderOptions
   m_stats.cellSize = m_keptCell;
   m_stats.dims[0] = grid.dimX, m_stats.dims[1] = grid.dimY, m_stats.dims[2] = grid.dimZ;
   m_stats.restingProxies = m_activeCount - std::uint32_t(m_moved.size());
+  notePeak();
+  std::vector<std::uint32_t>().swap(m_active);  // the moved list says all this search needs of it
   sendChanges(p, k);
   const cl_uint slotBits = indexBits(p.count);
   const cl_uint zero = 0;
@@ -750,20 +740,8 @@ void OpenClPairFinder::incremental(const ProxyArrays& p, const PairFinderOptions
   bin(k, grid, m_movedBins, true);
   m_stats.keys = m_movedBins.keys;
   m_stats.candidates = m_movedBins.candidates;
-  const std::uint32_t activeCount = m_activeCount;
   if (hugeCount > 0) {
-    // grid_test_huge over the active list, with the moved huge boxes marked per active index.
-    m_isHuge.assign(activeCount, 0);
-    for (std::size_t i = 0, h = 0; i < activeCount && h < hugeCount; ++i) {
-      if (m_active[i] == m_movedHuge[h]) {
-        m_isHuge[i] = 1;
-        ++h;
-      }
-    }
-    q.enqueueWriteBuffer(m_activeBuf.ensureFitted(c, activeCount * 4), CL_FALSE, 0, activeCount * 4,
-                         m_active.data());
-    q.enqueueWriteBuffer(m_isMovedHugeBuf.ensureFitted(c, activeCount), CL_FALSE, 0, activeCount,
-                         m_isHuge.data());
+    // grid_test_huge over every active slot, against the moved huge boxes (ascending, as m_moved).
     q.enqueueWriteBuffer(m_movedHugeBuf.ensureFitted(c, hugeCount * 4), CL_FALSE, 0, hugeCount * 4,
                          m_movedHuge.data());
   }
@@ -781,11 +759,9 @@ void OpenClPairFinder::incremental(const ProxyArrays& p, const PairFinderOptions
       launch(k.testMoved, binnedCount);
     }
     testBins(k, m_movedBins, out, capacity, slotBits);
-    testHuge(k, m_movedHugeBuf, hugeCount, m_isMovedHugeBuf, activeCount, out, capacity, slotBits);
+    testHuge(k, m_movedHugeBuf, hugeCount, p.count, out, capacity, slotBits);
     if (pairsFit(capacity)) break;
   }
-  notePeak();
-  std::vector<std::uint32_t>().swap(m_active);  // on the device where needed (pairsFit waited for the writes)
   // The new pairs, sorted on the device, merged with the carried ones: pairs of two resting proxies are
   // those of the last search (neither box nor filter changed). Every new pair has a moved proxy, so the two
   // lists never share a pair. The carried pairs go straight into `pairs`, sized exactly, and the new ones are

@@ -88,8 +88,9 @@ void OpenClRadixSort::sortPasses(const cl::Buffer& keys, const cl::Buffer* value
                       static_cast<cl_uint>(chunks), m_counts);
         queue.enqueueNDRangeKernel(m_scatter, cl::NullRange, cl::NDRange(global), cl::NDRange(m_groupSize));
       } else {
-        setKernelArgs(m_scatterKeys, 0, keysFrom, keysTo, static_cast<cl_uint>(n), static_cast<cl_uint>(shift),
-                      digitMask, static_cast<cl_uint>(chunkLength), static_cast<cl_uint>(chunks), m_counts);
+        setKernelArgs(m_scatterKeys, 0, keysFrom, keysTo, static_cast<cl_uint>(n),
+                      static_cast<cl_uint>(shift), digitMask, static_cast<cl_uint>(chunkLength),
+                      static_cast<cl_uint>(chunks), m_counts);
         queue.enqueueNDRangeKernel(m_scatterKeys, cl::NullRange, cl::NDRange(global),
                                    cl::NDRange(m_groupSize));
       }

@@ -9,9 +9,9 @@
 
 namespace gpucol::opencl {
 
-/// Stable radix sort of (uint64 key, uint32 value) pairs, or of keys alone, on an OpenCL device, 4 bits per pass, each
-/// work-item counting and scattering one chunk in order, digit offsets from OpenClScan. Keeps its scratch
-/// buffers between calls (grown, shrunk only by releaseScratch); one object per thread.
+/// Stable radix sort of (uint64 key, uint32 value) pairs, or of keys alone, on an OpenCL device, 4 bits per
+/// pass, each work-item counting and scattering one chunk in order, digit offsets from OpenClScan. Keeps its
+/// scratch buffers between calls (grown, shrunk only by releaseScratch); one object per thread.
 class OpenClRadixSort {
  public:
   /// Builds (or takes from the cache) the sort program of `context`.

@@ -215,7 +215,8 @@ TEST(OpenClPairFinderMemory, HostMemoryIsReadInPlaceWhereTheDeviceSharesIt) {
   cl::Buffer buffer(context.context(), CL_MEM_READ_WRITE | CL_MEM_USE_HOST_PTR, kValues * 4, values.get());
   EXPECT_EQ(scan.exclusiveScan(buffer, kValues), std::uint64_t(kValues));
   context.queue().finish();
-  EXPECT_LT(std::ptrdiff_t(heapBytes()) - std::ptrdiff_t(before), std::ptrdiff_t(kValues)) << "a copy was made";
+  EXPECT_LT(std::ptrdiff_t(heapBytes()) - std::ptrdiff_t(before), std::ptrdiff_t(kValues))
+      << "a copy was made";
   // No read, no map: the device wrote into the host's array itself.
   EXPECT_EQ(values[0], 0u);
   EXPECT_EQ(values[2], 2u);

@@ -89,8 +89,7 @@ void expectMatchesReferences(const Scene& scene, const std::string& what,
   // copied from them.
   const ProxyRecords records = recordsOf(scene);
   const ProxyArrays views[3] = {
-      proxies,
-      records.view(ProxyRecords::Blocks::EndToEnd, proxies.group, proxies.mask, proxies.flags),
+      proxies, records.view(ProxyRecords::Blocks::EndToEnd, proxies.group, proxies.mask, proxies.flags),
       records.view(ProxyRecords::Blocks::Apart, proxies.group, proxies.mask, proxies.flags)};
   for (std::unique_ptr<PairFinder>& gpu : finders) {
     ASSERT_NE(gpu, nullptr);

@@ -1,7 +1,7 @@
 #pragma once
 // Boxes and filters as a caller's records (BoxRecords) for the OpenCL pair finder's tests, as GridBroadphase
-// keeps its proxies: records of a layout other than the device's copy (48 bytes, the fields in another order),
-// in blocks of 16 laid end to end in one array aligned as a device wants its memory.
+// keeps its proxies: records of a layout other than the device's copy (48 bytes, the fields in another
+// order), in blocks of 16 laid end to end in one array aligned as a device wants its memory.
 #include <cstddef>
 #include <cstdint>
 #include <memory>
@@ -21,7 +21,7 @@ class ProxyRecords {
   explicit ProxyRecords(std::size_t count) : m_count(count) {
     const std::size_t blocks = (count >> kBlockBits) + 1;
     m_records.reset(static_cast<Record*>(
-        ::operator new(blocks * (std::size_t(1) << kBlockBits) * sizeof(Record), std::align_val_t(4096))));
+        ::operator new(blocks*(std::size_t(1) << kBlockBits) * sizeof(Record), std::align_val_t(4096))));
     for (std::size_t b = 0; b < blocks; ++b)
       m_blocks.push_back(reinterpret_cast<const unsigned char*>(m_records.get() + (b << kBlockBits)));
   }
@@ -46,7 +46,8 @@ class ProxyRecords {
     p.records.maxOffset = offsetof(Record, hi);
     p.records.groupOffset = offsetof(Record, group);
     p.records.maskOffset = offsetof(Record, mask);
-    p.records.contiguousBytes = blocks == Blocks::EndToEnd ? (m_blocks.size() * sizeof(Record)) << kBlockBits : 0;
+    p.records.contiguousBytes =
+        blocks == Blocks::EndToEnd ? (m_blocks.size() * sizeof(Record)) << kBlockBits : 0;
     return p;
   }
   /// Bytes of the records.

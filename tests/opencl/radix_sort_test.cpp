@@ -1,18 +1,18 @@
 #include "opencl/host/radix_sort.h"
 
-#include "opencl_test_device.h"
-
 #include <algorithm>
 #include <cstdint>
 #include <random>
 #include <vector>
 
+#include "opencl_test_device.h"
+
 namespace gpucol::opencl {
 namespace {
 
 // Reference: std::stable_sort of (key, value) by the key's low keyBits bits.
-void expectSortMatchesStableSort(OpenClRadixSort& sorter, std::size_t n, unsigned keyBits, std::uint64_t keyRange,
-                                 std::uint32_t seed) {
+void expectSortMatchesStableSort(OpenClRadixSort& sorter, std::size_t n, unsigned keyBits,
+                                 std::uint64_t keyRange, std::uint32_t seed) {
   std::mt19937_64 random(seed);
   std::uniform_int_distribution<std::uint64_t> key(0, keyRange);
   std::vector<std::uint64_t> keys(n);

@@ -52,7 +52,8 @@ class ReservedBlocks {
   void* add() {
     m_blocks.reserve(m_blocks.size() + 1);  // before committing, so that a failure here loses nothing
 #if defined(__linux__)
-    if (m_range != nullptr && m_inRange == m_blocks.size() && (m_inRange + 1) * m_blockBytes <= m_rangeBytes) {
+    if (m_range != nullptr && m_inRange == m_blocks.size() &&
+        (m_inRange + 1) * m_blockBytes <= m_rangeBytes) {
       const std::size_t end = roundToPage((m_inRange + 1) * m_blockBytes);
       if (end > m_committed) {
         if (mprotect(m_range + m_committed, end - m_committed, PROT_READ | PROT_WRITE) != 0)
@@ -93,8 +94,8 @@ class ReservedBlocks {
   std::size_t m_page = 4096;
   unsigned char* m_range = nullptr;  // the reserved range, or nullptr where the system refused it
   std::size_t m_rangeBytes = 0;
-  std::size_t m_committed = 0;        // bytes of the range made accessible
-  std::size_t m_inRange = 0;          // the first blocks, which lie in the range
+  std::size_t m_committed = 0;  // bytes of the range made accessible
+  std::size_t m_inRange = 0;    // the first blocks, which lie in the range
   std::vector<unsigned char*> m_blocks;
 };
 
