@@ -19,7 +19,6 @@ OpenClRadixSort::OpenClRadixSort(OpenClContext& context) : m_context(context), m
     cl::Program program = m_context.program("radix_sort", kernels::radix_sort);
     m_count = cl::Kernel(program, "radix_count");
     m_scatter = cl::Kernel(program, "radix_scatter");
-    m_scatterKeys = cl::Kernel(program, "radix_scatter_keys");
     m_groupSize = std::min(m_context.workGroupSize(m_count), m_context.workGroupSize(m_scatter));
     // Enough chunks to fill the device a few times over; more would only lengthen the counts to scan.
     const std::size_t units = m_context.device().getInfo<CL_DEVICE_MAX_COMPUTE_UNITS>();
@@ -71,7 +70,7 @@ void OpenClRadixSort::sortPasses(const cl::Buffer& keys, const cl::Buffer* value
     cl::Buffer keysFrom = keys;
     cl::Buffer valuesFrom = values != nullptr ? *values : cl::Buffer();
     cl::Buffer keysTo = m_keysTemp;
-    cl::Buffer valuesTo = m_valuesTemp;
+    cl::Buffer valuesTo = values != nullptr ? m_valuesTemp : cl::Buffer();
     unsigned passes = 0;
     for (unsigned shift = 0; shift < keyBits; shift += kRadixBits, ++passes) {
       // The last pass may look at fewer than 4 bits: bits past keyBits are never looked at.
@@ -82,18 +81,11 @@ void OpenClRadixSort::sortPasses(const cl::Buffer& keys, const cl::Buffer* value
                     static_cast<cl_uint>(chunkLength), static_cast<cl_uint>(chunks), m_counts);
       queue.enqueueNDRangeKernel(m_count, cl::NullRange, cl::NDRange(global), cl::NDRange(m_groupSize));
       m_scan.exclusiveScan(m_counts, digits * chunks);
-      if (values != nullptr) {
-        setKernelArgs(m_scatter, 0, keysFrom, valuesFrom, keysTo, valuesTo, static_cast<cl_uint>(n),
-                      static_cast<cl_uint>(shift), digitMask, static_cast<cl_uint>(chunkLength),
-                      static_cast<cl_uint>(chunks), m_counts);
-        queue.enqueueNDRangeKernel(m_scatter, cl::NullRange, cl::NDRange(global), cl::NDRange(m_groupSize));
-      } else {
-        setKernelArgs(m_scatterKeys, 0, keysFrom, keysTo, static_cast<cl_uint>(n),
-                      static_cast<cl_uint>(shift), digitMask, static_cast<cl_uint>(chunkLength),
-                      static_cast<cl_uint>(chunks), m_counts);
-        queue.enqueueNDRangeKernel(m_scatterKeys, cl::NullRange, cl::NDRange(global),
-                                   cl::NDRange(m_groupSize));
-      }
+      // Null value buffers (keys alone) are passed as null pointers, which the kernel skips.
+      setKernelArgs(m_scatter, 0, keysFrom, valuesFrom, keysTo, valuesTo, static_cast<cl_uint>(n),
+                    static_cast<cl_uint>(shift), digitMask, static_cast<cl_uint>(chunkLength),
+                    static_cast<cl_uint>(chunks), m_counts);
+      queue.enqueueNDRangeKernel(m_scatter, cl::NullRange, cl::NDRange(global), cl::NDRange(m_groupSize));
       std::swap(keysFrom, keysTo);
       std::swap(valuesFrom, valuesTo);
     }

@@ -42,7 +42,6 @@ class OpenClRadixSort {
   OpenClScan m_scan;
   cl::Kernel m_count;
   cl::Kernel m_scatter;
-  cl::Kernel m_scatterKeys;
   void sortPasses(const cl::Buffer& keys, const cl::Buffer* values, std::size_t n, unsigned keyBits);
   std::size_t m_groupSize = 0;     // work-group size of both kernels (asked of the device)
   std::size_t m_targetChunks = 0;  // chunks (work-items) per pass to aim for

@@ -6,8 +6,8 @@
 //  radix_count:   digit histogram of each chunk, written digit-major (counts[digit * chunks + chunk]), so
 //                 that one exclusive scan of the whole array (scan.cl) gives every chunk's first output
 //                 slot for every digit with chunks of equal digit kept in order — the sort is stable.
-//  radix_scatter: walks its chunk again in order and writes each element to its digit's next slot
-//                 (radix_scatter_keys: keys without values).
+//  radix_scatter: walks its chunk again in order and writes each element to its digit's next slot (the
+//                 values too, unless they are null: keys sorted alone).
 
 #define RADIX 16u
 
@@ -49,25 +49,8 @@ __kernel void radix_scatter(__global const ulong* keysIn, __global const uint* v
     const ulong key = keysIn[i];
     const uint destination = next[(uint)(key >> shift) & digitMask]++;
     keysOut[destination] = key;
-    valuesOut[destination] = valuesIn[i];
-  }
-}
-
-__kernel void radix_scatter_keys(__global const ulong* keysIn, __global ulong* keysOut, const uint n,
-                                 const uint shift, const uint digitMask, const uint chunkLength,
-                                 const uint chunks, __global const uint* offsets) {
-  const uint chunk = get_global_id(0);
-  if (chunk >= chunks) {
-    return;
-  }
-  uint next[RADIX];
-  for (uint d = 0u; d <= digitMask; ++d) {
-    next[d] = offsets[d * chunks + chunk];
-  }
-  const uint begin = chunk * chunkLength;
-  const uint end = min(n, begin + chunkLength);
-  for (uint i = begin; i < end; ++i) {
-    const ulong key = keysIn[i];
-    keysOut[next[(uint)(key >> shift) & digitMask]++] = key;
+    if (valuesOut != 0) {
+      valuesOut[destination] = valuesIn[i];
+    }
   }
 }
