@@ -349,7 +349,7 @@ void OpenClPairFinder::bin(Kernels& k, const GpucolGridParams& grid, Bins& b, bo
     if (!slotsAfterBinning) releaseEarly({&b.slots}, false);
     // Stage 5 on a sparse or large grid: radix sort by cell.
     m_sort.sort(b.cellKeys.buffer, b.keySlots.buffer, b.keys, indexBits(cells));
-    releaseEarly({}, true);  // the pair sort's is 12 bytes per pair, usually far fewer than the entries
+    releaseEarly({}, true);  // the pair sort's is 8 bytes per pair, usually far fewer than the entries
     // Stage 6: runs of equal cells.
     setKernelArgs(k.markRuns, 0, b.cellKeys.buffer, b.keys,
                   b.runHeads.ensureFitted(c, std::size_t(b.keys) * 4));
@@ -524,9 +524,10 @@ std::size_t OpenClPairFinder::heldBytes() const {
 
 void OpenClPairFinder::releaseUnkept() {
   // Between searches the finder holds only what the next one reuses, as the CPU finder does: stage 11's kept
-  // grid (the boxes, flags and resting marks on the device, the entries and runs the moved proxies are
-  // tested against, the huge list and the last pairs) when this search kept one. A full search writes every
-  // box again, so without a kept grid even the boxes go. The host's lists go in any case; the device's
+  // grid (the flags and resting marks on the device, and the boxes where they are copied, the entries and
+  // runs the moved proxies are tested against, the huge list, and the last pairs unless the caller keeps
+  // them) when this search kept one. A full search writes every box again, so without a kept grid even the
+  // boxes go. The host's lists go in any case; the device's
   // buffers where the finder releases them (OpenClPairFinderTuning::release). The next search allocates
   // afresh (measured: measurement history, "OpenCL memory between steps").
   m_context.queue().finish();  // writes not waited for read the host lists until they run
