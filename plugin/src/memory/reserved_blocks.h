@@ -50,7 +50,10 @@ class ReservedBlocks {
 
   /// A new block of uninitialised memory, aligned to 64 bytes; throws std::bad_alloc when no memory is left.
   void* add() {
-    m_blocks.reserve(m_blocks.size() + 1);  // before committing, so that a failure here loses nothing
+    // The table grows before a block is committed, so that a failure here loses nothing; by half again, not
+    // by one (a reserve of size() + 1 reallocated it on every block).
+    if (m_blocks.size() == m_blocks.capacity())
+      m_blocks.reserve(std::max<std::size_t>(8, m_blocks.size() * 3 / 2));
 #if defined(__linux__)
     if (m_range != nullptr && m_inRange == m_blocks.size() &&
         (m_inRange + 1) * m_blockBytes <= m_rangeBytes) {
