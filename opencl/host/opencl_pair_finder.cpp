@@ -14,6 +14,7 @@
 #include <string>
 
 #include "broadphase/grid_choice.h"
+#include "broadphase/packed_pairs.h"
 #include "broadphase/pair_mapping.h"
 #include "gpucol_kernels/kernels.h"
 #include "opencl/host/device_array.h"
@@ -152,7 +153,7 @@ class OpenClPairFinder final : public PairFinder {
   std::uint32_t m_syncedCount = 0;         // slots whose boxes, filters and flags the device arrays hold
   std::vector<std::uint8_t> m_resting;     // per slot: active in that search and unchanged since
   bool m_callerKeepsPairs = false;         // the pairs of that search are the caller's ProxyArrays::lastPairs
-  std::vector<std::uint64_t> m_keptPairs;  // else our copy of them
+  PackedPairs m_keptPairs;                 // else our copy of them (plain)
   std::vector<std::uint32_t> m_moved;      // active slots changed since that search, ascending
   std::vector<std::uint32_t> m_movedBinned;  // of those, the binned ones
   std::vector<std::uint32_t> m_movedHuge;    // and the huge ones
@@ -494,7 +495,7 @@ void OpenClPairFinder::findPairs(const ProxyArrays& p, const PairFinderOptions& 
       // The next search carries pairs over from the caller's copy of these when it keeps one (not held
       // twice), else from ours.
       m_callerKeepsPairs = m_kept && p.lastPairs != nullptr;
-      if (m_kept && !m_callerKeepsPairs) m_keptPairs.assign(pairs.begin(), pairs.end());
+      if (m_kept && !m_callerKeepsPairs) m_keptPairs.assign(pairs, true);
       m_keptInPlace = m_inPlace;
       m_stats.rebinnedProxies = m_activeCount - m_stats.restingProxies;
     }
@@ -519,7 +520,7 @@ std::size_t OpenClPairFinder::heldBytes() const {
          (m_active.capacity() + m_binned.capacity() + m_huge.capacity() + m_moved.capacity() +
           m_movedBinned.capacity() + m_movedHuge.capacity()) *
              sizeof(std::uint32_t) +
-         (m_keptPairs.capacity() + m_found.capacity()) * 8;
+         m_keptPairs.bytes() + m_found.capacity() * 8;
 }
 
 void OpenClPairFinder::releaseUnkept() {
@@ -539,7 +540,7 @@ void OpenClPairFinder::releaseUnkept() {
   std::vector<GpucolProxyUpdate>().swap(m_updates);
   std::vector<std::uint64_t>().swap(m_found);
   if (!m_kept) std::vector<std::uint8_t>().swap(m_resting);
-  if (!m_kept || m_callerKeepsPairs) std::vector<std::uint64_t>().swap(m_keptPairs);
+  if (!m_kept || m_callerKeepsPairs) m_keptPairs.clear();
   if (!m_releases) return;
   for (DeviceArray* a :
        {&m_activeBuf, &m_pairs, &m_updatesBuf, &m_movedHugeBuf, &m_bins.slots, &m_bins.runPairs}) {
@@ -765,34 +766,12 @@ void OpenClPairFinder::incremental(const ProxyArrays& p, const PairFinderOptions
   }
   // The new pairs, sorted on the device, merged with the carried ones: pairs of two resting proxies are
   // those of the last search (neither box nor filter changed). Every new pair has a moved proxy, so the two
-  // lists never share a pair. The carried pairs go straight into `pairs`, sized exactly, and the new ones are
-  // merged in from the back: no second list of the carried pairs.
+  // lists never share a pair (mergeCarriedPairs: no second list of the carried pairs).
   readPairs(slotBits, m_found);
-  auto resting = [&](std::uint64_t key) {
-    return m_resting[std::uint32_t(key >> 32)] && m_resting[std::uint32_t(key)];
-  };
-  auto forEachLast = [&](auto&& f) {
-    if (m_callerKeepsPairs) {
-      p.lastPairs->forEach(f);
-    } else {
-      for (std::uint64_t key : m_keptPairs) f(key);
-    }
-  };
-  std::size_t carried = 0;
-  forEachLast([&](std::uint64_t key) { carried += resting(key); });
-  pairs.reserve(carried + m_found.size());
-  forEachLast([&](std::uint64_t key) {
-    if (resting(key)) pairs.push_back(key);
-  });
-  std::size_t fromCarried = carried, fromNew = m_found.size();
-  pairs.resize(carried + fromNew);
-  for (std::size_t to = pairs.size(); fromNew > 0;) {
-    if (fromCarried > 0 && pairs[fromCarried - 1] > m_found[fromNew - 1]) {
-      pairs[--to] = pairs[--fromCarried];
-    } else {
-      pairs[--to] = m_found[--fromNew];
-    }
-  }
+  mergeCarriedPairs(
+      m_callerKeepsPairs ? *p.lastPairs : m_keptPairs,
+      [&](std::uint64_t key) { return m_resting[std::uint32_t(key >> 32)] && m_resting[std::uint32_t(key)]; },
+      m_found, pairs);
   notePeak();  // the output beside the new pairs
 }
 

@@ -560,27 +560,15 @@ void CpuPairFinder::incremental(const ProxyArrays& p, const PairFinderOptions& o
   m_stats.candidates = candidates;
   gather(m_movedKeys);  // the new pairs (m_movedKeys is free again)
   sortPairs(m_movedKeys, m_sortScratch, m_sortOffsets, slotBitsFor(p.count));
-  // Pairs of two unchanged proxies are carried over (neither box nor filter changed), straight into `pairs`,
-  // sized exactly, and the new pairs merged in from the back: no second list of the carried pairs.
+  // Pairs of two unchanged proxies are carried over (neither box nor filter changed); a pair is never both
+  // carried and new (a new one has a moved proxy).
   const PackedPairs& last = m_callerKeepsPairs ? *p.lastPairs : m_lastPairs;
-  auto resting = [&](std::uint64_t key) {
-    return m_unchanged[std::uint32_t(key >> 32)] && m_unchanged[std::uint32_t(key)];
-  };
-  std::size_t carried = 0;
-  last.forEach([&](std::uint64_t key) { carried += resting(key); });
-  pairs.reserve(carried + m_movedKeys.size());
-  last.forEach([&](std::uint64_t key) {
-    if (resting(key)) pairs.push_back(key);
-  });
-  std::size_t fromCarried = carried, fromNew = m_movedKeys.size();
-  pairs.resize(carried + fromNew);
-  for (std::size_t to = pairs.size(); fromNew > 0;) {
-    // A pair is never both carried and new (a new one has a moved proxy).
-    if (fromCarried > 0 && pairs[fromCarried - 1] > m_movedKeys[fromNew - 1])
-      pairs[--to] = pairs[--fromCarried];
-    else
-      pairs[--to] = m_movedKeys[--fromNew];
-  }
+  mergeCarriedPairs(
+      last,
+      [&](std::uint64_t key) {
+        return m_unchanged[std::uint32_t(key >> 32)] && m_unchanged[std::uint32_t(key)];
+      },
+      m_movedKeys, pairs);
 }
 
 void CpuPairFinder::bruteForce(const ProxyArrays& p, const PairFinderOptions& options,

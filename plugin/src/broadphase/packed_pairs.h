@@ -202,4 +202,27 @@ void PackedPairs::setSegment(std::size_t i, std::size_t n, KeyAt&& keyAt) {
   forEachCode(n, keyAt, [&](std::uint64_t v) { out = writeVarint(out, v); });
 }
 
+/// Stage 11's result (grid_pair_finder.h): the keys of `last` that `carried(key)` accepts (pairs of two
+/// resting proxies), merged with `found` (ascending, none of them among those) into `pairs`. The carried keys
+/// go straight into `pairs`, sized exactly, and `found` is merged in from the back: no second list.
+template <typename Carried>
+void mergeCarriedPairs(const PackedPairs& last, Carried&& carried, const std::vector<std::uint64_t>& found,
+                       std::vector<std::uint64_t>& pairs) {
+  std::size_t kept = 0;
+  last.forEach([&](std::uint64_t key) { kept += carried(key); });
+  pairs.clear();
+  pairs.reserve(kept + found.size());
+  last.forEach([&](std::uint64_t key) {
+    if (carried(key)) pairs.push_back(key);
+  });
+  std::size_t fromCarried = kept, fromFound = found.size();
+  pairs.resize(kept + fromFound);
+  for (std::size_t to = pairs.size(); fromFound > 0;) {
+    if (fromCarried > 0 && pairs[fromCarried - 1] > found[fromFound - 1])
+      pairs[--to] = pairs[--fromCarried];
+    else
+      pairs[--to] = found[--fromFound];
+  }
+}
+
 }  // namespace gpucol
