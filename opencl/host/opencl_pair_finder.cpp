@@ -311,7 +311,7 @@ void OpenClPairFinder::bin(Kernels& k, const GpucolGridParams& grid, Bins& b, bo
   q.enqueueFillBuffer(m_overflow.ensure(c, 4), zero, 0, 4);
   const std::uint64_t cells = std::uint64_t(grid.dimX) * grid.dimY * grid.dimZ;
   if (sortsByCounting(cells, b.count)) {
-    // Stages 4-6 on a dense grid of at most 2^19 cells, as the CPU finder: a counting sort over the cells
+    // Stages 4-6 on a dense grid (sortsByCounting), as the CPU finder: a counting sort over the cells
     // (each cell's count, scanned into its first entry, then each entry placed), and the runs are the filled
     // cells. No (cell, slot) keys are written.
     const cl_uint cellCount = cl_uint(cells);

@@ -32,11 +32,17 @@ struct OpenClPairFinderTuning {
 
 /// Stage 5 on the device: whether the finder sorts the entries of a grid of `cells` cells holding `binned`
 /// boxes by a counting sort over the cells (each cell's count, scanned, then each entry placed by an atomic
-/// increment) rather than by the radix sort of (cell, slot) keys. Counting wins on a dense grid while its
-/// counters and entries stay in a CPU device's caches: on PoCL it took less time at 100K and 300K boxes and
-/// 8% more CPU time at 1M (uniform cloud, about 10^6 cells; measurement history).
+/// increment) rather than by the radix sort of (cell, slot) keys.
+/// - Up to 2^19 cells, for speed: counting wins while its counters and entries stay in a CPU device's caches
+///   (on PoCL it took less time at 100K and 300K boxes; measurement history).
+/// - Beyond, for memory, while cells <= 1.5 x binned: at its peak counting holds 8 bytes per cell and per run
+///   and 4 per entry, the radix sort 24 per entry, and there are at least as many entries as boxes and as
+///   runs. At 1M boxes (about 10^6 cells) that took the OpenCL step's peak from 150 to 99 bytes per proxy,
+///   in the same time (measurement history).
+/// - Never past a 32-bit cell index, which the counting kernels use.
 inline bool sortsByCounting(std::uint64_t cells, std::size_t binned) {
-  return cells <= denseCellLimit(binned) && cells <= (std::uint64_t(1) << 19);
+  return cells <= denseCellLimit(binned) && cells < 0xffffffffu &&
+         (cells <= (std::uint64_t(1) << 19) || 2 * cells <= 3 * std::uint64_t(binned));
 }
 
 /// The grid pair finder of plugin/src/broadphase/grid_pair_finder.h on an OpenCL device: the host

@@ -159,14 +159,14 @@ __kernel void grid_write_keys(PROXY_PARAMS, __global const GpucolGridParams* gri
   }
 }
 
-// Stages 4-5 on a small dense grid (sortsByCounting in opencl_pair_finder.h), the counting sort over the
+// Stages 4-5 on a dense grid (sortsByCounting in opencl_pair_finder.h), the counting sort over the
 // cells, run twice. Counting (place = 0): one atomic increment of cellStart[c + 1] per binned box of each
 // cell c it covers (cellStart[0] stays 0); the host then scans them. Placing (place = 1): each entry takes
 // the next place of its cell at cellStart[c + 1], which the scan left at the cell's first entry and placing
 // leaves at its end, that is at cell c + 1's first: cellStart then holds every cell's first entry and the
-// total. With about as many cells as boxes, and counters that stay in cache, this costs less than a count
-// per box and the radix sort's passes over every entry. The order inside a cell depends on the threads;
-// the pairs do not (stage 9 orders each pair's slots, stage 10 sorts the pairs).
+// total. With about as many cells as boxes this costs less than a count per box and the radix sort's passes
+// over every entry, and holds less. The order inside a cell depends on the threads; the pairs do not (stage 9
+// orders each pair's slots, stage 10 sorts the pairs).
 __kernel void grid_count_or_place_entries(PROXY_PARAMS, __global const GpucolGridParams* grid,
                                           __global const uint* binned, const uint binnedCount,
                                           volatile __global uint* cellStart, const uint place,

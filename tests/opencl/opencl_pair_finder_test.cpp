@@ -2,6 +2,7 @@
 
 #include <algorithm>
 #include <cstdint>
+#include <memory>
 #include <random>
 #include <string>
 #include <vector>
@@ -70,8 +71,7 @@ bool sortsByCountingOn(const Scene& scene) {
   std::vector<std::uint64_t> pairs;
   finder->findPairs(scene.view(), options, pairs);
   const PairFinderStats& s = finder->stats();
-  return std::uint64_t(s.dims[0]) * s.dims[1] * s.dims[2] <=
-         denseCellLimit(s.rebinnedProxies - s.hugeProxies);
+  return sortsByCounting(std::uint64_t(s.dims[0]) * s.dims[1] * s.dims[2], s.rebinnedProxies - s.hugeProxies);
 }
 
 void expectMatchesReferences(const Scene& scene, const std::string& what,
@@ -141,6 +141,35 @@ TEST(OpenClPairFinder, ClusteredScene) {
   }
   expectMatchesReferences(s, "clustered");
   EXPECT_FALSE(sortsByCountingOn(s)) << "the radix sort of a sparse grid was not run";
+}
+
+TEST(OpenClPairFinder, DenseGridOfMoreThan2To19CellsSortedByCounting) {
+  GPUCOL_REQUIRE_OPENCL(context);
+  // A grid past the cache-sized 2^19 cells that the counting sort takes for memory (at most 1.5 cells per box):
+  // the atomic placing over half a million cells, against the CPU finder (itself checked against brute force
+  // at this size by the slab search's tests). Too many boxes for the brute force here.
+  const Scene s = uniformScene(420000, 122.0f, 0.45f, 21);
+  const ProxyRecords records = recordsOf(s);
+  const ProxyArrays views[2] = {
+      s.view(), records.view(ProxyRecords::Blocks::EndToEnd, s.group.data(), s.mask.data(), s.flags.data())};
+  std::unique_ptr<PairFinder> gpu = makePairFinder(Config{}), cpu = makeCpuPairFinder();
+  ASSERT_NE(gpu, nullptr);
+  PairFinderOptions options;
+  std::vector<std::uint64_t> fromCpu;
+  cpu->findPairs(views[0], options, fromCpu);
+  ASSERT_GT(fromCpu.size(), 10000u) << "scene too sparse";
+  for (const ProxyArrays& view : views) {
+    std::vector<std::uint64_t> fromGpu;
+    gpu->findPairs(view, options, fromGpu);
+    const PairFinderStats& st = gpu->stats();
+    const std::uint64_t cells = std::uint64_t(st.dims[0]) * st.dims[1] * st.dims[2];
+    const std::uint32_t binned = st.rebinnedProxies - st.hugeProxies;
+    ASSERT_GT(cells, std::uint64_t(1) << 19) << "the grid should pass 2^19 cells";
+    ASSERT_LE(2 * cells, 3 * std::uint64_t(binned)) << "the grid should hold at most 1.5 cells per box";
+    ASSERT_TRUE(sortsByCounting(cells, binned));
+    EXPECT_EQ(fromGpu.size(), fromCpu.size());
+    EXPECT_TRUE(fromGpu == fromCpu) << "OpenCL pairs differ from the CPU finder";
+  }
 }
 
 TEST(OpenClPairFinder, MixedSizesWithHugeBoxes) {
