@@ -56,6 +56,9 @@ struct Bins {
   std::uint32_t keys = 0;        ///< (cell, slot) entries.
   std::uint32_t runs = 0;        ///< Runs of equal cells (runStart has runs + 1 entries).
   std::uint32_t candidates = 0;  ///< Sum of m(m-1)/2 over the runs.
+  /// On a dense grid whose cells are mostly filled, every cell is a run, empty ones too: runStart is the
+  /// counting sort's first entry per cell and runCell is left empty (runsAreCells).
+  bool runsAreCells = false;
   /// Device bytes held.
   std::size_t bytes() const {
     return slots.bytes + counts.bytes + cellKeys.bytes + keySlots.bytes + runHeads.bytes + runStart.bytes +
@@ -92,8 +95,8 @@ class OpenClPairFinder final : public PairFinder {
 
  private:
   struct Kernels {
-    cl::Kernel countCells, writeKeys, countOrPlaceEntries, markFilledCells, writeFilledCells, markRuns,
-        writeRuns, countRunPairs, testCandidates, testHuge, bruteTest, updateProxies, testMoved;
+    cl::Kernel countCells, writeKeys, countOrPlaceEntries, countFilledCells, markFilledCells, writeFilledCells,
+        markRuns, writeRuns, countRunPairs, testCandidates, testHuge, bruteTest, updateProxies, testMoved;
   };
   Kernels& kernels(bool newton, const ProxyArrays& p);
   bool readsRecordsInPlace(const ProxyArrays& p) const;
@@ -180,6 +183,7 @@ OpenClPairFinder::Kernels& OpenClPairFinder::kernels(bool newton, const ProxyArr
     k.countCells = cl::Kernel(program, "grid_count_cells");
     k.writeKeys = cl::Kernel(program, "grid_write_keys");
     k.countOrPlaceEntries = cl::Kernel(program, "grid_count_or_place_entries");
+    k.countFilledCells = cl::Kernel(program, "grid_count_filled_cells");
     k.markFilledCells = cl::Kernel(program, "grid_mark_filled_cells");
     k.writeFilledCells = cl::Kernel(program, "grid_write_filled_cells");
     k.markRuns = cl::Kernel(program, "grid_mark_runs");
@@ -304,6 +308,7 @@ void OpenClPairFinder::bin(Kernels& k, const GpucolGridParams& grid, Bins& b, bo
   const cl::Context& c = m_context.context();
   cl::CommandQueue& q = m_context.queue();
   b.keys = b.runs = b.candidates = 0;
+  b.runsAreCells = false;
   if (b.count == 0) {
     return;
   }
@@ -321,19 +326,36 @@ void OpenClPairFinder::bin(Kernels& k, const GpucolGridParams& grid, Bins& b, bo
     setKernelArgs(k.countOrPlaceEntries, kProxyArgs, m_grid.buffer, b.slots.buffer, b.count, b.counts.buffer,
                   cl_uint(0), b.slots.buffer);
     launch(k.countOrPlaceEntries, b.count);
+    // The filled cells, read in the queue's order: the scan's own read of its total waits for it too.
+    constexpr cl_uint kCellsPerItem = 256;
+    q.enqueueFillBuffer(m_counter.ensure(c, 4), zero, 0, 4);
+    setKernelArgs(k.countFilledCells, 0, b.counts.buffer, cellCount, kCellsPerItem, m_counter.buffer);
+    launch(k.countFilledCells, (cells + kCellsPerItem - 1) / kCellsPerItem);
+    cl_uint filled = 0;
+    q.enqueueReadBuffer(m_counter.buffer, CL_FALSE, 0, 4, &filled);
     b.keys = m_scan.exclusiveScan(b.counts.buffer, cells + 1);
     setKernelArgs(k.countOrPlaceEntries, kProxyArgs + 4, cl_uint(1),
                   b.keySlots.ensureFitted(c, std::size_t(b.keys) * 4));
     launch(k.countOrPlaceEntries, b.keys == 0 ? 0 : b.count);
     if (!slotsAfterBinning) releaseEarly({&b.slots}, false);  // the entries hold them now
-    setKernelArgs(k.markFilledCells, 0, b.counts.buffer, cellCount, b.runHeads.ensureFitted(c, cells * 4));
-    launch(k.markFilledCells, cells);
-    b.runs = m_scan.exclusiveScan(b.runHeads.buffer, cells);
-    setKernelArgs(k.writeFilledCells, 0, b.counts.buffer, cellCount, b.runHeads.buffer, b.runs,
-                  b.runStart.ensureFitted(c, (std::size_t(b.runs) + 1) * 4),
-                  b.runCell.ensureFitted(c, std::size_t(b.runs) * 4));
-    launch(k.writeFilledCells, cells);
-    releaseEarly({&b.counts, &b.runHeads}, false);  // what only led to the runs
+    if (m_tuning.runsAreCells && runsAreCells(cells, filled)) {
+      // Every cell a run: the placed counts are the runs' first entries, and a run's cell is its number.
+      b.runStart.release();
+      b.runStart = b.counts;
+      b.counts = DeviceArray{};
+      b.runCell.release();  // a null argument: the kernels take the run's number as its cell
+      b.runs = cellCount;
+      b.runsAreCells = true;
+    } else {
+      setKernelArgs(k.markFilledCells, 0, b.counts.buffer, cellCount, b.runHeads.ensureFitted(c, cells * 4));
+      launch(k.markFilledCells, cells);
+      b.runs = m_scan.exclusiveScan(b.runHeads.buffer, cells);
+      setKernelArgs(k.writeFilledCells, 0, b.counts.buffer, cellCount, b.runHeads.buffer, b.runs,
+                    b.runStart.ensureFitted(c, (std::size_t(b.runs) + 1) * 4),
+                    b.runCell.ensureFitted(c, std::size_t(b.runs) * 4));
+      launch(k.writeFilledCells, cells);
+      releaseEarly({&b.counts, &b.runHeads}, false);  // what only led to the runs
+    }
   } else {
     // Stage 4: count cells per box, scan, fill (cell, slot) entries.
     setProxyArgs(k.countCells);
@@ -670,6 +692,7 @@ void OpenClPairFinder::fullSearch(const ProxyArrays& p, const PairFinderOptions&
     std::vector<float>().swap(m_extent);
     bin(k, grid, m_bins, false);
     m_stats.keys = m_bins.keys;
+    m_stats.runsAreCells = m_bins.runsAreCells;
     m_stats.candidates = m_bins.candidates + std::uint64_t(m_huge.size()) * activeCount;
   } else {
     uploadActive();

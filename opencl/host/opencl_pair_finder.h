@@ -28,6 +28,11 @@ struct OpenClPairFinderTuning {
   /// records lie end to end (contiguousBytes) with their filters, at an address the device takes as its own
   /// (CL_DEVICE_MEM_BASE_ADDR_ALIGN). Otherwise, and always on a discrete GPU, the boxes are copied.
   bool recordsInPlace = true;
+  /// Whether, on a dense grid (sortsByCounting) with at least two thirds of its cells filled, every cell is
+  /// a run (empty ones have no candidates) rather than the filled cells being listed: less memory, and two
+  /// passes over the cells fewer (a count of the filled cells instead of their marks, scan and list). False:
+  /// always the list (the tests run both).
+  bool runsAreCells = true;
 };
 
 /// Stage 5 on the device: whether the finder sorts the entries of a grid of `cells` cells holding `binned`
@@ -43,6 +48,15 @@ struct OpenClPairFinderTuning {
 inline bool sortsByCounting(std::uint64_t cells, std::size_t binned) {
   return cells <= denseCellLimit(binned) && cells < 0xffffffffu &&
          (cells <= (std::uint64_t(1) << 19) || 2 * cells <= 3 * std::uint64_t(binned));
+}
+
+/// Stage 6 on a dense grid (sortsByCounting) of `cells` cells, `filled` of which hold an entry: whether every
+/// cell is taken as a run of entries, empty ones too, rather than the filled cells being listed. Where at
+/// least two thirds are filled that holds less: 4 bytes per cell for the runs' candidate counts, beside the
+/// counting sort's 4 per cell that then serve as the runs' first entries, where listing holds 8 per cell and
+/// 8 per run while the list is made and 12 per run after.
+inline bool runsAreCells(std::uint64_t cells, std::uint64_t filled) {
+  return 2 * cells <= 3 * filled;
 }
 
 /// The grid pair finder of plugin/src/broadphase/grid_pair_finder.h on an OpenCL device: the host

@@ -191,6 +191,24 @@ __kernel void grid_count_or_place_entries(PROXY_PARAMS, __global const GpucolGri
   }
 }
 
+// Stage 6 on a dense grid: how many cells hold an entry, from the counts before they are scanned
+// (cellCount[c + 1] is cell c's), each work-item adding up `chunk` cells with one atomic addition.
+__kernel void grid_count_filled_cells(__global const uint* cellCount, const uint cells, const uint chunk,
+                                      volatile __global uint* filled) {
+  const ulong first = (ulong)get_global_id(0) * chunk;
+  if (first >= cells) {
+    return;
+  }
+  const uint end = (uint)min((ulong)cells, first + chunk);
+  uint n = 0u;
+  for (uint c = (uint)first; c < end; ++c) {
+    n += cellCount[c + 1u] > 0u ? 1u : 0u;
+  }
+  if (n > 0u) {
+    atomic_add(filled, n);
+  }
+}
+
 // Stage 6 on a dense grid: 1 for each cell that holds an entry (a run).
 __kernel void grid_mark_filled_cells(__global const uint* cellStart, const uint cells, __global uint* runHeads) {
   const uint c = get_global_id(0);
@@ -259,7 +277,8 @@ __kernel void grid_count_run_pairs(__global const uint* runStart, const uint run
 // search over the scanned counts (its run) and the mapping function (its (i, j) in the run); the rest step
 // through the run's pairs in the same row-major order, as the CPU finder does, which on a CPU device is far
 // cheaper than a search and a square root per candidate (a GPU uses chunks of one). Each pair is tested,
-// filtered, and kept only in the cell holding the min corner of the two boxes' overlap.
+// filtered, and kept only in the cell holding the min corner of the two boxes' overlap. A null runCell: every
+// cell is a run, and a run's number is its cell (Bins::runsAreCells in opencl_pair_finder.cpp).
 __kernel void grid_test_candidates(PROXY_PARAMS, __global const GpucolGridParams* grid,
                                    __global const uint* runStart, __global const uint* runCell,
                                    __global const uint* runPrefix, const uint runCount, const uint total,
@@ -295,7 +314,7 @@ __kernel void grid_test_candidates(PROXY_PARAMS, __global const GpucolGridParams
       const uint b = keySlots[start + (uint)j];
       const GpucolProxyBox boxB = load_box(boxes, b);
       if (boxes_overlap(boxA, boxB) && filters_accept(boxA, boxB, flags, a, b) &&
-          overlap_cell(boxA, boxB, g) == (ulong)runCell[run]) {
+          overlap_cell(boxA, boxB, g) == (ulong)(runCell != 0 ? runCell[run] : run)) {
         append_pair(min(a, b), max(a, b), slotBits, pairs, capacity, pairCount);
       }
     }
@@ -410,18 +429,26 @@ __kernel void grid_test_moved(PROXY_PARAMS, __global const GpucolGridParams* gri
   for (uint z = span.lo[2]; z <= span.hi[2]; ++z) {
     for (uint y = span.lo[1]; y <= span.hi[1]; ++y) {
       const uint row = (uint)(((ulong)z * g.dimY + y) * g.dimX);
-      // First run whose cell is at least the row's first cell of the range.
-      uint r = 0u, hi = runCount;
-      while (r < hi) {
-        const uint mid = r + (hi - r) / 2u;
-        if (runCell[mid] < row + span.lo[0]) {
-          r = mid + 1u;
-        } else {
-          hi = mid;
+      // First run whose cell is at least the row's first cell of the range: that cell's own when every cell
+      // is a run (no runCell), else found by binary search.
+      uint r = row + span.lo[0];
+      if (runCell != 0) {
+        uint lo = 0u, hi = runCount;
+        while (lo < hi) {
+          const uint mid = lo + (hi - lo) / 2u;
+          if (runCell[mid] < row + span.lo[0]) {
+            lo = mid + 1u;
+          } else {
+            hi = mid;
+          }
         }
+        r = lo;
       }
-      for (; r < runCount && runCell[r] <= row + span.hi[0]; ++r) {
-        const uint c = runCell[r];
+      for (; r < runCount; ++r) {
+        const uint c = runCell != 0 ? runCell[r] : r;
+        if (c > row + span.hi[0]) {
+          break;
+        }
         for (uint e = runStart[r]; e < runStart[r + 1u]; ++e) {
           const uint s = keySlots[e];
           if (!resting[s]) {

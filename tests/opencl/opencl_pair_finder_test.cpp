@@ -17,6 +17,14 @@ namespace {
 
 constexpr OpenClPairFinderTuning::BufferRelease kKeepBuffers = OpenClPairFinderTuning::BufferRelease::Never;
 
+/// The default tuning but with the filled cells of a dense grid always listed as its runs (never every cell a
+/// run: OpenClPairFinderTuning::runsAreCells).
+OpenClPairFinderTuning listedRuns() {
+  OpenClPairFinderTuning tuning;
+  tuning.runsAreCells = false;
+  return tuning;
+}
+
 /// A scene as the structure of arrays that ProxyArrays views.
 struct Scene {
   std::vector<float> minX, minY, minZ, maxX, maxY, maxZ;
@@ -60,28 +68,36 @@ Scene uniformScene(std::size_t n, float world, float half, std::uint32_t seed, f
   return s;
 }
 
-/// Runs the OpenCL finder (grid and brute-force paths, both square roots, three launch shapes) and checks it
-/// against the CPU finder (bit for bit, same order) and the double-precision brute force (same set).
-/// Whether a full grid search of `scene` sorts its entries by counting over the cells rather than by the
-/// radix sort (stage 5).
-bool sortsByCountingOn(const Scene& scene) {
+/// The stats of a full grid search of `scene` by a default OpenCL finder.
+PairFinderStats fullSearchStats(const Scene& scene) {
   std::unique_ptr<PairFinder> finder = makePairFinder(Config{});
   PairFinderOptions options;
   options.bruteForceBelow = 0;
   std::vector<std::uint64_t> pairs;
   finder->findPairs(scene.view(), options, pairs);
-  const PairFinderStats& s = finder->stats();
+  return finder->stats();
+}
+
+/// Whether a full grid search of `scene` sorts its entries by counting over the cells rather than by the
+/// radix sort (stage 5).
+bool sortsByCountingOn(const Scene& scene) {
+  const PairFinderStats s = fullSearchStats(scene);
   return sortsByCounting(std::uint64_t(s.dims[0]) * s.dims[1] * s.dims[2], s.rebinnedProxies - s.hugeProxies);
 }
 
+/// Runs the OpenCL finder (grid and brute-force paths, both square roots, three launch shapes and the runs of
+/// dense grids always listed; boxes in six arrays and in records) and checks it against the CPU finder (bit
+/// for bit, same order) and the double-precision brute force (same set).
 void expectMatchesReferences(const Scene& scene, const std::string& what,
                              std::uint32_t bruteForceBelow = 1000) {
   OpenClContext* context = OpenClContext::tryGet();
   ASSERT_NE(context, nullptr);
   // The device's own launch shape, one candidate per item (a GPU's), and an odd chunk length with the
-  // buffers kept between searches (a discrete GPU's policy) rather than released.
-  static std::unique_ptr<PairFinder> finders[3] = {makePairFinder(Config{}), makePairFinder(Config{}, {1}),
-                                                   makePairFinder(Config{}, {7, kKeepBuffers})};
+  // buffers kept between searches (a discrete GPU's policy) rather than released; and a dense grid's filled
+  // cells always listed as its runs.
+  static std::unique_ptr<PairFinder> finders[4] = {makePairFinder(Config{}), makePairFinder(Config{}, {1}),
+                                                   makePairFinder(Config{}, {7, kKeepBuffers}),
+                                                   makePairFinder(Config{}, listedRuns())};
   std::unique_ptr<PairFinder> cpu = makeCpuPairFinder();
   const ProxyArrays proxies = scene.view();
   const std::vector<std::uint64_t> expected = findPairsBruteForce(proxies);
@@ -126,6 +142,9 @@ TEST(OpenClPairFinder, UniformCloud) {
   EXPECT_GT(findPairsBruteForce(uniformScene(3000, 100.0f, 1.5f, 1).view()).size(), 100u)
       << "scene too sparse";
   EXPECT_TRUE(sortsByCountingOn(uniformScene(3000, 100.0f, 1.5f, 1))) << "the counting sort was not run";
+  // Runs of a dense grid: the filled cells listed (under two thirds filled), and every cell a run.
+  EXPECT_FALSE(fullSearchStats(uniformScene(3000, 100.0f, 1.5f, 1)).runsAreCells);
+  EXPECT_TRUE(fullSearchStats(uniformScene(500, 30.0f, 1.5f, 2)).runsAreCells);
 }
 
 TEST(OpenClPairFinder, ClusteredScene) {
@@ -254,9 +273,10 @@ TEST(OpenClPairFinder, GrowsItsOutputAcrossSteps) {
   expectMatchesReferences(uniformScene(2000, 20.0f, 1.5f, 13), "dense");
 }
 
-/// Stage 11 over steps: OpenCL finders (three launch shapes, the last keeping its buffers, and a fourth that
+/// Stage 11 over steps: OpenCL finders (three launch shapes, the last keeping its buffers; a fourth that
 /// reads the boxes in records, in place where the device shares the host's memory, and carries pairs over
-/// from the test's coded copy of its last result, as from GridBroadphase's) and a CPU finder see the
+/// from the test's coded copy of its last result, as from GridBroadphase's; a fifth whose dense grids always
+/// list their filled cells as runs) and a CPU finder see the
 /// same scene and the same `moved` flags each step. Each OpenCL finder's pairs must equal the CPU finder's
 /// (bit for bit, same order) and brute force, and its resting/re-binned counts and path (grid, incremental)
 /// the CPU finder's.
@@ -265,7 +285,8 @@ class SteppedFinders {
   explicit SteppedFinders(const PairFinderOptions& options)
       : m_options(options),
         m_gpu{makePairFinder(Config{}), makePairFinder(Config{}, {1}),
-              makePairFinder(Config{}, {7, kKeepBuffers}), makePairFinder(Config{})},
+              makePairFinder(Config{}, {7, kKeepBuffers}), makePairFinder(Config{}),
+              makePairFinder(Config{}, listedRuns())},
         m_cpu(makeCpuPairFinder()) {}
 
   /// One search of every finder; `moved` may be nullptr (anything may have changed). Returns the OpenCL
@@ -304,7 +325,7 @@ class SteppedFinders {
 
  private:
   PairFinderOptions m_options;
-  std::unique_ptr<PairFinder> m_gpu[4];
+  std::unique_ptr<PairFinder> m_gpu[5];
   PackedPairs m_lastOfRecordsFinder;  // the fourth finder's last result, coded
   std::unique_ptr<PairFinder> m_cpu;
 };
@@ -342,6 +363,9 @@ TEST(OpenClPairFinder, RestingProxiesAtEachFractionMoving) {
     std::vector<std::uint8_t> moved(s.flags.size(), 0), changedSinceKept(s.flags.size(), 0);
     PairFinderStats st = finders.step(s, nullptr, what + ", step 0");
     EXPECT_TRUE(st.usedGrid && !st.incremental) << what << ": the first search is a full one";
+    // Its grid (mostly filled cells) takes every cell as a run, so the moved boxes are tested against such a
+    // kept grid; the fifth finder lists its filled cells.
+    EXPECT_TRUE(st.runsAreCells) << what;
     int incrementalSteps = 0;
     for (int t = 1; t <= 8; ++t) {
       std::fill(moved.begin(), moved.end(), std::uint8_t(0));

@@ -246,6 +246,9 @@ struct PairFinderStats {
   /// True when an OpenCL finder's kernels read the boxes in ProxyArrays::records in place, with no copy of
   /// them on the device.
   bool recordsReadInPlace = false;
+  /// True when an OpenCL finder's full search took every cell of its dense grid as a run of entries, empty
+  /// cells too, rather than listing the filled ones (OpenClPairFinderTuning::runsAreCells).
+  bool runsAreCells = false;
   /// True when the slab search paired boxes by home cell (PairFinderOptions::homeCells) on a grid of its own
   /// (cellSize and dims give that grid's).
   bool homeCells = false;
