@@ -318,7 +318,7 @@ void OpenClPairFinder::bin(Kernels& k, const GpucolGridParams& grid, Bins& b, bo
   if (sortsByCounting(cells, b.count)) {
     // Stages 4-6 on a dense grid (sortsByCounting), as the CPU finder: a counting sort over the cells
     // (each cell's count, scanned into its first entry, then each entry placed), and the runs are the filled
-    // cells. No (cell, slot) keys are written.
+    // cells, or every cell (runsAreCells). No (cell, slot) keys are written.
     const cl_uint cellCount = cl_uint(cells);
     q.enqueueFillBuffer(b.counts.ensureFitted(c, (cells + 1) * 4), zero, 0, (cells + 1) * 4);
     setProxyArgs(k.countOrPlaceEntries);
@@ -326,14 +326,15 @@ void OpenClPairFinder::bin(Kernels& k, const GpucolGridParams& grid, Bins& b, bo
     setKernelArgs(k.countOrPlaceEntries, kProxyArgs, m_grid.buffer, b.slots.buffer, b.count, b.counts.buffer,
                   cl_uint(0), b.slots.buffer);
     launch(k.countOrPlaceEntries, b.count);
-    // The filled cells, read in the queue's order: the scan's own read of its total waits for it too.
+    // The filled cells are counted before the scan, which waits for the queue anyway: reading their count
+    // after it costs no wait of its own.
     constexpr cl_uint kCellsPerItem = 256;
     q.enqueueFillBuffer(m_counter.ensure(c, 4), zero, 0, 4);
     setKernelArgs(k.countFilledCells, 0, b.counts.buffer, cellCount, kCellsPerItem, m_counter.buffer);
     launch(k.countFilledCells, (cells + kCellsPerItem - 1) / kCellsPerItem);
-    cl_uint filled = 0;
-    q.enqueueReadBuffer(m_counter.buffer, CL_FALSE, 0, 4, &filled);
     b.keys = m_scan.exclusiveScan(b.counts.buffer, cells + 1);
+    cl_uint filled = 0;
+    q.enqueueReadBuffer(m_counter.buffer, CL_TRUE, 0, 4, &filled);
     setKernelArgs(k.countOrPlaceEntries, kProxyArgs + 4, cl_uint(1),
                   b.keySlots.ensureFitted(c, std::size_t(b.keys) * 4));
     launch(k.countOrPlaceEntries, b.keys == 0 ? 0 : b.count);

@@ -276,10 +276,9 @@ TEST(OpenClPairFinder, GrowsItsOutputAcrossSteps) {
 /// Stage 11 over steps: OpenCL finders (three launch shapes, the last keeping its buffers; a fourth that
 /// reads the boxes in records, in place where the device shares the host's memory, and carries pairs over
 /// from the test's coded copy of its last result, as from GridBroadphase's; a fifth whose dense grids always
-/// list their filled cells as runs) and a CPU finder see the
-/// same scene and the same `moved` flags each step. Each OpenCL finder's pairs must equal the CPU finder's
-/// (bit for bit, same order) and brute force, and its resting/re-binned counts and path (grid, incremental)
-/// the CPU finder's.
+/// list their filled cells as runs) and a CPU finder see the same scene and the same `moved` flags each step.
+/// Each OpenCL finder's pairs must equal the CPU finder's (bit for bit, same order) and brute force, and its
+/// resting/re-binned counts and path (grid, incremental) the CPU finder's.
 class SteppedFinders {
  public:
   explicit SteppedFinders(const PairFinderOptions& options)
