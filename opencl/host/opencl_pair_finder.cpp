@@ -12,6 +12,7 @@
 #include <map>
 #include <stdexcept>
 #include <string>
+#include <utility>
 
 #include "broadphase/grid_choice.h"
 #include "broadphase/packed_pairs.h"
@@ -341,9 +342,9 @@ void OpenClPairFinder::bin(Kernels& k, const GpucolGridParams& grid, Bins& b, bo
     if (!slotsAfterBinning) releaseEarly({&b.slots}, false);  // the entries hold them now
     if (m_tuning.runsAreCells && runsAreCells(cells, filled)) {
       // Every cell a run: the placed counts are the runs' first entries, and a run's cell is its number.
-      b.runStart.release();
-      b.runStart = b.counts;
-      b.counts = DeviceArray{};
+      // Swapped rather than moved: where buffers are kept (a discrete GPU), the next counts reuse the old
+      // runStart; where they are released, that is already empty.
+      std::swap(b.runStart, b.counts);
       b.runCell.release();  // a null argument: the kernels take the run's number as its cell
       b.runs = cellCount;
       b.runsAreCells = true;
