@@ -3,6 +3,8 @@
 #include <algorithm>
 #include <cstddef>
 #include <cstdint>
+#include <stdexcept>
+#include <string>
 
 #include "opencl/host/cl_api.h"
 
@@ -17,14 +19,14 @@ struct DeviceArray {
   /// ones).
   const cl::Buffer& ensure(const cl::Context& context, std::size_t wanted) {
     wanted = std::max<std::size_t>(wanted, 16);
-    if (bytes < wanted) allocate(context, wanted + wanted / 4);
+    if (bytes < wanted) allocate(context, wanted, wanted + wanted / 4);
     return buffer;
   }
   /// As ensure, but the first buffer is exactly `wanted` bytes, for arrays sized by the slot count, which a
   /// steady scene keeps; once such an array has had to grow, it takes the quarter more as well.
   const cl::Buffer& ensureFitted(const cl::Context& context, std::size_t wanted) {
     if (bytes == 0) {
-      allocate(context, std::max<std::size_t>(wanted, 16));
+      allocate(context, std::max<std::size_t>(wanted, 16), std::max<std::size_t>(wanted, 16));
       return buffer;
     }
     return ensure(context, wanted);
@@ -45,7 +47,18 @@ struct DeviceArray {
   }
 
  private:
-  void allocate(const cl::Context& context, std::size_t size) {
+  /// A buffer of `size` bytes, or of the device's largest allocation when `size` is above it but `wanted` is
+  /// not; past that a length_error that names both sizes (a GPU's limit is a fraction of its memory, and a
+  /// driver's own failure would say only CL_INVALID_BUFFER_SIZE).
+  void allocate(const cl::Context& context, std::size_t wanted, std::size_t size) {
+    const std::size_t limit =
+        context.getInfo<CL_CONTEXT_DEVICES>().at(0).getInfo<CL_DEVICE_MAX_MEM_ALLOC_SIZE>();
+    if (wanted > limit) {
+      throw std::length_error("OpenCL buffer of " + std::to_string(wanted) +
+                              " bytes exceeds the device's largest allocation (CL_DEVICE_MAX_MEM_ALLOC_SIZE, " +
+                              std::to_string(limit) + " bytes)");
+    }
+    size = std::min(size, limit);
     buffer = cl::Buffer(context, CL_MEM_READ_WRITE, size);
     bytes = size;
   }

@@ -96,6 +96,16 @@ constexpr std::uint64_t kDepthFirstItems = 4096;
 constexpr std::uint64_t kDepthFirstMinItems = 256;
 constexpr std::uint64_t kTrianglesPerItem = 128;
 
+/// The same on a GPU, which runs one work-item per start path: a front wide enough that its live paths
+/// fill every multiprocessor, start paths per compute unit. Most paths die within a level or two of the
+/// roots' overlap (27674's front at depth 6 has 279 live node pairs of 4,096), so the front is made many
+/// times wider than the device's lanes.
+constexpr std::uint64_t kGpuStartPathsPerUnit = 1024;
+
+/// Sums of the two trees' depths whose traversal variants (stack lengths 64, 128, 256) are built with the
+/// pipeline: up to 85 levels between the two trees, more than a balanced tree of 2^40 triangles each.
+constexpr int kPrebuiltTreeDepths[] = {21, 42, 85};
+
 /// Words of the counter buffer the traversal and the near kernel share: [0] candidates appended, [1] the
 /// candidate counter wrapped, [2] / [3] low / high word of the box tests (mesh_middle_phase.cl), [4] hits
 /// appended by mesh_near_filter_test, [5] the next start path the depth-first traversal's work-items take;
@@ -114,10 +124,17 @@ class OpenClMeshPipeline final : public MeshBatchDevice {
                                                   "-DGPUCOL_LANES=" + std::to_string(kPrefilterLanes));
       m_nearFilterTest = cl::Kernel(nearProgram, "mesh_near_filter_test");
       m_nearTest = cl::Kernel(nearProgram, "mesh_near_test");
+      m_nearEach = cl::Kernel(nearProgram, "mesh_near_each");
       m_counters = cl::Buffer(m_context.context(), CL_MEM_READ_WRITE, kCounterWords * sizeof(cl_uint));
       // Kernels read the leaf entry arena even when no tree has entries: give it one element.
       m_emptyEntries = cl::Buffer(m_context.context(), CL_MEM_READ_ONLY, sizeof(GpucolLeafEntry));
       m_computeUnits = std::max<cl_uint>(1, m_context.device().getInfo<CL_DEVICE_MAX_COMPUTE_UNITS>());
+      // Every traversal variant a batch of ordinary trees can ask for, built now rather than inside a timed
+      // call (a cold build takes seconds on a GPU's driver, and Backend::Auto times the calls).
+      for (int treeDepths : kPrebuiltTreeDepths) {
+        depthFirstKernel(treeDepths, !m_context.gpuShaped());
+        depthFirstKernel(treeDepths, false);
+      }
     });
   }
 
@@ -156,7 +173,7 @@ class OpenClMeshPipeline final : public MeshBatchDevice {
   /// in work.
   std::size_t groupSize(const cl::Kernel& kernel, std::uint64_t) const {
     return std::min<std::size_t>(m_context.workGroupSize(kernel),
-                                 m_context.isGpu() ? kGroupSizeCap : kCpuGroupSizeCap);
+                                 m_context.gpuShaped() ? kGroupSizeCap : kCpuGroupSizeCap);
   }
 
   /// The global size launch() uses for `items` work-items of `kernel`.
@@ -182,6 +199,13 @@ class OpenClMeshPipeline final : public MeshBatchDevice {
                                    unsigned bitsA, unsigned bitsB, bool chainNear, std::uint64_t& records,
                                    MeshBatchDeviceStats& s);
   void setNearFilterArgs(std::uint64_t capacity, unsigned bitsA, unsigned bitsB);
+  /// The near phase with the early-out, in the device's shape: candidates in vector lanes on a CPU device
+  /// (mesh_near_filter_test), one per work-item on a GPU (mesh_near_each).
+  cl::Kernel& nearKernel() { return m_context.gpuShaped() ? m_nearEach : m_nearFilterTest; }
+  /// Work-items nearKernel() takes for `candidates`.
+  std::uint64_t nearItems(std::uint64_t candidates) const {
+    return m_context.gpuShaped() ? candidates : (candidates + kPrefilterLanes - 1) / kPrefilterLanes;
+  }
   cl::Kernel& depthFirstKernel(int treeDepths, bool fusedNear);
 
   OpenClContext& m_context;
@@ -189,7 +213,7 @@ class OpenClMeshPipeline final : public MeshBatchDevice {
   MeshDeviceCache m_cache;
   OpenClScan m_scan;
   OpenClRadixSort m_sort;
-  cl::Kernel m_frontStart, m_frontExpand, m_nearFilterTest, m_nearTest;
+  cl::Kernel m_frontStart, m_frontExpand, m_nearFilterTest, m_nearTest, m_nearEach;
   std::map<std::pair<std::size_t, bool>, cl::Kernel> m_depthFirst;  // by stack length, near phase fused
   cl::Buffer m_emptyEntries, m_counters;
   const cl_uint m_zeroCounters[kCounterWords] = {};
@@ -306,7 +330,7 @@ void OpenClMeshPipeline::runBatch(const std::vector<DeviceMeshPair>& pairs,
     const cl_uint counters[kCounterWords] = {cl_uint(candidateCount)};
     queue.enqueueWriteBuffer(m_counters, CL_FALSE, 0, sizeof counters, counters);
     setNearFilterArgs(candidateCount, bitsA, bitsB);
-    launch(m_nearFilterTest, (candidateCount + kPrefilterLanes - 1) / kPrefilterLanes);
+    launch(nearKernel(), nearItems(candidateCount));
     cl_uint read[kCounterWords];
     queue.enqueueReadBuffer(m_counters, CL_TRUE, 0, sizeof read, read);
     records = read[4];
@@ -512,7 +536,7 @@ cl::Kernel& OpenClMeshPipeline::depthFirstKernel(int treeDepths, bool fusedNear)
   // (GPUCOL_SKIP_DEAD_PATHS: there few work-items take many paths each; on a GPU each path is a work-item of
   // its own, and the skips would only add atomics).
   std::string options = "-DGPUCOL_DFS_STACK=" + std::to_string(length) +
-                        (m_context.isGpu() ? "" : " -DGPUCOL_CPU_PREFETCH -DGPUCOL_SKIP_DEAD_PATHS");
+                        (m_context.gpuShaped() ? "" : " -DGPUCOL_CPU_PREFETCH -DGPUCOL_SKIP_DEAD_PATHS");
   cl::Program program;
   if (fusedNear) {
     // The near phase's functions first, then the traversal that calls them (GPUCOL_FUSED_NEAR in
@@ -528,7 +552,7 @@ cl::Kernel& OpenClMeshPipeline::depthFirstKernel(int treeDepths, bool fusedNear)
 
 void OpenClMeshPipeline::setNearFilterArgs(std::uint64_t capacity, unsigned bitsA, unsigned bitsB) {
   const cl::Context& ctx = m_context.context();
-  setKernelArgs(m_nearFilterTest, 0, m_pairs.buffer, m_cache.triangles(), m_keys.buffer, cl_uint(capacity),
+  setKernelArgs(nearKernel(), 0, m_pairs.buffer, m_cache.triangles(), m_keys.buffer, cl_uint(capacity),
                 cl_uint(bitsA), cl_uint(bitsB), m_hits.ensure(ctx, capacity * sizeof(GpucolNearHit)),
                 m_counters);
 }
@@ -548,8 +572,10 @@ std::uint64_t OpenClMeshPipeline::traverseDepthFirst(std::size_t pairCount, int 
   int depth = options.depthFirstStartDepth;
   if (depth < 0) {
     depth = 0;
-    const std::uint64_t wanted = std::clamp<std::uint64_t>(smallerTriangles / kTrianglesPerItem,
-                                                           kDepthFirstMinItems, kDepthFirstItems);
+    const std::uint64_t wanted =
+        m_context.gpuShaped() ? m_computeUnits * kGpuStartPathsPerUnit
+                              : std::clamp<std::uint64_t>(smallerTriangles / kTrianglesPerItem,
+                                                          kDepthFirstMinItems, kDepthFirstItems);
     while (depth < kMaxStartDepth && (std::uint64_t(pairCount) << (2 * depth)) < wanted) ++depth;
   }
   const std::uint64_t items = std::uint64_t(pairCount) << (2 * depth);
@@ -562,12 +588,12 @@ std::uint64_t OpenClMeshPipeline::traverseDepthFirst(std::size_t pairCount, int 
   // A CPU device's default path runs the near test inside the traversal (GPUCOL_FUSED_NEAR, measured there);
   // a GPU keeps them apart (not measured there: inside the traversal the near test would add to its warps'
   // divergence), and so does splitTimes, to time them.
-  const bool fusedNear = chainNear && !options.splitTimes && !m_context.isGpu();
+  const bool fusedNear = chainNear && !options.splitTimes && !m_context.gpuShaped();
   cl::Kernel& kernel = depthFirstKernel(treeDepths, fusedNear);
   // A GPU runs one work-item per path; a CPU device a few work-groups per thread, whose items take the
   // paths one after another (see mesh_traverse_depth_first).
   const std::uint64_t workers =
-      m_context.isGpu() ? items
+      m_context.gpuShaped() ? items
                         : std::min<std::uint64_t>(
                               items, kCpuTraversalGroupsPerUnit * m_computeUnits * groupSize(kernel, items));
   // The key buffer keeps its size between batches; it starts at one candidate per 4 work-items.
@@ -592,7 +618,7 @@ std::uint64_t OpenClMeshPipeline::traverseDepthFirst(std::size_t pairCount, int 
       if (!fusedNear) {
         setNearFilterArgs(capacity, bitsA, bitsB);
         if (options.splitTimes) queue.enqueueMarkerWithWaitList(nullptr, &traversed);
-        launch(m_nearFilterTest, (capacity + kPrefilterLanes - 1) / kPrefilterLanes);
+        launch(nearKernel(), nearItems(capacity));
       }
       if (options.splitTimes) {
         // The host waits for the traversal only to time it: the near kernel is queued behind it already.

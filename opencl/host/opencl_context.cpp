@@ -4,6 +4,7 @@
 
 #include "opencl/host/device_selection.h"
 
+#include <cstdlib>
 #include <functional>
 #include <iostream>
 #include <memory>
@@ -101,6 +102,17 @@ bool hostUnifiedMemory(const cl::Device& device, bool isGpu) {
   }
 }
 
+/// The kernel shape (OpenClContext::gpuShaped): GPUCOL_OPENCL_SHAPE=gpu or cpu, else the device's type. Any
+/// other value is refused, so that a misspelt switch does not silently test the device's own shape.
+bool kernelShapeIsGpu(bool isGpu) {
+  const char* shape = std::getenv("GPUCOL_OPENCL_SHAPE");
+  if (shape == nullptr || shape[0] == '\0') return isGpu;
+  const std::string value = shape;
+  if (value == "gpu") return true;
+  if (value == "cpu") return false;
+  throw std::runtime_error("GPUCOL_OPENCL_SHAPE is \"" + value + "\"; it must be gpu, cpu or unset");
+}
+
 std::string hexHash(const char* source) {
   const std::size_t h = std::hash<std::string>{}(source);
   static const char* kDigits = "0123456789abcdef";
@@ -133,6 +145,8 @@ OpenClContext::OpenClContext(const std::string& filter) {
     m_deviceName = candidates[*chosen].deviceName;
     m_isGpu = candidates[*chosen].isGpu;
     m_sharesHostMemory = hostUnifiedMemory(m_device, m_isGpu);
+    m_gpuShaped = kernelShapeIsGpu(m_isGpu);
+    m_maxAllocation = std::size_t(m_device.getInfo<CL_DEVICE_MAX_MEM_ALLOC_SIZE>());
     m_context = cl::Context(m_device);
     m_queue = cl::CommandQueue(m_context, m_device);
   });

@@ -41,6 +41,10 @@ class OpenClContext {
   const std::string& deviceName() const { return m_deviceName; }
   /// True when the device is a GPU.
   bool isGpu() const { return m_isGpu; }
+  /// True when kernels are launched in a GPU's shapes (one work-item per candidate, wide fronts, tile sorts)
+  /// rather than a CPU device's (few work-items walking chunks, vector lanes): the device's type, unless the
+  /// environment variable GPUCOL_OPENCL_SHAPE says `gpu` or `cpu` (tests run both shapes on PoCL with it).
+  bool gpuShaped() const { return m_gpuShaped; }
   /// True when the device's memory is the host's (a CPU device, or a GPU that shares the host's memory):
   /// its buffers then take the process's memory.
   bool sharesHostMemory() const { return m_sharesHostMemory; }
@@ -49,6 +53,9 @@ class OpenClContext {
   /// hash) and cached for the life of the process (Boost.Compute's rule). A failed build throws an
   /// OpenClError carrying the build log. Thread-safe.
   cl::Program program(const std::string& name, const char* source, const std::string& options = {});
+
+  /// The largest buffer the device allows (CL_DEVICE_MAX_MEM_ALLOC_SIZE).
+  std::size_t maxAllocation() const { return m_maxAllocation; }
 
   /// Number of programs built so far (the cache's misses); lets tests check the cache.
   std::size_t programBuilds() const;
@@ -68,7 +75,9 @@ class OpenClContext {
   cl::CommandQueue m_queue;
   std::string m_deviceName;
   bool m_isGpu = false;
+  bool m_gpuShaped = false;
   bool m_sharesHostMemory = true;
+  std::size_t m_maxAllocation = 0;
 
   mutable std::mutex m_programMutex;
   std::map<std::string, cl::Program> m_programs;

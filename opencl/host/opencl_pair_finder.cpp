@@ -423,8 +423,8 @@ void OpenClPairFinder::testBins(Kernels& k, Bins& b, const cl::Buffer& out, std:
   // A CPU device steps through chunks of candidates (see grid_test_candidates); a GPU takes one each.
   const std::size_t local = m_context.workGroupSize(k.testCandidates);
   const std::uint64_t units = m_context.device().getInfo<CL_DEVICE_MAX_COMPUTE_UNITS>();
-  const std::uint64_t targetItems = units * local * (m_context.isGpu() ? 64 : 1);
-  const std::uint64_t minChunk = m_context.isGpu() ? 1 : 16;
+  const std::uint64_t targetItems = units * local * (m_context.gpuShaped() ? 64 : 1);
+  const std::uint64_t minChunk = m_context.gpuShaped() ? 1 : 16;
   const std::uint64_t chunkLength = m_tuning.candidatesPerItem != 0
                                         ? m_tuning.candidatesPerItem
                                         : std::max(minChunk, (b.candidates + targetItems - 1) / targetItems);

@@ -12,6 +12,7 @@ namespace {
 constexpr unsigned kRadixBits = 4;  // at most log2(RADIX) of radix_sort.cl
 constexpr unsigned kRadix = 1u << kRadixBits;
 constexpr std::size_t kMinChunk = 16;
+constexpr std::size_t kMaxTile = 256;
 }  // namespace
 
 OpenClRadixSort::OpenClRadixSort(OpenClContext& context) : m_context(context), m_scan(context) {
@@ -19,10 +20,16 @@ OpenClRadixSort::OpenClRadixSort(OpenClContext& context) : m_context(context), m
     cl::Program program = m_context.program("radix_sort", kernels::radix_sort);
     m_count = cl::Kernel(program, "radix_count");
     m_scatter = cl::Kernel(program, "radix_scatter");
+    m_tileCount = cl::Kernel(program, "radix_tile_count");
+    m_tileScatter = cl::Kernel(program, "radix_tile_scatter");
+    m_tiles = m_context.gpuShaped();
+    // A tile is one work-group, kMaxTile elements at most (TILE_MAX of radix_sort.cl).
+    m_tileSize = std::min({kMaxTile, m_context.workGroupSize(m_tileCount), m_context.workGroupSize(m_tileScatter)});
+    m_tiles = m_tiles && m_tileSize >= kRadix;  // the tile kernels need RADIX work-items per group
     m_groupSize = std::min(m_context.workGroupSize(m_count), m_context.workGroupSize(m_scatter));
     // Enough chunks to fill the device a few times over; more would only lengthen the counts to scan.
     const std::size_t units = m_context.device().getInfo<CL_DEVICE_MAX_COMPUTE_UNITS>();
-    m_targetChunks = std::max<std::size_t>(1, units * m_groupSize * (m_context.isGpu() ? 2 : 1));
+    m_targetChunks = std::max<std::size_t>(1, units * m_groupSize);
   });
 }
 
@@ -50,9 +57,12 @@ void OpenClRadixSort::sortPasses(const cl::Buffer& keys, const cl::Buffer* value
   translateClErrors("OpenCL radix sort", [&] {
     cl::CommandQueue& queue = m_context.queue();
     // Short chunks keep many items busy; kMinChunk bounds the counts array at 16 / kMinChunk per element.
-    const std::size_t chunkLength = std::max(kMinChunk, (n + m_targetChunks - 1) / m_targetChunks);
+    // Tiles: one chunk per work-group of m_tileSize elements, one element per work-item.
+    const std::size_t chunkLength =
+        m_tiles ? m_tileSize : std::max(kMinChunk, (n + m_targetChunks - 1) / m_targetChunks);
     const std::size_t chunks = (n + chunkLength - 1) / chunkLength;
-    const std::size_t global = (chunks + m_groupSize - 1) / m_groupSize * m_groupSize;
+    const std::size_t global = m_tiles ? chunks * m_tileSize : (chunks + m_groupSize - 1) / m_groupSize * m_groupSize;
+    const std::size_t local = m_tiles ? m_tileSize : m_groupSize;
     if (m_countsCapacity < chunks * kRadix) {
       m_counts = cl::Buffer(m_context.context(), CL_MEM_READ_WRITE, chunks * kRadix * sizeof(cl_uint));
       m_countsCapacity = chunks * kRadix;
@@ -77,15 +87,28 @@ void OpenClRadixSort::sortPasses(const cl::Buffer& keys, const cl::Buffer* value
       const unsigned bits = std::min(kRadixBits, keyBits - shift);
       const cl_uint digitMask = (1u << bits) - 1u;
       const std::size_t digits = std::size_t(digitMask) + 1;
-      setKernelArgs(m_count, 0, keysFrom, static_cast<cl_uint>(n), static_cast<cl_uint>(shift), digitMask,
-                    static_cast<cl_uint>(chunkLength), static_cast<cl_uint>(chunks), m_counts);
-      queue.enqueueNDRangeKernel(m_count, cl::NullRange, cl::NDRange(global), cl::NDRange(m_groupSize));
+      if (m_tiles) {
+        setKernelArgs(m_tileCount, 0, keysFrom, static_cast<cl_uint>(n), static_cast<cl_uint>(shift), digitMask,
+                      static_cast<cl_uint>(chunks), m_counts);
+        queue.enqueueNDRangeKernel(m_tileCount, cl::NullRange, cl::NDRange(global), cl::NDRange(local));
+      } else {
+        setKernelArgs(m_count, 0, keysFrom, static_cast<cl_uint>(n), static_cast<cl_uint>(shift), digitMask,
+                      static_cast<cl_uint>(chunkLength), static_cast<cl_uint>(chunks), m_counts);
+        queue.enqueueNDRangeKernel(m_count, cl::NullRange, cl::NDRange(global), cl::NDRange(local));
+      }
       m_scan.exclusiveScan(m_counts, digits * chunks);
-      // Null value buffers (keys alone) are passed as null pointers, which the kernel skips.
-      setKernelArgs(m_scatter, 0, keysFrom, valuesFrom, keysTo, valuesTo, static_cast<cl_uint>(n),
-                    static_cast<cl_uint>(shift), digitMask, static_cast<cl_uint>(chunkLength),
-                    static_cast<cl_uint>(chunks), m_counts);
-      queue.enqueueNDRangeKernel(m_scatter, cl::NullRange, cl::NDRange(global), cl::NDRange(m_groupSize));
+      // Null value buffers (keys alone) are passed as null pointers, which the kernels skip.
+      if (m_tiles) {
+        setKernelArgs(m_tileScatter, 0, keysFrom, valuesFrom, keysTo, valuesTo, static_cast<cl_uint>(n),
+                      static_cast<cl_uint>(shift), digitMask, static_cast<cl_uint>(bits),
+                      static_cast<cl_uint>(chunks), m_counts);
+        queue.enqueueNDRangeKernel(m_tileScatter, cl::NullRange, cl::NDRange(global), cl::NDRange(local));
+      } else {
+        setKernelArgs(m_scatter, 0, keysFrom, valuesFrom, keysTo, valuesTo, static_cast<cl_uint>(n),
+                      static_cast<cl_uint>(shift), digitMask, static_cast<cl_uint>(chunkLength),
+                      static_cast<cl_uint>(chunks), m_counts);
+        queue.enqueueNDRangeKernel(m_scatter, cl::NullRange, cl::NDRange(global), cl::NDRange(local));
+      }
       std::swap(keysFrom, keysTo);
       std::swap(valuesFrom, valuesTo);
     }

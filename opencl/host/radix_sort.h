@@ -10,7 +10,9 @@
 namespace gpucol::opencl {
 
 /// Stable radix sort of (uint64 key, uint32 value) pairs, or of keys alone, on an OpenCL device, 4 bits per
-/// pass, each work-item counting and scattering one chunk in order, digit offsets from OpenClScan. Keeps its
+/// pass, digit offsets from OpenClScan. On a CPU device each work-item counts and scatters one chunk in order;
+/// in a GPU's shape (OpenClContext::gpuShaped) each work-group sorts a tile in local memory and writes it
+/// coalesced. Keeps its
 /// scratch buffers between calls (grown, shrunk only by releaseScratch); one object per thread.
 class OpenClRadixSort {
  public:
@@ -42,7 +44,10 @@ class OpenClRadixSort {
   OpenClScan m_scan;
   cl::Kernel m_count;
   cl::Kernel m_scatter;
-  void sortPasses(const cl::Buffer& keys, const cl::Buffer* values, std::size_t n, unsigned keyBits);
+  cl::Kernel m_tileCount;
+  cl::Kernel m_tileScatter;
+  bool m_tiles = false;            // the GPU's shape: tiles of m_tileSize elements
+  std::size_t m_tileSize = 0;  void sortPasses(const cl::Buffer& keys, const cl::Buffer* values, std::size_t n, unsigned keyBits);
   std::size_t m_groupSize = 0;     // work-group size of both kernels (asked of the device)
   std::size_t m_targetChunks = 0;  // chunks (work-items) per pass to aim for
   cl::Buffer m_counts;

@@ -20,7 +20,7 @@ OpenClScan::OpenClScan(OpenClContext& context, Method method) : m_context(contex
     m_addOffsets = cl::Kernel(program, "scan_add_block_offsets");
     m_chunkTotals = cl::Kernel(program, "scan_chunk_totals");
     m_scanChunks = cl::Kernel(program, "scan_chunks");
-    m_chunked = method == Method::Chunked || (method == Method::Auto && !m_context.isGpu());
+    m_chunked = method == Method::Chunked || (method == Method::Auto && !m_context.gpuShaped());
     m_chunkGroupSize =
         std::min(m_context.workGroupSize(m_chunkTotals), m_context.workGroupSize(m_scanChunks));
     const std::size_t units = m_context.device().getInfo<CL_DEVICE_MAX_COMPUTE_UNITS>();

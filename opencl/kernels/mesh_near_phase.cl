@@ -852,3 +852,33 @@ __kernel void mesh_near_filter_test(__global const GpucolMeshPair* restrict pair
   if (first >= n) return;
   mesh_test_lanes(pairs, soup, keys, first, n, bitsA, bitsB, hits, counters);
 }
+
+// The GPU's shape of mesh_near_filter_test: one candidate per work-item, the double test of mesh_near_hit
+// straight away (scalar code: a GPU has no vector lanes for the float early-out to fill, and the double test's
+// first plane test rejects as early), the intersecting records of a work-group appended with one atomic on
+// counters[4] (each takes a slot of the group's count in local memory). Launched over `capacity` items in
+// whole groups; work-items past the count read from counters[0] write nothing.
+__kernel void mesh_near_each(__global const GpucolMeshPair* restrict pairs, __global const float* restrict soup,
+                             __global const ulong* restrict keys, const uint capacity, const uint bitsA,
+                             const uint bitsB, __global GpucolNearHit* restrict hits,
+                             __global uint* restrict counters) {
+  __local uint groupCount, groupBase;
+  const uint n = min(counters[0], capacity);
+  // Uniform over the group: a group wholly past the count leaves before any barrier.
+  if (get_group_id(0) * get_local_size(0) >= n) return;
+  if (get_local_id(0) == 0) groupCount = 0u;
+  barrier(CLK_LOCAL_MEM_FENCE);
+  const uint j = get_global_id(0);
+  GpucolNearHit hit;
+  uint slot = 0xffffffffu;
+  if (j < n) {
+    float af[3][3], bf[3][3];
+    mesh_candidate_triangles(pairs, soup, keys[j], bitsA, bitsB, af, bf);
+    hit = mesh_near_hit(af, bf, j);
+    if (hit.flags & GPUCOL_HIT_INTERSECTS) slot = atomic_inc(&groupCount);
+  }
+  barrier(CLK_LOCAL_MEM_FENCE);
+  if (get_local_id(0) == 0 && groupCount > 0u) groupBase = atomic_add(&counters[4], groupCount);
+  barrier(CLK_LOCAL_MEM_FENCE);
+  if (slot != 0xffffffffu) hits[groupBase + slot] = hit;
+}

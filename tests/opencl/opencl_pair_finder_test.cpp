@@ -95,9 +95,12 @@ void expectMatchesReferences(const Scene& scene, const std::string& what,
   // The device's own launch shape, one candidate per item (a GPU's), and an odd chunk length with the
   // buffers kept between searches (a discrete GPU's policy) rather than released; and a dense grid's filled
   // cells always listed as its runs.
-  static std::unique_ptr<PairFinder> finders[4] = {makePairFinder(Config{}), makePairFinder(Config{}, {1}),
-                                                   makePairFinder(Config{}, {7, kKeepBuffers}),
-                                                   makePairFinder(Config{}, listedRuns())};
+  // Made once and never destroyed: OpenCL objects released by a static destructor at exit race the driver's
+  // own teardown (NVIDIA's driver is known to crash there), as the contexts do (opencl_context.cpp).
+  static std::unique_ptr<PairFinder>* finders =
+      new std::unique_ptr<PairFinder>[4]{makePairFinder(Config{}), makePairFinder(Config{}, {1}),
+                                         makePairFinder(Config{}, {7, kKeepBuffers}),
+                                         makePairFinder(Config{}, listedRuns())};
   std::unique_ptr<PairFinder> cpu = makeCpuPairFinder();
   const ProxyArrays proxies = scene.view();
   const std::vector<std::uint64_t> expected = findPairsBruteForce(proxies);
@@ -107,7 +110,8 @@ void expectMatchesReferences(const Scene& scene, const std::string& what,
   const ProxyArrays views[3] = {
       proxies, records.view(ProxyRecords::Blocks::EndToEnd, proxies.group, proxies.mask, proxies.flags),
       records.view(ProxyRecords::Blocks::Apart, proxies.group, proxies.mask, proxies.flags)};
-  for (std::unique_ptr<PairFinder>& gpu : finders) {
+  for (int f = 0; f < 4; ++f) {
+    std::unique_ptr<PairFinder>& gpu = finders[f];
     ASSERT_NE(gpu, nullptr);
     for (int v = 0; v < 3; ++v) {
       const std::string how = what + (v == 0 ? "" : v == 1 ? ", records end to end" : ", records apart");
