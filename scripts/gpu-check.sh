@@ -170,7 +170,7 @@ run_there() {
     bench crossover 120 crossover --mesh-dir "$pack/meshes" --quick --csv "$out/crossover.csv"
   else
     bench meshpair 100 meshpair --backend opencl --runs 7 --mesh-dir "$pack/meshes"
-    bench broadphase 120 broadphase --n 100000,1000000 --scenes uniform,mixed --run cpu,opencl,b3 --steps 7 \
+    bench broadphase 120 broadphase --n 100000,1000000 --scenes uniform,mixed --run cpu,opencl,b3 --steps 7 --stages \
       --interleave --peer-max 1000000 --csv "$out/broadphase.csv"
     bench meshbatch 40 meshbatch --mesh-dir "$pack/meshes" --pairs 100 --runs 7
     bench crossover 90 crossover --mesh-dir "$pack/meshes" --csv "$out/crossover.csv"

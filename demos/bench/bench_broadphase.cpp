@@ -466,7 +466,7 @@ void runAll(const Options& o) {
       for (std::size_t i = 0; i < steppers.size(); ++i) results[slot[i]] = steppers[i]->finish();
       for (std::size_t g = 0; g < grids.size(); ++g) {
         Result& r = results[slot[g]];
-        if (o.stages && r.broadphase != "gpucol-opencl")
+        if (o.stages)
           printStages(sceneName, n, r.broadphase, stepStats[g]);
         if (r.broadphase == "gpucol-opencl" && !grids[g]->stats().usedOpenCl)
           r.note = "ran on the CPU: OpenCL path fell back";
@@ -541,7 +541,7 @@ const CommandRegistration kRegistration([](CLI::App& app) {
       "the same device");
   cmd->add_flag(
       "--stages", options->stages,
-      "also print gpucol-cpu's median wall ms per stage (search and its grid stages, diff + pair cache)");
+      "also print each gpucol broad phase's median wall ms per stage (search, the CPU grid's stages, diff + pair cache)");
   cmd->add_flag("--interleave", options->interleave,
                 "take turns: step 1 of every broad phase, then step 2, ... (so all meet the same load on a "
                 "shared machine); default: each runs all its steps in turn");

@@ -191,7 +191,7 @@ struct OpenClRow {
   double clTotalMs = 0;         // the default options (one wait for traversal, near kernel and readback)
   double clSplitTotalMs = 0;    // the same with splitTimes (a wait after the traversal)
   double startDepthMs[3] = {0, 0, 0};  // breadth-first, d0 = 0, 3, 6
-  double depthFirstMs[3] = {0, 0, 0};  // depth-first, start depth 3, 6, 8
+  double depthFirstMs[4] = {0, 0, 0, 0};  // depth-first, start depth 6, 8, 10, 11
   double noEarlyOutMs = 0, resendMs = 0, deviceSortMs = 0;
   double resendUploadMs = 0;
   double ratio = 0, ratioLow = 0, ratioHigh = 0;  // OpenCL / CPU over the blocks of calls: median, range
@@ -201,7 +201,7 @@ struct OpenClRow {
 };
 
 constexpr int kStartDepths[3] = {0, 3, 6};
-constexpr int kDepthFirstStartDepths[3] = {3, 6, 8};
+constexpr int kDepthFirstStartDepths[4] = {6, 8, 10, 11};
 
 // Median end-to-end time of collideMeshes on OpenCL with `device` options, and the stage medians.
 double timeOpenCl(const MeshShape& shape, const scenes::PairPose& pose, const MeshBatchDeviceOptions& device,
@@ -297,7 +297,7 @@ OpenClRow measureOpenCl(const std::string& name, const TriangleMesh& loaded, int
     row.startDepthMs[k] = timeOpenCl(shape, pose, o, runs, &breadthFirst, nullptr);
     if (k == 0) row.stages.frontSizes = breadthFirst.frontSizes;
   }
-  for (int k = 0; k < 3; ++k) {
+  for (int k = 0; k < 4; ++k) {
     MeshBatchDeviceOptions o;
     o.depthFirstStartDepth = kDepthFirstStartDepths[k];
     row.depthFirstMs[k] = timeOpenCl(shape, pose, o, runs, nullptr, nullptr);
@@ -365,15 +365,15 @@ void printOpenClTables(const std::vector<OpenClRow>& rows, const std::string& de
          "radix sort, and "
          "meshes "
          "re-sent every call (thesis §5.4.1) instead of resident; the last column is the default\n";
-  out << "| mesh | breadth-first d0=0 | d0=3 | d0=6 | depth-first d=3 | d=6 | d=8 | no early-out | device "
+  out << "| mesh | breadth-first d0=0 | d0=3 | d0=6 | depth-first d=6 | d=8 | d=10 | d=11 | no early-out | device "
          "sort "
          "| "
          "re-sent (its upload) | default |\n";
-  out << "|---|---:|---:|---:|---:|---:|---:|---:|---:|---:|---:|\n";
+  out << "|---|---:|---:|---:|---:|---:|---:|---:|---:|---:|---:|---:|\n";
   for (const OpenClRow& r : rows) {
     out << "| " << r.name << " | " << r.startDepthMs[0] << " | " << r.startDepthMs[1] << " | "
         << r.startDepthMs[2] << " | " << r.depthFirstMs[0] << " | " << r.depthFirstMs[1] << " | "
-        << r.depthFirstMs[2] << " | " << r.noEarlyOutMs << " | " << r.deviceSortMs << " | " << r.resendMs
+        << r.depthFirstMs[2] << " | " << r.depthFirstMs[3] << " | " << r.noEarlyOutMs << " | " << r.deviceSortMs << " | " << r.resendMs
         << " (" << r.resendUploadMs << ") | " << r.clTotalMs << " |\n";
   }
 }

@@ -532,11 +532,13 @@ cl::Kernel& OpenClMeshPipeline::depthFirstKernel(int treeDepths, bool fusedNear)
   const auto key = std::make_pair(length, fusedNear);
   auto found = m_depthFirst.find(key);
   if (found != m_depthFirst.end()) return found->second;
-  // A CPU device gets the prefetch hints (see GPUCOL_PREFETCH_NODE in the kernel) and skips dead start paths
-  // (GPUCOL_SKIP_DEAD_PATHS: there few work-items take many paths each; on a GPU each path is a work-item of
-  // its own, and the skips would only add atomics).
-  std::string options = "-DGPUCOL_DFS_STACK=" + std::to_string(length) +
-                        (m_context.gpuShaped() ? "" : " -DGPUCOL_CPU_PREFETCH -DGPUCOL_SKIP_DEAD_PATHS");
+  // The CPU device's shape skips dead start paths (GPUCOL_SKIP_DEAD_PATHS: there few work-items take many
+  // paths each; in a GPU's shape each path is a work-item of its own, and the skips would only add atomics).
+  // The prefetch hints (GPUCOL_PREFETCH_NODE in the kernel) go only to a CPU device: a GPU's compiler refuses
+  // __builtin_prefetch on a __global pointer (NVIDIA's did, with the CPU shape forced).
+  std::string options = "-DGPUCOL_DFS_STACK=" + std::to_string(length);
+  if (!m_context.gpuShaped()) options += " -DGPUCOL_SKIP_DEAD_PATHS";
+  if (!m_context.gpuShaped() && !m_context.isGpu()) options += " -DGPUCOL_CPU_PREFETCH";
   cl::Program program;
   if (fusedNear) {
     // The near phase's functions first, then the traversal that calls them (GPUCOL_FUSED_NEAR in
