@@ -43,13 +43,29 @@ std::uint32_t OpenClScan::exclusiveScan(const cl::Buffer& data, std::size_t n) {
     cl::CommandQueue& queue = m_context.queue();
     const cl_uint zero = 0;
     queue.enqueueFillBuffer(m_overflow, zero, 0, sizeof(cl_uint));
-    const std::uint32_t total = m_chunked ? scanLevelChunked(data, n, 0) : scanLevel(data, n, 0);
+    const std::uint32_t total = m_chunked ? scanLevelChunked(data, n, 0, true) : scanLevel(data, n, 0, true);
     cl_uint overflow = 0;
     queue.enqueueReadBuffer(m_overflow, CL_TRUE, 0, sizeof(cl_uint), &overflow);
     if (overflow != 0) {
       throw std::overflow_error("OpenClScan: the sum of " + std::to_string(n) + " values exceeds 2^32 - 1");
     }
     return total;
+  });
+}
+
+void OpenClScan::exclusiveScanQueued(const cl::Buffer& data, std::size_t n) {
+  if (n == 0) {
+    return;
+  }
+  if (n > 0xffffffffu) {
+    throw std::length_error("OpenClScan: " + std::to_string(n) + " values exceed the uint32 index range");
+  }
+  translateClErrors("OpenCL exclusive scan", [&] {
+    if (m_chunked) {
+      scanLevelChunked(data, n, 0, false);
+    } else {
+      scanLevel(data, n, 0, false);
+    }
   });
 }
 
@@ -71,7 +87,8 @@ const cl::Buffer& OpenClScan::levelBuffer(std::size_t level, std::size_t count) 
   return m_levelSums[level];
 }
 
-std::uint32_t OpenClScan::scanLevelChunked(const cl::Buffer& data, std::size_t n, std::size_t level) {
+std::uint32_t OpenClScan::scanLevelChunked(const cl::Buffer& data, std::size_t n, std::size_t level,
+                                           bool readTotal) {
   cl::CommandQueue& queue = m_context.queue();
   const std::size_t chunkLength = std::max(kMinChunk, (n + m_targetChunks - 1) / m_targetChunks);
   const std::size_t chunks = (n + chunkLength - 1) / chunkLength;
@@ -84,18 +101,18 @@ std::uint32_t OpenClScan::scanLevelChunked(const cl::Buffer& data, std::size_t n
   std::uint32_t total = 0;
   if (chunks == 1) {
     // One chunk: its total is the answer and its offset is zero.
-    queue.enqueueReadBuffer(sums, CL_TRUE, 0, sizeof(cl_uint), &total);
+    if (readTotal) queue.enqueueReadBuffer(sums, CL_TRUE, 0, sizeof(cl_uint), &total);
     const cl_uint zero = 0;
     queue.enqueueFillBuffer(sums, zero, 0, sizeof(cl_uint));
   } else {
-    total = scanLevelChunked(sums, chunks, level + 1);
+    total = scanLevelChunked(sums, chunks, level + 1, readTotal);
   }
   setKernelArgs(m_scanChunks, 0, data, static_cast<cl_uint>(n), static_cast<cl_uint>(chunkLength), sums);
   queue.enqueueNDRangeKernel(m_scanChunks, cl::NullRange, cl::NDRange(global), cl::NDRange(m_chunkGroupSize));
   return total;
 }
 
-std::uint32_t OpenClScan::scanLevel(const cl::Buffer& data, std::size_t n, std::size_t level) {
+std::uint32_t OpenClScan::scanLevel(const cl::Buffer& data, std::size_t n, std::size_t level, bool readTotal) {
   cl::CommandQueue& queue = m_context.queue();
   const std::size_t blockLength = 2 * m_blockItems;
   const std::size_t blocks = (n + blockLength - 1) / blockLength;
@@ -106,10 +123,10 @@ std::uint32_t OpenClScan::scanLevel(const cl::Buffer& data, std::size_t n, std::
                              cl::NDRange(m_blockItems));
   if (blocks == 1) {
     cl_uint total = 0;
-    queue.enqueueReadBuffer(sums, CL_TRUE, 0, sizeof(cl_uint), &total);
+    if (readTotal) queue.enqueueReadBuffer(sums, CL_TRUE, 0, sizeof(cl_uint), &total);
     return total;
   }
-  const std::uint32_t total = scanLevel(sums, blocks, level + 1);
+  const std::uint32_t total = scanLevel(sums, blocks, level + 1, readTotal);
   const std::size_t global = (n + m_addGroupSize - 1) / m_addGroupSize * m_addGroupSize;
   setKernelArgs(m_addOffsets, 0, data, static_cast<cl_uint>(n), sums, static_cast<cl_uint>(blockLength));
   queue.enqueueNDRangeKernel(m_addOffsets, cl::NullRange, cl::NDRange(global), cl::NDRange(m_addGroupSize));

@@ -26,6 +26,11 @@ class OpenClScan {
   /// when a call fails. Enqueued on the context's queue; returns when the total is known.
   std::uint32_t exclusiveScan(const cl::Buffer& data, std::size_t n);
 
+  /// As exclusiveScan, but only enqueued: no wait, no total, no overflow check. For values whose sum the
+  /// caller knows to fit in 32 bits (a radix sort's digit counts of at most 2^32 - 1 elements), so that a
+  /// discrete GPU's queue runs on without a round trip to the host.
+  void exclusiveScanQueued(const cl::Buffer& data, std::size_t n);
+
   /// Convenience for tests and small inputs: scans a host vector through the device.
   std::uint32_t exclusiveScan(std::vector<std::uint32_t>& values);
 
@@ -33,8 +38,9 @@ class OpenClScan {
   std::size_t bytes() const;
 
  private:
-  std::uint32_t scanLevel(const cl::Buffer& data, std::size_t n, std::size_t level);
-  std::uint32_t scanLevelChunked(const cl::Buffer& data, std::size_t n, std::size_t level);
+  // One level of the scan and the levels above it; the top level's total is read (a wait) when readTotal.
+  std::uint32_t scanLevel(const cl::Buffer& data, std::size_t n, std::size_t level, bool readTotal);
+  std::uint32_t scanLevelChunked(const cl::Buffer& data, std::size_t n, std::size_t level, bool readTotal);
   const cl::Buffer& levelBuffer(std::size_t level, std::size_t count);
 
   OpenClContext& m_context;

@@ -50,6 +50,24 @@ TEST_P(OpenClScanMethods, MatchesStdExclusiveScanOnAwkwardLengths) {
   }
 }
 
+TEST_P(OpenClScanMethods, QueuedScanWritesTheSameValuesWithoutWaiting) {
+  GPUCOL_REQUIRE_OPENCL(context);
+  OpenClScan scan(context, GetParam());
+  std::mt19937 random(9);
+  std::uniform_int_distribution<std::uint32_t> value(0, 1000);
+  for (std::size_t n : {std::size_t{1}, std::size_t{33}, std::size_t{4097}, std::size_t{100003}, std::size_t{1} << 21}) {
+    std::vector<std::uint32_t> data(n);
+    for (auto& v : data) v = value(random);
+    std::vector<std::uint32_t> expected = data;
+    scan.exclusiveScan(expected);
+    cl::Buffer buffer(context.context(), CL_MEM_READ_WRITE, n * sizeof(cl_uint));
+    context.queue().enqueueWriteBuffer(buffer, CL_FALSE, 0, n * sizeof(cl_uint), data.data());
+    scan.exclusiveScanQueued(buffer, n);
+    context.queue().enqueueReadBuffer(buffer, CL_TRUE, 0, n * sizeof(cl_uint), data.data());
+    EXPECT_EQ(data, expected) << "n = " << n;
+  }
+}
+
 TEST_P(OpenClScanMethods, MatchesStdOnAMillionValuesOverSeveralLevels) {
   GPUCOL_REQUIRE_OPENCL(context);
   OpenClScan scan(context, GetParam());
