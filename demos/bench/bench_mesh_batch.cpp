@@ -93,16 +93,19 @@ void run(const MeshBatchOptions& options) {
               << t.singleMs << " | " << std::setprecision(1) << t.singleMs / t.batchMs << "x"
               << std::setprecision(2) << " | " << t.contacts << " | " << (t.same ? "yes" : "NO") << " |\n";
     if (backend == Backend::OpenCL) {
-      // The same batch with the candidates sorted on the device before the near phase (deviceSort) rather
-      // than on the host after it.
-      MeshBatchDeviceOptions sortOnDevice;
-      sortOnDevice.deviceSort = true;
-      detail::setMeshDeviceOptions(sortOnDevice);
-      const Timing d = measure(queries, config, options.runs);
-      detail::setMeshDeviceOptions(MeshBatchDeviceOptions());
-      std::cout << "| OpenCL, device sort | " << d.batchMs << " | " << d.singleMs << " | " << std::setprecision(1)
-                << d.singleMs / d.batchMs << "x" << std::setprecision(2) << " | " << d.contacts << " | "
-                << (d.same ? "yes" : "NO") << " |\n";
+      // The same batch with the candidates sorted on the device before the near phase, and on the host after
+      // it (CandidateSort::Auto takes one of the two, by the device's shape).
+      for (CandidateSort sort : {CandidateSort::Device, CandidateSort::Host}) {
+        MeshBatchDeviceOptions sorted;
+        sorted.candidateSort = sort;
+        detail::setMeshDeviceOptions(sorted);
+        const Timing d = measure(queries, config, options.runs);
+        detail::setMeshDeviceOptions(MeshBatchDeviceOptions());
+        std::cout << (sort == CandidateSort::Device ? "| OpenCL, device sort | " : "| OpenCL, host sort | ")
+                  << d.batchMs << " | " << d.singleMs << " | " << std::setprecision(1) << d.singleMs / d.batchMs
+                  << "x" << std::setprecision(2) << " | " << d.contacts << " | " << (d.same ? "yes" : "NO")
+                  << " |\n";
+      }
       // The stages of one more batch that waits after the traversal, so that its time is split. It runs the
       // traversal and the near kernel apart, a program of its own on a CPU device: a first batch builds it.
       MeshBatchDeviceOptions split;

@@ -202,6 +202,13 @@ class OpenClMeshPipeline final : public MeshBatchDevice {
   /// The near phase with the early-out, in the device's shape: candidates in vector lanes on a CPU device
   /// (mesh_near_filter_test), one per work-item on a GPU (mesh_near_each).
   cl::Kernel& nearKernel() { return m_context.gpuShaped() ? m_nearEach : m_nearFilterTest; }
+  /// Whether the candidates are sorted on the device (CandidateSort::Auto: in a GPU's shape; on a CPU device
+  /// the host's radix sort was faster at every size measured, up to a batch of 431,257 candidates, and on the
+  /// H200 the device's from about 10,000 candidates up: README, "On a GPU").
+  bool sortsOnDevice(const MeshBatchDeviceOptions& options) const {
+    return options.candidateSort == CandidateSort::Device ||
+           (options.candidateSort == CandidateSort::Auto && m_context.gpuShaped());
+  }
   /// Work-items nearKernel() takes for `candidates`.
   std::uint64_t nearItems(std::uint64_t candidates) const {
     return m_context.gpuShaped() ? candidates : (candidates + kPrefilterLanes - 1) / kPrefilterLanes;
@@ -290,7 +297,7 @@ void OpenClMeshPipeline::runBatch(const std::vector<DeviceMeshPair>& pairs,
   // enqueued right behind it, reading the candidate count on the device: one wait for both instead of a wait,
   // a second launch and a second wait (PoCL's threads went idle and woke again in between).
   const bool chainNear =
-      options.traversal == MeshTraversal::DepthFirst && options.nearPrefilter && !options.deviceSort;
+      options.traversal == MeshTraversal::DepthFirst && options.nearPrefilter && !sortsOnDevice(options);
   std::uint64_t candidateCount = 0;
   std::uint64_t records = 0;
   m_keysRead = m_hitsRead = 0;
@@ -309,7 +316,7 @@ void OpenClMeshPipeline::runBatch(const std::vector<DeviceMeshPair>& pairs,
   // the device before the near phase, or (deviceSort false) on the host after it: the near phase does not
   // care about the order, and the host sorts the keys it reads back anyway without the device sort's launches
   // and waits (ten radix passes of 4 bits for 40-bit keys, a scan with a wait in each).
-  const bool deviceSort = options.deviceSort;
+  const bool deviceSort = sortsOnDevice(options);
   if (deviceSort) {
     start = Clock::now();
     m_sort.sort(m_keys.buffer, m_values.ensure(ctx, candidateCount * sizeof(cl_uint)), candidateCount,

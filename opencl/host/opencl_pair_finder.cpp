@@ -5,6 +5,7 @@
 #include <tbb/parallel_for.h>
 
 #include <algorithm>
+#include <chrono>
 #include <cmath>
 #include <cstddef>
 #include <initializer_list>
@@ -104,6 +105,7 @@ class OpenClPairFinder final : public PairFinder {
   void bindRecords(const ProxyArrays& p);
   void chooseGrid(const ProxyArrays& p, const PairFinderOptions& options, GpucolGridParams& g);
   static GpucolProxyBox deviceBox(const ProxyArrays& p, std::uint32_t s);
+  static double millisecondsSince(std::chrono::steady_clock::time_point start);
   void upload(const ProxyArrays& p);
   bool keepGrid(const ProxyArrays& p, const PairFinderOptions& options);
   void sendChanges(const ProxyArrays& p, Kernels& k);
@@ -146,6 +148,7 @@ class OpenClPairFinder final : public PairFinder {
   const std::vector<std::uint64_t>* m_output = nullptr;  // findPairs' `pairs`, counted in the peak
   Bins m_bins;                    // the last full grid search's entries and runs (kept for stage 11)
   std::uint32_t m_lastPairs = 0;  // pairs the device found in the last search (sizes the next output)
+  std::chrono::steady_clock::time_point m_searchStart;  // the stage times' origin (PairFinderStats::chooseMs)
 
   // Stage 11: what the device keeps of the last full grid search, and what changed since.
   bool m_kept = false;                     // m_bins, m_grid, m_hugeBuf and m_restingBuf describe that search
@@ -235,6 +238,10 @@ void OpenClPairFinder::chooseGrid(const ProxyArrays& p, const PairFinderOptions&
   if (m_binned.empty()) return;
   m_stats.cellSize = grid.cell;
   for (int a = 0; a < 3; ++a) m_stats.dims[a] = grid.dims[a];
+}
+
+double OpenClPairFinder::millisecondsSince(std::chrono::steady_clock::time_point start) {
+  return std::chrono::duration<double, std::milli>(std::chrono::steady_clock::now() - start).count();
 }
 
 GpucolProxyBox OpenClPairFinder::deviceBox(const ProxyArrays& p, std::uint32_t s) {
@@ -488,6 +495,7 @@ void OpenClPairFinder::findPairs(const ProxyArrays& p, const PairFinderOptions& 
     throw std::invalid_argument(
         "gpucol OpenCL pair finder: ProxyArrays with neither the six axis arrays nor records");
   }
+  m_searchStart = std::chrono::steady_clock::now();
   m_stats = PairFinderStats{};
   m_stats.peakIncludesOutput = true;
   m_output = &pairs;
@@ -692,17 +700,22 @@ void OpenClPairFinder::fullSearch(const ProxyArrays& p, const PairFinderOptions&
     notePeak();
     for (auto* v : {&m_active, &m_binned}) std::vector<std::uint32_t>().swap(*v);
     std::vector<float>().swap(m_extent);
+    m_stats.chooseMs = millisecondsSince(m_searchStart);
+    const auto binStart = std::chrono::steady_clock::now();
     bin(k, grid, m_bins, false);
+    m_stats.binMs = millisecondsSince(binStart);
     m_stats.keys = m_bins.keys;
     m_stats.runsAreCells = m_bins.runsAreCells;
     m_stats.candidates = m_bins.candidates + std::uint64_t(m_huge.size()) * activeCount;
   } else {
     uploadActive();
     m_stats.candidates = gpucol_pair_count(activeCount);
+    m_stats.chooseMs = millisecondsSince(m_searchStart);
   }
 
   // Stages 7–10: test every candidate and append the survivors; grow and run again when they overflow
   // the output (its size comes from the last search, so a steady scene runs once).
+  const auto testStart = std::chrono::steady_clock::now();
   std::uint32_t capacity = std::max<std::uint32_t>(1024, m_lastPairs + m_lastPairs / 4);
   for (;;) {
     q.enqueueFillBuffer(m_counter.buffer, zero, 0, 4);
@@ -721,7 +734,10 @@ void OpenClPairFinder::fullSearch(const ProxyArrays& p, const PairFinderOptions&
   // The pair sort's scratch is the search's last peak: what neither it nor the next search uses goes first.
   releaseEarly({&m_bins.runPairs, &m_activeBuf}, false);
   if (!keep) releaseEarly({&m_bins.keySlots, &m_bins.runStart, &m_bins.runCell}, false);
+  m_stats.testMs = millisecondsSince(testStart);
+  const auto sortStart = std::chrono::steady_clock::now();
   readPairs(slotBits, pairs);
+  m_stats.sortMs = millisecondsSince(sortStart);
 
   if (keep) {
     m_keptOptions = options;

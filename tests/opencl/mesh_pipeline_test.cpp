@@ -152,19 +152,19 @@ TEST(MeshPipeline, ThesisSceneBothWalksAtEveryStartDepthWithAndWithoutEarlyOut) 
   for (MeshTraversal traversal : {MeshTraversal::DepthFirst, MeshTraversal::BreadthFirst}) {
     for (int depth : {0, 1, 3, 6}) {
       for (bool prefilter : {true, false}) {
-        for (bool deviceSort : {true, false}) {
+        for (CandidateSort sort : {CandidateSort::Device, CandidateSort::Host}) {
           MeshBatchDeviceOptions options;
           options.traversal = traversal;
           // Depth-first: the start front at the same depths (0 = one work-item walks the whole tree pair).
           options.startDepth = depth;
           options.depthFirstStartDepth = depth;
           options.nearPrefilter = prefilter;
-          options.deviceSort = deviceSort;
+          options.candidateSort = sort;
           detail::setMeshDeviceOptions(options);
           SCOPED_TRACE(std::string(traversal == MeshTraversal::DepthFirst ? "depth-first" : "breadth-first") +
                        ", start depth " + std::to_string(depth) +
                        (prefilter ? ", early-out" : ", no early-out") +
-                       (deviceSort ? ", device sort" : ", host sort"));
+                       (sort == CandidateSort::Device ? ", device sort" : ", host sort"));
           const Compared seen = expectSameAsCpu({scene.pair()}, 100.0f);
           EXPECT_GT(seen.intersecting, 100u);
           // Larger than one work-group of this device: the launches span several groups.

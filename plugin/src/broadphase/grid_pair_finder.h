@@ -263,10 +263,12 @@ struct PairFinderStats {
   std::uint32_t restingProxies = 0;
   /// Active proxies binned (or, when huge, tested against all) in this search.
   std::uint32_t rebinnedProxies = 0;
-  /// Wall-clock milliseconds of the stages of a full grid search (CPU finder; 0 elsewhere): stages 2-3
+  /// Wall-clock milliseconds of the stages of a full grid search (0 in an incremental one): stages 2-3
   /// (cell size, huge split), 4-6 (binning, sort by cell, runs), 7-9 (candidate tests),
   /// 3 (huge boxes against the rest) and 10 (gather and sort of the pair keys). A slab search bins and tests
   /// each slab in one go: binMs is then its planning (slab lists), testMs the slabs, huge boxes included.
+  /// The OpenCL finder's are host clocks between its waits: chooseMs also holds the active list and the
+  /// boxes' upload, testMs the huge boxes, sortMs the device sort, the read and the widening of the pairs.
   double chooseMs = 0, binMs = 0, testMs = 0, hugeMs = 0, sortMs = 0;
 };
 

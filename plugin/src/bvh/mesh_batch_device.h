@@ -59,6 +59,17 @@ enum class MeshTraversal {
   BreadthFirst,
 };
 
+/// Where a batch's candidates are put in order (pair, triangle A, triangle B).
+enum class CandidateSort {
+  /// On the device in a GPU's shape, on the host on a CPU device: each was the faster there (README, "Mesh
+  /// pairs on OpenCL" and "On a GPU").
+  Auto,
+  /// On the device (radix sort) before the near phase.
+  Device,
+  /// On the host after the near phase, with a radix sort of its own, as the keys come back.
+  Host,
+};
+
 /// How the device runs a batch (the measured options of the OpenCL pipeline; defaults are the chosen ones).
 struct MeshBatchDeviceOptions {
   /// Middle phase walk (README, "Mesh pairs on OpenCL": depth-first was faster on PoCL at every size).
@@ -76,10 +87,8 @@ struct MeshBatchDeviceOptions {
   /// Keep each mesh resident on the device between batches; false re-sends every mesh every batch (the
   /// thesis's choice, §5.4.1), for the measurement.
   bool resident = true;
-  /// Sort the candidates on the device (radix sort) before the near phase; false sorts them on the host after
-  /// it, as they come back, with a radix sort of its own (faster on PoCL at every size measured, up to a
-  /// batch of 431,257 candidates; README, "Mesh pairs on OpenCL").
-  bool deviceSort = false;
+  /// Where the candidates are sorted.
+  CandidateSort candidateSort = CandidateSort::Auto;
   /// Wait after the traversal too, so that the stats split its time from the near kernel's and the
   /// readback's (the time-split table of `gpucol-bench meshpair --backend opencl`). Off (the default), the
   /// depth-first traversal, the near kernel and the reads of the counters, keys and hits are one wait, and
