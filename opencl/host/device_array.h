@@ -64,43 +64,6 @@ struct DeviceArray {
   }
 };
 
-/// Pinned host memory (CL_MEM_ALLOC_HOST_PTR, mapped once and kept mapped) that transfers between the host and
-/// a discrete GPU go through at the bus's full speed, where pageable memory takes a copy by the driver on the
-/// way. Grows on demand (a quarter more than asked), kept between calls.
-struct PinnedHostArray {
-  cl::Buffer buffer;      ///< The buffer whose mapping `host` is.
-  void* host = nullptr;   ///< Its mapped bytes (null until the first ensure).
-  std::size_t bytes = 0;  ///< Their count.
-  /// At least `wanted` bytes of pinned memory; what it held is not kept when it grows.
-  void* ensure(const cl::Context& context, cl::CommandQueue& queue, std::size_t wanted) {
-    if (bytes >= wanted && host != nullptr) return host;
-    release(queue);
-    wanted = std::max<std::size_t>(wanted, 16);
-    const std::size_t limit =
-        context.getInfo<CL_CONTEXT_DEVICES>().at(0).getInfo<CL_DEVICE_MAX_MEM_ALLOC_SIZE>();
-    if (wanted > limit) {
-      throw std::length_error("pinned buffer of " + std::to_string(wanted) +
-                              " bytes exceeds the device's largest allocation (CL_DEVICE_MAX_MEM_ALLOC_SIZE, " +
-                              std::to_string(limit) + " bytes)");
-    }
-    const std::size_t size = std::min(limit, wanted + wanted / 4);
-    buffer = cl::Buffer(context, CL_MEM_READ_WRITE | CL_MEM_ALLOC_HOST_PTR, size);
-    host = queue.enqueueMapBuffer(buffer, CL_TRUE, CL_MAP_READ | CL_MAP_WRITE, 0, size);
-    bytes = size;
-    return host;
-  }
-  /// Unmaps and drops the buffer, once the queue is done with it.
-  void release(cl::CommandQueue& queue) {
-    if (host != nullptr) {
-      queue.enqueueUnmapMemObject(buffer, host);
-      queue.finish();
-    }
-    buffer = cl::Buffer();
-    host = nullptr;
-    bytes = 0;
-  }
-};
-
 /// Bits needed to write every index below `count` (at least 1, so that a mask is never empty).
 inline unsigned indexBits(std::uint64_t count) {
   unsigned bits = 1;

@@ -82,14 +82,7 @@ class OpenClPairFinder final : public PairFinder {
   /// Waits for the queue: a write not waited for reads the finder's host lists until the queue runs it (a
   /// step cut short by an OpenCL error may leave some queued). clFinish, which throws nothing; its error, on
   /// a queue that already failed, changes nothing here.
-  ~OpenClPairFinder() override {
-    clFinish(m_context.queue()());
-    try {
-      m_staging.release(m_context.queue());
-    } catch (const cl::Error&) {
-      // A queue that already failed: the buffer goes with the context's teardown.
-    }
-  }
+  ~OpenClPairFinder() override { clFinish(m_context.queue()()); }
   OpenClPairFinder(const OpenClPairFinder&) = delete;
   OpenClPairFinder& operator=(const OpenClPairFinder&) = delete;
 
@@ -148,8 +141,6 @@ class OpenClPairFinder final : public PairFinder {
   std::vector<std::uint32_t> m_active, m_binned, m_huge;
   std::vector<float> m_extent;
   DeviceArray m_boxes, m_flags;  // every slot's GpucolProxyBox and flags
-  // In a GPU's shape, the boxes on their way to the device and the pairs on their way back (pinned).
-  PinnedHostArray m_staging;
   bool m_inPlace = false;        // this search reads the boxes in the caller's records (readsRecordsInPlace)
   cl::Buffer m_records;          // the records as the device's buffer, for this search only
   DeviceArray m_grid, m_activeBuf, m_hugeBuf, m_pairs, m_counter, m_overflow;
@@ -269,22 +260,10 @@ void OpenClPairFinder::upload(const ProxyArrays& p) {
     bindRecords(p);
     return;
   }
-  const std::size_t bytes = n * sizeof(GpucolProxyBox);
-  const cl::Buffer& boxes = m_boxes.ensureFitted(c, bytes);
-  if (m_context.gpuShaped()) {
-    // Gathered into pinned memory, then one transfer at the bus's speed: mapping a GPU's buffer gave a
-    // staging area of the driver's, which took 2.0 ms of a 100K-box search and 8.3 of a 1M one on an H200
-    // (with the active list and the grid choice; README, "On a GPU").
-    auto* staged = static_cast<GpucolProxyBox*>(m_staging.ensure(c, q, bytes));
-    tbb::parallel_for(tbb::blocked_range<std::uint32_t>(0, p.count, 4096),
-                      [&](const tbb::blocked_range<std::uint32_t>& r) {
-                        for (std::uint32_t s = r.begin(); s < r.end(); ++s) staged[s] = deviceBox(p, s);
-                      });
-    q.enqueueWriteBuffer(boxes, CL_FALSE, 0, bytes, staged);
-    return;
-  }
   // Written through a mapping, not from a host copy of every box: on a CPU device the mapping is the
   // buffer itself, so the boxes are gathered once and held once.
+  const std::size_t bytes = n * sizeof(GpucolProxyBox);
+  const cl::Buffer& boxes = m_boxes.ensureFitted(c, bytes);
   auto* out = static_cast<GpucolProxyBox*>(
       q.enqueueMapBuffer(boxes, CL_TRUE, CL_MAP_WRITE_INVALIDATE_REGION, 0, bytes));
   tbb::parallel_for(tbb::blocked_range<std::uint32_t>(0, p.count, 4096),
@@ -498,18 +477,14 @@ void OpenClPairFinder::readPairs(cl_uint slotBits, std::vector<std::uint64_t>& p
   if (found > 1) {
     m_sort.sortKeys(m_pairs.buffer, found, 2 * slotBits);
   }
-  // Read into the output itself and widened there: no host copy of the compressed keys (8 bytes a pair). In
-  // a GPU's shape they come through pinned memory (the in-order queue has read the boxes out of it by then)
-  // and are widened on their way into the output.
+  // Read into the output itself and widened there: no host copy of the compressed keys (8 bytes a pair).
   pairs.resize(found);
+  if (found > 0) {
+    q.enqueueReadBuffer(m_pairs.buffer, CL_TRUE, 0, std::size_t(found) * 8, pairs.data());
+  }
   const std::uint64_t lowMask = (std::uint64_t(1) << slotBits) - 1;
-  if (found > 0 && m_context.gpuShaped()) {
-    auto* read = static_cast<std::uint64_t*>(m_staging.ensure(m_context.context(), q, std::size_t(found) * 8));
-    q.enqueueReadBuffer(m_pairs.buffer, CL_TRUE, 0, std::size_t(found) * 8, read);
-    for (std::uint32_t i = 0; i < found; ++i) pairs[i] = ((read[i] >> slotBits) << 32) | (read[i] & lowMask);
-  } else {
-    if (found > 0) q.enqueueReadBuffer(m_pairs.buffer, CL_TRUE, 0, std::size_t(found) * 8, pairs.data());
-    for (std::uint64_t& key : pairs) key = ((key >> slotBits) << 32) | (key & lowMask);
+  for (std::uint64_t& key : pairs) {
+    key = ((key >> slotBits) << 32) | (key & lowMask);
   }
   notePeak();  // the pairs on the device, the sort's scratch and the list read
 }
@@ -566,7 +541,7 @@ void OpenClPairFinder::findPairs(const ProxyArrays& p, const PairFinderOptions& 
 std::size_t OpenClPairFinder::heldBytes() const {
   // The scan's and the sort's scratch are the finder's too: the pair sort's is 8 bytes per pair and its digit
   // counts, and on a sparse grid the cell sort's 12 per entry.
-  std::size_t bytes = m_bins.bytes() + m_movedBins.bytes() + m_scan.bytes() + m_sort.bytes() + m_staging.bytes;
+  std::size_t bytes = m_bins.bytes() + m_movedBins.bytes() + m_scan.bytes() + m_sort.bytes();
   for (const DeviceArray* a : {&m_boxes, &m_flags, &m_grid, &m_activeBuf, &m_hugeBuf, &m_pairs, &m_counter,
                                &m_overflow, &m_restingBuf, &m_updatesBuf, &m_movedHugeBuf}) {
     bytes += a->bytes;
@@ -605,7 +580,6 @@ void OpenClPairFinder::releaseUnkept() {
   }
   m_movedBins = Bins{};
   m_sort.releaseScratch();
-  m_staging.release(m_context.queue());
   if (!m_kept) {
     m_bins = Bins{};
     for (DeviceArray* a : {&m_boxes, &m_flags, &m_hugeBuf, &m_restingBuf}) a->release();
