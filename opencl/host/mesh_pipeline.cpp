@@ -313,9 +313,9 @@ void OpenClMeshPipeline::runBatch(const std::vector<DeviceMeshPair>& pairs,
   if (candidateCount == 0) return;
 
   // Deterministic order: by pair, then (triangleA, triangleB), which is the CPU's order within each pair. On
-  // the device before the near phase, or (deviceSort false) on the host after it: the near phase does not
-  // care about the order, and the host sorts the keys it reads back anyway without the device sort's launches
-  // and waits (ten radix passes of 4 bits for 40-bit keys, a scan with a wait in each).
+  // the device before the near phase (sortsOnDevice), or on the host after it: the near phase does not care
+  // about the order, and on a CPU device the host sorts the keys it reads back faster than the device's ten
+  // radix passes of 4 bits for 40-bit keys.
   const bool deviceSort = sortsOnDevice(options);
   if (deviceSort) {
     start = Clock::now();
