@@ -47,11 +47,10 @@ bool boxes_overlap(const GpucolProxyBox a, const GpucolProxyBox b) {
          b.minZ <= a.maxZ;
 }
 
-// Stage 8's filter for slots sa and sb: Bullet's group/mask rule; never static–static.
+// Stage 8's filter for slots sa and sb: Bullet's group/mask rule, bit for bit.
 bool filters_accept(const GpucolProxyBox a, const GpucolProxyBox b, __global const uchar* flags, const uint sa,
                     const uint sb) {
-  return (a.group & b.mask) != 0 && (b.group & a.mask) != 0 &&
-         (flags[sa] & flags[sb] & GPUCOL_PROXY_STATIC) == 0u;
+  return (a.group & b.mask) != 0 && (b.group & a.mask) != 0;
 }
 
 // Stage 8: overlap and filter of slots sa and sb.

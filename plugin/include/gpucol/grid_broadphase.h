@@ -61,8 +61,9 @@ struct GridBroadphaseStats {
   /// Live proxies that were neither re-binned nor tested against each other this step: static or sleeping
   /// ones whose box and filter did not change since the grid was last built (their pairs carry over).
   std::uint32_t restingProxies = 0;
-  /// Live proxies with Bullet's static filter group: no pair of two of them is ever generated (DESIGN's
-  /// static–static skip), and while they rest they are neither re-binned nor tested (`restingProxies`).
+  /// Live proxies with Bullet's static filter group: two of them pair only where their masks accept each
+  /// other, as in Bullet (its static objects' mask refuses the static group), and while they rest they are
+  /// neither re-binned nor tested (`restingProxies`).
   std::uint32_t staticProxies = 0;
   /// Live proxies binned (or tested against all) this step: every one on a full search, else the moved.
   std::uint32_t rebinnedProxies = 0;

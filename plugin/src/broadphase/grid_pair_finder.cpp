@@ -70,10 +70,9 @@ inline bool aabbOverlap(const ProxyArrays& p, std::uint32_t a, std::uint32_t b) 
 }
 
 inline bool passesFilter(const ProxyArrays& p, std::uint32_t a, std::uint32_t b) {
-  // Bullet's default filter (btOverlappingPairCache::needsBroadphaseCollision without a callback), and
-  // static–static pairs never exist.
-  return (p.group[a] & p.mask[b]) != 0 && (p.group[b] & p.mask[a]) != 0 &&
-         ((p.flags[a] & p.flags[b] & kProxyStatic) == 0);
+  // Bullet's default filter (btOverlappingPairCache::needsBroadphaseCollision without a callback), bit for bit:
+  // static–static pairs go only where the masks refuse them, as Bullet's own filters do.
+  return (p.group[a] & p.mask[b]) != 0 && (p.group[b] & p.mask[a]) != 0;
 }
 
 inline std::uint32_t homeCell(const ProxyArrays& p, std::uint32_t s, const Grid& g) {
@@ -1175,8 +1174,7 @@ std::vector<std::uint64_t> findPairsBruteForce(const ProxyArrays& p) {
       for (int k = 0; k < 3; ++k)
         overlap = overlap && double(x.lo[k]) <= double(y.hi[k]) && double(y.lo[k]) <= double(x.hi[k]);
       const bool filter = (p.group[a] & p.mask[b]) && (p.group[b] & p.mask[a]);
-      const bool bothStatic = (p.flags[a] & kProxyStatic) && (p.flags[b] & kProxyStatic);
-      if (overlap && filter && !bothStatic) pairs.push_back((std::uint64_t(a) << 32) | b);
+      if (overlap && filter) pairs.push_back((std::uint64_t(a) << 32) | b);
     }
   }
   return pairs;

@@ -26,7 +26,8 @@
 //  7. Mapping function: candidate k → its run (binary search in the prefix sum) → local index → (i, j) in
 //     the run by gpucol_pair_from_index (on the CPU once per chunk, then stepped; on a GPU once per item).
 //  8. AABB test + filter: overlap on all three axes with touching counting (min <= other max);
-//     (groupA & maskB) && (groupB & maskA); not both kProxyStatic.
+//     (groupA & maskB) && (groupB & maskA), Bullet's default test (the caller gives masks of -1 where a cache's
+//     own filter decides).
 //  9. Dedupe: two boxes share every cell around their overlap; the pair is reported only by the run whose
 //     cell holds the overlap's min corner, i.e. cellOf(max(minA, minB)) on each axis == the run's cell.
 // 10. Output: set bits in a bit mask over the candidates (§3.4) or append to per-chunk lists (compacted);
@@ -59,7 +60,7 @@ namespace gpucol {
 
 /// Flag bit of ProxyArrays::flags: the slot holds a live proxy.
 constexpr std::uint8_t kProxyActive = 1u;
-/// Flag bit of ProxyArrays::flags: the proxy is static (static–static pairs are never generated).
+/// Flag bit of ProxyArrays::flags: the proxy has Bullet's static group (counted; its pairs follow the masks alone).
 constexpr std::uint8_t kProxyStatic = 2u;
 
 /// The min and max corners of one box.

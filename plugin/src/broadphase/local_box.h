@@ -43,7 +43,7 @@ struct LocalBox {
 
 /// passesFilter on local copies.
 inline bool passesFilter(const LocalBox& a, const LocalBox& b) {
-  return (a.group & b.mask) != 0 && (b.group & a.mask) != 0 && ((a.flags & b.flags & kProxyStatic) == 0);
+  return (a.group & b.mask) != 0 && (b.group & a.mask) != 0;
 }
 
 inline CellRange cellRange(const LocalBox& b, const Grid& g) {

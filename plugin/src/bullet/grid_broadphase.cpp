@@ -41,6 +41,16 @@
 namespace gpucol {
 namespace {
 
+/// True when `cache` accepts a pair exactly when Bullet's group/mask test does (no overlap filter callback, and
+/// one of Bullet's own caches, whose needsBroadphaseCollision is that test): the pair finder then applies the
+/// test itself. Otherwise (a user's callback, which may accept pairs the masks reject, or another cache) the
+/// finder reports every overlapping pair and the cache decides each.
+bool cacheFiltersByGroupAndMask(btOverlappingPairCache& cache) {
+  if (cache.getOverlapFilterCallback() != nullptr) return false;
+  return dynamic_cast<btHashedOverlappingPairCache*>(&cache) != nullptr ||
+         dynamic_cast<btSortedOverlappingPairCache*>(&cache) != nullptr;
+}
+
 /// Proxies per parallel task of the per-step scan of the proxies' filters.
 constexpr std::uint32_t kScanGrain = 16384;
 
@@ -59,6 +69,8 @@ constexpr std::uint8_t kMoved = 2;      // box, filter or life changed since the
 constexpr std::uint8_t kNonFinite = 4;  // box has a NaN or infinite component: hidden from the finder
 constexpr std::uint8_t kFreed = 8;      // destroyed since the last search: its pairs already left the cache
 constexpr std::uint8_t kOffIndex = 16;  // set or reused since the query index was built (in offIndex)
+constexpr std::uint8_t kFilterChanged = 32;  // filter changed since the last diff (asked again when a cache's
+                                             // own filter decides: diffAndUpdateCache)
 
 /// Queries (rayTest, aabbTest) test every proxy below this many live proxies: the index's cells and the
 /// sort of its candidates cost more than a scan of so few boxes.
@@ -135,6 +147,13 @@ struct GridBroadphase::Impl {
   // NaN) and spread to every proxy. Such a proxy is hidden from the finder until its box is finite again.
   std::uint32_t nonFiniteCount = 0;
   bool nonFiniteChanged = false;  // a proxy entered or left that state: the next search is a full one
+  // Whether the finder applies Bullet's group/mask test itself (cacheFiltersByGroupAndMask), and what the last
+  // search did: a change makes the next search a full one.
+  bool finderFilters = true, lastFinderFilters = true;
+  // A live proxy's filter changed since the last diff (its slots carry kFilterChanged).
+  std::atomic<bool> filtersChanged{false};
+  // Every slot's "accept all" filter (-1), the finder's group and mask while the cache's own filter decides.
+  std::vector<std::int32_t> acceptAll;
   std::uint32_t liveCount = 0;
   std::uint32_t staticCount = 0;  // live proxies with the static flag (GridBroadphaseStats::staticProxies)
   int nextUniqueId = 0;
@@ -197,8 +216,8 @@ struct GridBroadphase::Impl {
   bool visible(std::uint32_t s) const { return (state[s] & (kLive | kNonFinite)) == kLive; }
 
   static std::uint8_t flagsOf(int filterGroup) {
-    // Bullet gives static and kinematic objects the StaticFilter group
-    // (btCollisionWorld::addCollisionObject); those pairs are never generated.
+    // Bullet gives static and kinematic objects the StaticFilter group (btCollisionWorld::addCollisionObject)
+    // and a mask without it, so that the group/mask test refuses their pairs; they rest between steps.
     return std::uint8_t(kProxyActive | ((filterGroup & btBroadphaseProxy::StaticFilter) ? kProxyStatic : 0));
   }
 
@@ -260,7 +279,8 @@ struct GridBroadphase::Impl {
                   staticDelta += wasStatic ? -1 : 1;
                 group[s] = p.m_collisionFilterGroup;
                 mask[s] = p.m_collisionFilterMask;
-                st |= kMoved;
+                st |= kMoved | kFilterChanged;
+                filtersChanged = true;
                 changed = true;
               }
               if (fill) flags[s] = (st & kNonFinite) ? 0 : flagsOf(group[s]);
@@ -370,7 +390,18 @@ struct GridBroadphase::Impl {
       v.maxZ = axis[5];
     }
     v.group = group.data(), v.mask = mask.data(), v.flags = view.flags();
+    if (!finderFilters) {
+      // The cache's own filter (a user's callback) has the only word: the finder reports every overlapping
+      // pair, and the diff offers each new one to the cache (needsBroadphaseCollision).
+      acceptAll.assign(slotCount, -1);
+      v.group = v.mask = acceptAll.data();
+      v.records.groupOffset = v.records.maskOffset = kNoRecordField;
+    } else {
+      std::vector<std::int32_t>().swap(acceptAll);
+    }
     v.moved = view.moved();
+    if (finderFilters != lastFinderFilters) v.moved = nullptr;
+    lastFinderFilters = finderFilters;
     if (readsRecords && surveying) v.survey = &survey;
     // The finder carries resting pairs over from our copy of its last result instead of keeping its own.
     v.lastPairs = &current;
@@ -548,7 +579,7 @@ struct GridBroadphase::Impl {
   /// free-slot lists, the last pair list and its refused part, and the finder's kept memory.
   std::size_t heldBytes() const {
     std::size_t bytes = blockCount() * kBlockSize * sizeof(GridProxy) + (blocks ? blocks->tableBytes() : 0);
-    bytes += (group.capacity() + mask.capacity()) * sizeof(std::int32_t) + state.capacity();
+    bytes += (group.capacity() + mask.capacity() + acceptAll.capacity()) * sizeof(std::int32_t) + state.capacity();
     bytes += (freeSlots.capacity() + pendingFree.capacity()) * sizeof(std::uint32_t);
     bytes += current.bytes() + refused.capacity() * sizeof(std::uint64_t);
     for (const PairFinder* f : {cpuFinder.get(), openClFinder.get()})
@@ -733,6 +764,7 @@ void GridBroadphase::calculateOverlappingPairs(btDispatcher* dispatcher) {
     return;
   }
   st.searched = true;
+  d.finderFilters = cacheFiltersByGroupAndMask(*d.pairCache);
   PairFinder& finder = d.chooseFinder(st);
   ProxyArrays view = d.finderView(kProxyBoxesAreFloats && d.tuning.boxesInPlace && finder.readsBoxRecords());
   // kMoved is relative to the previous search of the same finder; after a switch of finder, all moved.
@@ -825,6 +857,11 @@ void GridBroadphase::Impl::diffAndUpdateCache(btDispatcher* dispatcher, GridBroa
   // and half as much again while it grew: tests/memory).
   const std::size_t parts = diffParts(foundCoded);
   std::vector<std::size_t> addedAt(parts + 1, 0), removedAt(parts + 1, 0);
+  // Where the cache's own filter decides (a user's callback: the finder reports every overlapping pair), a
+  // kept pair one of whose proxies changed its filter is asked again, as the finder's masks are otherwise.
+  const bool recheck = !finderFilters && filtersChanged.load();
+  std::vector<std::uint64_t> recheckKeys;
+  std::mutex recheckMutex;
   auto walk = [&](bool list) {
     diffCodedInParts(current, foundCoded, [&](std::size_t part, std::uint64_t begin, auto before, auto now) {
       std::uint64_t* const added = list ? addedKeys.data() + addedAt[part] : nullptr;
@@ -847,11 +884,17 @@ void GridBroadphase::Impl::diffAndUpdateCache(btDispatcher* dispatcher, GridBroa
         if (list) removed[removedCount] = key;
         ++removedCount;
       };
-      if (refused.empty()) {
+      if (refused.empty() && !recheck) {
         diffSortedReaders(before, now, add, remove, IgnoreKept{});  // kept keys skipped in runs
       } else {
         diffSortedReaders(before, now, add, remove, [&](std::uint64_t key) {
-          if (isRefused(key)) add(key);  // asked again
+          if (isRefused(key)) {
+            add(key);  // asked again
+          } else if (list && recheck &&
+                     ((state[std::uint32_t(key >> 32)] | state[std::uint32_t(key)]) & kFilterChanged)) {
+            std::lock_guard<std::mutex> lock(recheckMutex);
+            recheckKeys.push_back(key);
+          }
         });
       }
       if (!list) addedAt[part + 1] = addedCount, removedAt[part + 1] = removedCount;
@@ -862,6 +905,21 @@ void GridBroadphase::Impl::diffAndUpdateCache(btDispatcher* dispatcher, GridBroa
   addedKeys.resize(addedAt[parts]);
   removedKeys.resize(removedAt[parts]);
   walk(true);
+  if (!recheckKeys.empty()) {
+    // Those the cache now refuses leave it and join the refused; the lists stay sorted.
+    for (const std::uint64_t key : recheckKeys) {
+      if (cache->needsBroadphaseCollision(proxy0(key), proxy1(key))) continue;
+      removedKeys.push_back(key);
+      refusedNow.push_back(key);
+    }
+    std::sort(removedKeys.begin(), removedKeys.end());
+  }
+  if (filtersChanged.exchange(false)) {
+    tbb::parallel_for(tbb::blocked_range<std::uint32_t>(0, slotCount, kScanGrain),
+                      [&](const tbb::blocked_range<std::uint32_t>& r) {
+                        for (std::uint32_t s = r.begin(); s != r.end(); ++s) state[s] &= ~kFilterChanged;
+                      });
+  }
   st.removed = removedKeys.size();
   const bool deferred = cache->hasDeferredRemoval();
   if (!deferred)
@@ -877,6 +935,7 @@ void GridBroadphase::Impl::diffAndUpdateCache(btDispatcher* dispatcher, GridBroa
     ++st.added;
   }
   if (deferred && !removedKeys.empty()) removeDeferred(dispatcher);  // handled in one pass over the cache
+  if (!recheckKeys.empty()) std::sort(refusedNow.begin(), refusedNow.end());
   current.swap(foundCoded);
   foundCoded.clear();
   refused.swap(refusedNow);
