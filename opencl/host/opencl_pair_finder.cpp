@@ -514,6 +514,9 @@ void OpenClPairFinder::findPairs(const ProxyArrays& p, const PairFinderOptions& 
   const bool canKeep = keepGrid(p, options);
   m_kept = false;
   translateClErrors("OpenCL grid pair search", [&] {
+    if (detail::takeInjectedOpenClFailure()) {
+      throw cl::Error(CL_OUT_OF_RESOURCES, "clEnqueueNDRangeKernel (a failure injected by a test)");
+    }
     if (m_activeCount >= 2) {
       Kernels& k = kernels(options.mappingSqrt == MappingSqrt::Newton, p);
       m_counter.ensure(m_context.context(), 4);

@@ -2,8 +2,9 @@
 // What the plugin may ask of OpenCL without depending on the OpenCL module or setting a device up: how many
 // contexts this process has created (gpucol::openClStarted), and whether the device OpenCL would choose is a
 // GPU. Header-only, so the plugin compiles the same whether or not it was built with OpenCL. DESIGN.md's lazy
-// start: Backend::Auto asks the probe before it sets anything up, so a machine whose only device is a CPU one
-// (PoCL) never builds a context or a program for Auto, whatever the scene's size.
+// start: Backend::Auto asks the probe only once its measured choice wants the device, and before it sets
+// anything up, so short work never touches OpenCL and a machine whose only device is a CPU one (PoCL) never
+// builds a context or a program for Auto, whatever the scene's size.
 #include <atomic>
 #include <cstdint>
 #include <functional>
@@ -25,10 +26,18 @@ inline std::function<bool(const std::string&)>& chosenDeviceIsGpuProbe() {
   return probe;
 }
 
+/// Count of chosenDeviceIsGpu calls that asked an installed probe (tests: short work never asks).
+inline std::atomic<std::uint32_t>& deviceListsAsked() {
+  static std::atomic<std::uint32_t> count{0};
+  return count;
+}
+
 /// The probe's answer, false when no probe is installed.
 inline bool chosenDeviceIsGpu(const std::string& configuredDevice) {
   const auto& probe = chosenDeviceIsGpuProbe();
-  return probe ? probe(configuredDevice) : false;
+  if (!probe) return false;
+  ++deviceListsAsked();
+  return probe(configuredDevice);
 }
 
 }  // namespace gpucol::opencl

@@ -335,6 +335,37 @@ TEST(GridBroadphase, FiltersAreBulletsBitForBitOnEveryPath) {
   }
 }
 
+TEST(GridBroadphase, AFailedOpenClSearchFallsBackToTheCpuWithTheSamePairs) {
+  // An OpenCL search that fails (injected: as a failed launch would) neither escapes calculateOverlappingPairs
+  // nor loses a pair: the CPU path searches the same step and every later one. At the first search, and at a
+  // later one whose finder kept its grid.
+  if (!haveOpenClPairFinder()) GTEST_SKIP() << "no OpenCL pair finder (built without OpenCL, or no device)";
+  for (const int failAtStep : {0, 2}) {
+    gpucol::GridBroadphase bp(openClGridConfig());
+    btDefaultCollisionConfiguration configuration;
+    btCollisionDispatcher dispatcher(&configuration);
+    std::mt19937 rng(21);
+    std::vector<Box> boxes(1500);
+    for (std::size_t i = 0; i < boxes.size(); ++i) {
+      randomBox(rng, boxes[i], 12.0f);
+      addProxy(bp, boxes, int(i), &dispatcher);
+    }
+    std::uniform_real_distribution<float> shift(-0.3f, 0.3f);
+    for (int step = 0; step < 4; ++step) {
+      if (step == failAtStep) gpucol::detail::failNextOpenClSearches(1);
+      ASSERT_NO_THROW(bp.calculateOverlappingPairs(&dispatcher)) << "step " << step;
+      EXPECT_EQ(cachePairs(bp.getOverlappingPairCache()), bruteForce(boxes)) << "step " << step;
+      EXPECT_EQ(bp.stats().usedOpenCl, step < failAtStep) << "step " << step;
+      for (std::size_t i = 0; i < boxes.size(); i += 7) {
+        const btVector3 d(shift(rng), shift(rng), shift(rng));
+        boxes[i].lo += d, boxes[i].hi += d;
+        bp.setAabb(boxes[i].proxy, boxes[i].lo, boxes[i].hi, &dispatcher);
+      }
+    }
+  }
+  gpucol::detail::failNextOpenClSearches(0);
+}
+
 TEST(GridBroadphase, OpenClKeepsItsGridWhileProxiesAreAdded) {
   // Few boxes move and a few proxies are created each step, past the slots the device's arrays were sized
   // for: the kept grid serves (stage 11) and the arrays grow keeping what they hold.

@@ -75,6 +75,39 @@ TEST(SkipCounters, SmallPairsStayOnTheCpuAndOpenClIsNeverStarted) {
   EXPECT_FALSE(openClStarted());
 }
 
+// Short work under Auto never asks OpenCL anything, not even the device lists (on PoCL that starts its
+// threads): a broad phase of 300 moving boxes and small mesh pairs, whose CPU calls take well under
+// MeasuredBackendChoice::kDeviceWorthMs.
+TEST(SkipCounters, ShortWorkUnderAutoNeverAsksTheDeviceLists) {
+  const std::uint32_t before = opencl::deviceListsAsked().load();
+  GridBroadphase broadphase;  // Backend::Auto
+  btDefaultCollisionConfiguration configuration;
+  btCollisionDispatcher dispatcher(&configuration);
+  std::vector<btBroadphaseProxy*> proxies;
+  for (int i = 0; i < 300; ++i) {
+    const btVector3 c(float(i % 10), float((i / 10) % 10), float(i / 100));
+    proxies.push_back(broadphase.createProxy(c, c + btVector3(1.2f, 1.2f, 1.2f), BOX_SHAPE_PROXYTYPE, nullptr,
+                                             btBroadphaseProxy::DefaultFilter, btBroadphaseProxy::AllFilter,
+                                             &dispatcher));
+  }
+  for (int step = 0; step < 20; ++step) {
+    for (std::size_t i = 0; i < proxies.size(); ++i) {
+      const btVector3 c = proxies[i]->m_aabbMin + btVector3(0.01f, 0, 0);
+      broadphase.setAabb(proxies[i], c, c + btVector3(1.2f, 1.2f, 1.2f), &dispatcher);
+    }
+    broadphase.calculateOverlappingPairs(&dispatcher);
+  }
+  EXPECT_GT(broadphase.getOverlappingPairCache()->getNumOverlappingPairs(), 300);
+  const auto box =
+      std::make_shared<MeshShape>(std::make_shared<const TriangleMesh>(scenes::makeBox(0.5f, 0.5f, 0.5f, 2)));
+  for (int call = 0; call < 10; ++call) {
+    const MeshPairResult r = collideMeshes(*box, pose(0, btVector3(0, 0, 0)), *box, pose(0.2f, btVector3(0.9f, 0, 0)));
+    ASSERT_FALSE(r.reducedContacts.empty());
+    EXPECT_EQ(r.stats.backendUsed, Backend::Cpu);
+  }
+  EXPECT_EQ(opencl::deviceListsAsked().load(), before);
+}
+
 // A large batch (two 81,920-triangle spheres) under Auto: Auto measures the device only when the chosen
 // device is a GPU, and starts on the CPU path; the device lists alone decide that, so on a machine whose only
 // device is a CPU one (PoCL) OpenCL is not set up at all, however many batches come.

@@ -8,6 +8,7 @@
 #include <tbb/parallel_sort.h>
 
 #include <algorithm>
+#include <atomic>
 #include <chrono>
 #include <cmath>
 #include <cstring>
@@ -1161,6 +1162,24 @@ std::unique_ptr<PairFinder> makeOpenClPairFinder(const Config& config) {
   if (!openClFactory()) return nullptr;
   return openClFactory()(config);
 }
+
+namespace detail {
+namespace {
+std::atomic<int>& injectedOpenClFailures() {
+  static std::atomic<int> count{0};
+  return count;
+}
+}  // namespace
+
+void failNextOpenClSearches(int count) { injectedOpenClFailures() = count; }
+
+bool takeInjectedOpenClFailure() {
+  int left = injectedOpenClFailures().load();
+  while (left > 0 && !injectedOpenClFailures().compare_exchange_weak(left, left - 1)) {
+  }
+  return left > 0;
+}
+}  // namespace detail
 
 std::vector<std::uint64_t> findPairsBruteForce(const ProxyArrays& p) {
   // Deliberately naive and independent of the grid code: double comparisons, nested loops.

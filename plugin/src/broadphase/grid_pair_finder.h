@@ -315,6 +315,14 @@ void registerOpenClPairFinder(PairFinderFactory factory);
 /// Calls the installed OpenCL factory; nullptr when none is installed or it returned none.
 std::unique_ptr<PairFinder> makeOpenClPairFinder(const Config& config);
 
+namespace detail {
+/// Fault injection for tests: the next `count` searches of OpenCL pair finders fail as a failed launch does
+/// (an OpenClError), so that the broad phase's fallback to the CPU is tested where no device fails by itself.
+void failNextOpenClSearches(int count);
+/// Takes one injected failure (true), or says there is none left (false). Called by the OpenCL finder.
+bool takeInjectedOpenClFailure();
+}  // namespace detail
+
 /// Pair key of slots a and b (either order): lower slot in the high 32 bits.
 inline std::uint64_t makePairKey(std::uint32_t a, std::uint32_t b) {
   return a < b ? (std::uint64_t(a) << 32) | b : (std::uint64_t(b) << 32) | a;

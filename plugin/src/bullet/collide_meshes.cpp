@@ -464,12 +464,15 @@ bool collideOnDevice(const std::vector<MeshPairQuery>& queries, const Config& co
   const bool autoChoice = config.meshBackend == Backend::Auto;
   const bool autoUsesCpuDevice = detail::autoUsesCpuDevice();
   MeasuredBackendChoice& measured = deviceBackendState().autoChoice;
-  // Auto asks the device lists before setting anything up: on a machine whose only OpenCL device is a CPU
-  // one, OpenCL is never started for it. Otherwise the measured choice for this size (it starts OpenCL the
-  // first time it wants the device).
-  if (autoChoice && !autoUsesCpuDevice && !opencl::chosenDeviceIsGpu(config.openclDevice)) return false;
+  // Auto: the measured choice for this size first, then, the first time it wants the device, the device
+  // lists: batches that stay on the CPU never touch OpenCL, and a machine whose only OpenCL device is a CPU
+  // one never sets OpenCL up for them.
   if (autoChoice && measured.choose(triangles) == MeasuredBackendChoice::Path::Cpu) {
     if (!measured.decided(triangles)) timeCpu = triangles;
+    return false;
+  }
+  if (autoChoice && !autoUsesCpuDevice && !opencl::chosenDeviceIsGpu(config.openclDevice)) {
+    measured.deviceFailed();
     return false;
   }
 

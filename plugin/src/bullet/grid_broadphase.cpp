@@ -530,12 +530,15 @@ struct GridBroadphase::Impl {
     const Backend b = config.broadphaseBackend;
     bool wantOpenCl = b == Backend::OpenCL;
     autoMeasuring = false;
-    // Auto asks the device lists first, so that a machine whose only OpenCL device is a CPU one never sets
-    // OpenCL up for it.
-    const bool autoMayUseDevice =
-        b == Backend::Auto && (detail::autoUsesCpuDevice() || opencl::chosenDeviceIsGpu(config.openclDevice));
-    if (autoMayUseDevice) {
+    if (b == Backend::Auto) {
       wantOpenCl = autoChoice.choose(liveCount) == MeasuredBackendChoice::Path::Device;
+      // The device lists are asked only once a size class wants the device (its CPU searches took
+      // MeasuredBackendChoice::kDeviceWorthMs or more), so that a world of short searches never touches
+      // OpenCL, and a machine whose only OpenCL device is a CPU one never sets OpenCL up for it.
+      if (wantOpenCl && !detail::autoUsesCpuDevice() && !opencl::chosenDeviceIsGpu(config.openclDevice)) {
+        autoChoice.deviceFailed();
+        wantOpenCl = false;
+      }
       autoMeasuring = !autoChoice.decided(liveCount).has_value();
     }
     if (wantOpenCl && !openClTried) {
@@ -554,6 +557,17 @@ struct GridBroadphase::Impl {
       autoMeasuring = false;
     }
     return *cpuFinder;
+  }
+
+  /// The OpenCL finder failed: warned about once, dropped, and never made again for this broad phase (Auto
+  /// takes the CPU from now on, as the mesh path does).
+  void dropOpenCl(const std::string& why) {
+    warnOnce("GridBroadphase OpenCL failure", "the OpenCL pair search failed (" + why +
+                                                  "); the broad phase continues on the CPU path");
+    openClFinder.reset();
+    openClTried = true;
+    autoChoice.deviceFailed();
+    autoMeasuring = false;
   }
 
   PairFinderOptions options() const {
@@ -765,18 +779,34 @@ void GridBroadphase::calculateOverlappingPairs(btDispatcher* dispatcher) {
   }
   st.searched = true;
   d.finderFilters = cacheFiltersByGroupAndMask(*d.pairCache);
-  PairFinder& finder = d.chooseFinder(st);
-  ProxyArrays view = d.finderView(kProxyBoxesAreFloats && d.tuning.boxesInPlace && finder.readsBoxRecords());
+  PairFinder* chosen = &d.chooseFinder(st);
+  ProxyArrays view = d.finderView(kProxyBoxesAreFloats && d.tuning.boxesInPlace && chosen->readsBoxRecords());
   // kMoved is relative to the previous search of the same finder; after a switch of finder, all moved.
-  if (&finder != d.lastFinder) view.moved = nullptr;
+  if (chosen != d.lastFinder) view.moved = nullptr;
   // Nothing is freed before the search: the step holds at least what was held before it, and the view (a
   // search that starts by dropping a kept grid may never come back up to that).
   const std::size_t startBytes = d.heldBytes() + d.view.bytes() + d.survey.bytes();
   const auto searchStart = std::chrono::steady_clock::now();
-  if (finder.codesPairs())
-    finder.findCodedPairs(view, d.options(), d.foundCoded);
-  else
-    finder.findPairs(view, d.options(), d.found);
+  auto search = [&](PairFinder& f, const ProxyArrays& v) {
+    if (f.codesPairs())
+      f.findCodedPairs(v, d.options(), d.foundCoded);
+    else
+      f.findPairs(v, d.options(), d.found);
+  };
+  try {
+    search(*chosen, view);
+  } catch (const std::exception& e) {
+    if (chosen == d.cpuFinder.get()) throw;
+    // The OpenCL search failed (a build, an allocation, a launch): said once, and the CPU path takes over for
+    // good with a full search of its own, so the step loses no pair.
+    d.dropOpenCl(e.what());
+    st.usedOpenCl = false;
+    chosen = d.cpuFinder.get();
+    view = d.finderView(kProxyBoxesAreFloats && d.tuning.boxesInPlace && chosen->readsBoxRecords());
+    view.moved = nullptr;
+    search(*chosen, view);
+  }
+  PairFinder& finder = *chosen;
   const auto cacheStart = std::chrono::steady_clock::now();
   st.searchMs = std::chrono::duration<double, std::milli>(cacheStart - searchStart).count();
   if (d.autoMeasuring) {
