@@ -67,6 +67,8 @@ std::vector<PairContact> swapSides(std::vector<PairContact> contacts) {
     // pointOnA = pointOnB + normalOnB * distance); the normal turns round.
     c.pointOnB = c.pointOnB + c.normalOnB * c.distance;
     c.normalOnB = -c.normalOnB;
+    std::swap(c.partId0, c.partId1);
+    std::swap(c.index0, c.index1);
   }
   return contacts;
 }
@@ -96,9 +98,14 @@ void ContactManifoldSet::write(const std::vector<PairContact>& contacts, const b
     result->setPersistentManifold(m_groups[g].manifold);
     for (std::size_t i : chooseSupport(byGroup[g], body1Basis * m_groups[g].normalInBody1)) {
       const PairContact& contact = byGroup[g][i];
+      // The triangles go into the point and gContactAddedCallback (Bullet swaps them with the bodies).
+      result->setShapeIdentifiersA(contact.partId0, contact.index0);
+      result->setShapeIdentifiersB(contact.partId1, contact.index1);
       result->addContactPoint(contact.normalOnB, contact.pointOnB, contact.distance);
     }
   }
+  result->setShapeIdentifiersA(-1, -1);
+  result->setShapeIdentifiersB(-1, -1);
   // Every manifold is refreshed, not only those that got a contact: points of a face that separated must go.
   std::size_t kept = 0;
   for (std::size_t i = 0; i < m_groups.size(); ++i) {

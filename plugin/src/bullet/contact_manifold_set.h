@@ -15,6 +15,9 @@ struct PairContact {
   btVector3 pointOnB;   ///< World point on body1's surface (margin included).
   btVector3 normalOnB;  ///< Unit world normal on body1 pointing towards body0.
   btScalar distance;    ///< Signed distance along the normal, negative when penetrating (margins included).
+  /// The part and triangle of body0's and body1's shape that made the contact (btManifoldPoint's m_partId0/1
+  /// and m_index0/1, as Bullet's concave algorithms give them); -1 on a side without triangles (a plane).
+  int partId0 = -1, index0 = -1, partId1 = -1, index1 = -1;
 };
 
 /// The same contacts seen from the other side: body0 and body1 swap roles.

@@ -47,7 +47,12 @@ std::vector<PairContact> toPairContacts(const std::vector<MeshContact>& reduced,
   std::vector<PairContact> out;
   out.reserve(reduced.size());
   for (const MeshContact& c : reduced) {
-    out.push_back({c.pointOnBWorld + c.normalWorldOnB * marginB, c.normalWorldOnB, c.depth - marginA - marginB});
+    PairContact p{c.pointOnBWorld + c.normalWorldOnB * marginB, c.normalWorldOnB, c.depth - marginA - marginB};
+    // A MeshShape is one part: part 0, and its triangle's index.
+    p.partId0 = p.partId1 = 0;
+    p.index0 = int(c.triangleA);
+    p.index1 = int(c.triangleB);
+    out.push_back(p);
   }
   return out;
 }
@@ -146,6 +151,8 @@ void MeshMeshAlgorithm::processCollision(const btCollisionObjectWrapper* body0, 
         const MeshPairResult result =
             collideMeshes(mesh, meshBody->getWorldTransform(), *patch, otherBody->getWorldTransform(), m_config);
         contacts = toPairContacts(result.reducedContacts, mesh.getMargin(), other->getMargin());
+        // The patch's triangles are the other shape's: their part and index as its processAllTriangles gave.
+        for (PairContact& c : contacts) m_patch->sourceTriangle(std::uint32_t(c.index1), c.partId1, c.index1);
       }
       if (!meshFirst) contacts = swapSides(std::move(contacts));
     }

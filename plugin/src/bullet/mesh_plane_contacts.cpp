@@ -32,24 +32,31 @@ std::vector<PairContact> meshPlaneContacts(const MeshShape& mesh, const btTransf
   };
   const std::uint32_t* indices = mesh.mesh().indices().data();
   const float* positions = mesh.mesh().positions().data();
-  std::vector<std::uint32_t> vertices;
+  // (vertex, triangle) of every triangle near the plane.
+  std::vector<std::uint64_t> vertices;
   visitTreeTriangles(mesh.tree(), boxNearPlane, [&](std::uint32_t t) {
-    for (int i = 0; i < 3; ++i) vertices.push_back(indices[3 * std::size_t(t) + i]);
+    for (int i = 0; i < 3; ++i) vertices.push_back((std::uint64_t(indices[3 * std::size_t(t) + i]) << 32) | t);
   });
-  // A vertex is shared by several triangles: each gives one contact.
+  // A vertex is shared by several triangles: it gives one contact, named by the lowest of them.
   std::sort(vertices.begin(), vertices.end());
-  vertices.erase(std::unique(vertices.begin(), vertices.end()), vertices.end());
+  vertices.erase(std::unique(vertices.begin(), vertices.end(),
+                             [](std::uint64_t a, std::uint64_t b) { return (a >> 32) == (b >> 32); }),
+                 vertices.end());
 
   std::vector<PairContact> contacts;
   std::vector<ReductionInput> binned;
-  for (std::uint32_t v : vertices) {
+  for (const std::uint64_t vertexAndTriangle : vertices) {
+    const std::uint32_t v = std::uint32_t(vertexAndTriangle >> 32);
     const float* p = positions + 3 * std::size_t(v);
     const btScalar distance = normalInMesh.dot(btVector3(p[0], p[1], p[2])) + offset;
     if (distance > reach) continue;
     const btVector3 world = meshTransform(btVector3(p[0], p[1], p[2]) * mesh.getLocalScaling());
     // On the plane's margin surface; the distance counts both margins, so bodies rest `margins` apart.
     const btVector3 onPlane = world - normalWorld * (distance - plane.getMargin());
-    contacts.push_back({onPlane, normalWorld, distance - margins});
+    PairContact contact{onPlane, normalWorld, distance - margins};
+    contact.partId0 = 0;  // the mesh's part and triangle; the plane has none
+    contact.index0 = int(std::uint32_t(vertexAndTriangle));
+    contacts.push_back(contact);
     binned.push_back({Eigen::Vector3f(float(world.x()), float(world.y()), float(world.z())),
                       Eigen::Vector3f(float(normalWorld.x()), float(normalWorld.y()), float(normalWorld.z())),
                       float(distance - margins)});

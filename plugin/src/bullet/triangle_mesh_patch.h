@@ -21,6 +21,13 @@ class TriangleMeshPatch {
   const MeshShape* update(const btConcaveShape& other, const btTransform& otherTransform, const MeshShape& mesh,
                           const btTransform& meshTransform);
 
+  /// The part and index that `other`'s processAllTriangles gave for triangle `patchTriangle` of the patch.
+  void sourceTriangle(std::uint32_t patchTriangle, int& partId, int& triangleIndex) const {
+    const std::uint64_t id = m_triangleIds.at(patchTriangle);
+    partId = int(std::uint32_t(id >> 32));
+    triangleIndex = int(std::uint32_t(id));
+  }
+
  private:
   std::vector<std::uint64_t> m_triangleIds;  // (part, index) of the patch's triangles, in the order collected
   std::unique_ptr<MeshShape> m_shape;
