@@ -30,9 +30,21 @@ bool sameTransform(const btTransform& a, const btTransform& b) {
          a.getBasis()[1] == b.getBasis()[1] && a.getBasis()[2] == b.getBasis()[2];
 }
 
+// Every concave shape Bullet has, and a user's own (CUSTOM_CONCAVE_SHAPE_TYPE): a plane is collided as a
+// plane, the others through their processAllTriangles (TriangleMeshPatch). An empty shape collides with nothing.
 bool isOtherConcave(const btCollisionShape* shape) {
-  return shape->getShapeType() == STATIC_PLANE_PROXYTYPE || shape->getShapeType() == TRIANGLE_MESH_SHAPE_PROXYTYPE;
+  return shape->isConcave() && shape->getShapeType() != EMPTY_SHAPE_PROXYTYPE && !MeshShape::isMeshShape(shape);
 }
+
+// The shape types whose pairs with a MeshShape the algorithm is registered for.
+const int kPartnerTypes[] = {MeshShape::kMeshShapeType,
+                             TRIANGLE_MESH_SHAPE_PROXYTYPE,
+                             SCALED_TRIANGLE_MESH_SHAPE_PROXYTYPE,
+                             TERRAIN_SHAPE_PROXYTYPE,
+                             GIMPACT_SHAPE_PROXYTYPE,
+                             MULTIMATERIAL_TRIANGLE_MESH_PROXYTYPE,
+                             STATIC_PLANE_PROXYTYPE,
+                             CUSTOM_CONCAVE_SHAPE_TYPE};
 
 // The pairs the algorithm takes: two meshes, or a mesh and one of the concave shapes it knows.
 bool handles(const btCollisionShape* s0, const btCollisionShape* s1) {
@@ -135,8 +147,8 @@ void MeshMeshAlgorithm::processCollision(const btCollisionObjectWrapper* body0, 
                   : collideMeshes(*query->shapeA, query->transformA, *query->shapeB, query->transformB, m_config);
       contacts = toPairContacts(result.reducedContacts, s0->getMargin(), s1->getMargin());
     } else if (handles(s0, s1)) {
-      // A mesh against a plane or a triangle mesh: computed with the mesh as body0, then turned round if the
-      // mesh is body1.
+      // A mesh against a plane or another concave shape: computed with the mesh as body0, then turned round if
+      // the mesh is body1.
       const bool meshFirst = MeshShape::isMeshShape(s0);
       const btCollisionObjectWrapper* meshBody = meshFirst ? body0 : body1;
       const btCollisionObjectWrapper* otherBody = meshFirst ? body1 : body0;
@@ -180,9 +192,8 @@ void MeshMeshAlgorithm::registerWith(btCollisionDispatcher& dispatcher, const Co
   static std::list<MeshMeshCreateFunc> functions;
   const std::lock_guard<std::mutex> lock(mutex);
   btCollisionConfiguration* configuration = dispatcher.getCollisionConfiguration();
-  const int kinds[] = {MeshShape::kMeshShapeType, STATIC_PLANE_PROXYTYPE, TRIANGLE_MESH_SHAPE_PROXYTYPE};
-  for (int a : kinds) {
-    for (int b : kinds) {
+  for (int a : kPartnerTypes) {
+    for (int b : kPartnerTypes) {
       if (a != MeshShape::kMeshShapeType && b != MeshShape::kMeshShapeType) continue;
       functions.emplace_back(config, configuration->getCollisionAlgorithmCreateFunc(a, b));
       dispatcher.registerCollisionCreateFunc(a, b, &functions.back());

@@ -30,7 +30,10 @@ const MeshShape* TriangleMeshPatch::update(const btConcaveShape& other, const bt
     m_shape.reset();
     return nullptr;
   }
-  if (collector.ids != m_triangleIds || !m_shape) {
+  // Rebuilt when other triangles come near, or the same ones moved (a deforming shape, such as a GImpact mesh
+  // whose vertices the user updates).
+  if (collector.ids != m_triangleIds || collector.xyz != m_positions || !m_shape) {
+    m_positions = collector.xyz;
     // Each triangle gets its own three vertices: the patch needs no welding, only the triangles' positions.
     std::vector<std::uint32_t> indices(collector.xyz.size() / 3);
     for (std::size_t i = 0; i < indices.size(); ++i) indices[i] = std::uint32_t(i);

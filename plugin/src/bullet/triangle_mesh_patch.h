@@ -11,7 +11,7 @@
 
 namespace gpucol {
 
-/// The triangles of a foreign concave shape (a btBvhTriangleMeshShape) near a mesh, as a MeshShape of their own,
+/// The triangles of a foreign concave shape (a BVH, scaled BVH, heightfield, GImpact or user's concave shape) near a mesh, as a MeshShape of their own,
 /// so that the mesh-vs-mesh query collides the two. The patch is rebuilt only when the set of triangles near the
 /// mesh changes: a mesh resting on a floor reuses the same patch step after step.
 class TriangleMeshPatch {
@@ -30,6 +30,7 @@ class TriangleMeshPatch {
 
  private:
   std::vector<std::uint64_t> m_triangleIds;  // (part, index) of the patch's triangles, in the order collected
+  std::vector<float> m_positions;            // their corners as collected (the patch's own copy is its mesh's)
   std::unique_ptr<MeshShape> m_shape;
 };
 
