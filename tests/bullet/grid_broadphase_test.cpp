@@ -366,6 +366,71 @@ TEST(GridBroadphase, AFailedOpenClSearchFallsBackToTheCpuWithTheSamePairs) {
   gpucol::detail::failNextOpenClSearches(0);
 }
 
+/// Client ids of the proxies an aabbTest reports.
+struct IdCollector : btBroadphaseAabbCallback {
+  std::set<int> ids;
+  bool process(const btBroadphaseProxy* proxy) override {
+    ids.insert(idOf(proxy));
+    return true;
+  }
+};
+
+TEST(GridBroadphase, BoxesWithMinAboveMaxGetBulletsAnswerOnEveryPath) {
+  // A user's bug: some boxes have min > max on an axis. Every path (CPU grid, CPU brute force, OpenCL grid
+  // and brute force, the scan and the index of aabbTest) gives btDbvtBroadphase's pairs and query answers on
+  // the same boxes: the overlap test min <= other max on every axis, whatever the corners' order.
+  std::vector<std::pair<std::string, gpucol::Config>> paths;
+  gpucol::Config grid, allPairs;
+  grid.bruteForceBelow = 100;
+  allPairs.bruteForceBelow = 1 << 30;
+  paths = {{"CPU grid", grid}, {"CPU brute force", allPairs}};
+  if (haveOpenClPairFinder()) {
+    paths.emplace_back("OpenCL grid", openClGridConfig());
+    gpucol::Config openClBrute = openClGridConfig();
+    openClBrute.bruteForceBelow = 1 << 30;
+    paths.emplace_back("OpenCL brute force", openClBrute);
+  }
+  std::mt19937 rng(17);
+  std::vector<Box> boxes(2000);
+  for (std::size_t i = 0; i < boxes.size(); ++i) {
+    randomBox(rng, boxes[i], 10.0f);
+    if (i % 17 == 0) std::swap(boxes[i].lo[i % 3], boxes[i].hi[i % 3]);  // inverted on one axis
+    if (i % 151 == 0) std::swap(boxes[i].lo, boxes[i].hi);                 // inverted on all three
+  }
+  btDefaultCollisionConfiguration configuration;
+  btCollisionDispatcher dispatcher(&configuration);
+  btDbvtBroadphase dbvt;
+  std::vector<Box> dbvtBoxes = boxes;
+  for (std::size_t i = 0; i < boxes.size(); ++i) addProxy(dbvt, dbvtBoxes, int(i), &dispatcher);
+  dbvt.calculateOverlappingPairs(&dispatcher);
+  const std::set<IdPair> expected = cachePairs(dbvt.getOverlappingPairCache());
+  ASSERT_EQ(expected, bruteForce(dbvtBoxes)) << "the brute force's overlap test is btDbvt's";
+  std::size_t invertedPairs = 0;
+  for (const IdPair& p : expected) invertedPairs += (p.first % 17 == 0) || (p.second % 17 == 0);
+  ASSERT_GT(invertedPairs, 20u) << "the inverted boxes have pairs to find";
+  std::uniform_real_distribution<float> centre(-10, 10), half(0.5f, 4.0f);
+  std::vector<std::pair<btVector3, btVector3>> queries;
+  for (int q = 0; q < 60; ++q) {
+    const btVector3 c(centre(rng), centre(rng), centre(rng)), h(half(rng), half(rng), half(rng));
+    queries.emplace_back(c - h, c + h);
+  }
+  for (const auto& [name, config] : paths) {
+    gpucol::GridBroadphase bp(config);
+    std::vector<Box> own = boxes;
+    for (std::size_t i = 0; i < own.size(); ++i) addProxy(bp, own, int(i), &dispatcher);
+    bp.calculateOverlappingPairs(&dispatcher);
+    EXPECT_EQ(cachePairs(bp.getOverlappingPairCache()), expected) << name;
+    // The queries, many since the last change, go through the scan first and then the index.
+    for (const auto& [lo, hi] : queries) {
+      IdCollector ours, bullets;
+      bp.aabbTest(lo, hi, ours);
+      dbvt.aabbTest(lo, hi, bullets);
+      EXPECT_EQ(ours.ids, bullets.ids) << name;
+    }
+    EXPECT_GT(bp.queryStats().indexed, 0u) << name << ": the index answered some queries";
+  }
+}
+
 TEST(GridBroadphase, OpenClKeepsItsGridWhileProxiesAreAdded) {
   // Few boxes move and a few proxies are created each step, past the slots the device's arrays were sized
   // for: the kept grid serves (stage 11) and the arrays grow keeping what they hold.

@@ -69,6 +69,7 @@ constexpr std::uint8_t kMoved = 2;      // box, filter or life changed since the
 constexpr std::uint8_t kNonFinite = 4;  // box has a NaN or infinite component: hidden from the finder
 constexpr std::uint8_t kFreed = 8;      // destroyed since the last search: its pairs already left the cache
 constexpr std::uint8_t kOffIndex = 16;  // set or reused since the query index was built (in offIndex)
+constexpr std::uint8_t kInverted = 64;  // box has min > max on an axis: hidden from the finder, paired apart
 constexpr std::uint8_t kFilterChanged = 32;  // filter changed since the last diff (asked again when a cache's
                                              // own filter decides: diffAndUpdateCache)
 
@@ -146,6 +147,7 @@ struct GridBroadphase::Impl {
   // box: the finder's cell size, grid bounds and cell indices would turn NaN (or a float-to-int conversion of
   // NaN) and spread to every proxy. Such a proxy is hidden from the finder until its box is finite again.
   std::uint32_t nonFiniteCount = 0;
+  std::uint32_t invertedCount = 0;  // live proxies with kInverted
   bool nonFiniteChanged = false;  // a proxy entered or left that state: the next search is a full one
   // Whether the finder applies Bullet's group/mask test itself (cacheFiltersByGroupAndMask), and what the last
   // search did: a change makes the next search a full one.
@@ -283,7 +285,7 @@ struct GridBroadphase::Impl {
                 filtersChanged = true;
                 changed = true;
               }
-              if (fill) flags[s] = (st & kNonFinite) ? 0 : flagsOf(group[s]);
+              if (fill) flags[s] = (st & (kNonFinite | kInverted)) ? 0 : flagsOf(group[s]);
               if (boxes)
                 for (int a = 0; a < 3; ++a)
                   lo[a][s] = float(p.m_aabbMin[a]), hi[a][s] = float(p.m_aabbMax[a]);
@@ -510,7 +512,56 @@ struct GridBroadphase::Impl {
                    ", max " + toString(hi) +
                    "); such a proxy gets no pairs until its AABB is finite (said once)");
     }
+    const bool inverted = finite && !(lo.x() <= hi.x() && lo.y() <= hi.y() && lo.z() <= hi.z());
+    setInverted(s, inverted);
+    if (inverted) {
+      warnOnce("grid broadphase inverted box",
+               "GridBroadphase: a proxy's AABB has min > max on some axis (min " + toString(lo) + ", max " +
+                   toString(hi) +
+                   "); its pairs and queries follow the overlap test min <= other max on every axis, as "
+                   "btDbvtBroadphase's do (said once)");
+    }
     setNonFinite(s, !finite);
+  }
+
+  void setInverted(std::uint32_t s, bool value) {
+    if (bool(state[s] & kInverted) == value) return;
+    state[s] = std::uint8_t(value ? state[s] | kInverted : state[s] & ~kInverted);
+    invertedCount += value ? 1 : -1;
+    nonFiniteChanged = true;  // a life change for the finder, as a box turning non-finite
+  }
+
+  /// The pairs of the boxes with min > max (kInverted, hidden from the finder: the grid files a box by its
+  /// corners' cells), by Bullet's overlap test against every other visible box, as btDbvtBroadphase finds
+  /// them, merged into `foundCoded`. Such boxes are a user's bug, said once by store(); they cost a pass over
+  /// every proxy each.
+  void addInvertedPairs() {
+    std::vector<std::uint32_t> inverted;
+    for (std::uint32_t s = 0; s < slotCount; ++s)
+      if (visible(s) && (state[s] & kInverted)) inverted.push_back(s);
+    tbb::enumerable_thread_specific<std::vector<std::uint64_t>> lists;
+    tbb::parallel_for(std::size_t(0), inverted.size(), [&](std::size_t i) {
+      const std::uint32_t a = inverted[i];
+      const GridProxy& pa = proxy(a);
+      std::vector<std::uint64_t>& out = lists.local();
+      for (std::uint32_t b = 0; b < slotCount; ++b) {
+        if (b == a || !visible(b) || ((state[b] & kInverted) && b < a)) continue;  // two inverted: once
+        const GridProxy& pb = proxy(b);
+        if (!TestAabbAgainstAabb2(pa.m_aabbMin, pa.m_aabbMax, pb.m_aabbMin, pb.m_aabbMax)) continue;
+        if (finderFilters && !((group[a] & mask[b]) && (group[b] & mask[a]))) continue;
+        out.push_back(makePairKey(a, b));
+      }
+    });
+    std::vector<std::uint64_t> extra;
+    for (const std::vector<std::uint64_t>& l : lists) extra.insert(extra.end(), l.begin(), l.end());
+    if (extra.empty()) return;
+    std::sort(extra.begin(), extra.end());
+    std::vector<std::uint64_t> found;
+    found.reserve(foundCoded.size());
+    foundCoded.forEach([&](std::uint64_t key) { found.push_back(key); });
+    std::vector<std::uint64_t> merged(found.size() + extra.size());
+    merged.erase(std::merge(found.begin(), found.end(), extra.begin(), extra.end(), merged.begin()), merged.end());
+    foundCoded.assign(merged, !PackedPairs::worthCoding(merged.size(), slotCount));
   }
 
   void setNonFinite(std::uint32_t s, bool value) {
@@ -666,6 +717,7 @@ void GridBroadphase::destroyProxy(btBroadphaseProxy* proxy, btDispatcher* dispat
   d.pairCache->removeOverlappingPairsContainingProxy(proxy, dispatcher);
   if (Impl::flagsOf(d.group[slot]) & kProxyStatic) --d.staticCount;
   d.setNonFinite(slot, false);
+  d.setInverted(slot, false);
   d.state[slot] = std::uint8_t(kFreed | kMoved | (d.state[slot] & kOffIndex));
   d.pendingFree.push_back(slot);
   --d.liveCount;
@@ -844,6 +896,7 @@ void GridBroadphase::calculateOverlappingPairs(btDispatcher* dispatcher) {
     }
     std::vector<std::uint64_t>().swap(d.found);
   }
+  if (d.invertedCount > 0) d.addInvertedPairs();
   st.overlappingPairs = d.foundCoded.size();
   const std::size_t lastListBytes = d.current.bytes(), listBytes = d.foundCoded.bytes();
   d.diffAndUpdateCache(dispatcher, st);
@@ -1029,6 +1082,7 @@ void GridBroadphase::resetPool(btDispatcher* /*dispatcher*/) {
   std::vector<std::int32_t>().swap(d.mask);
   std::vector<std::uint8_t>().swap(d.state);
   d.nonFiniteCount = 0;
+  d.invertedCount = 0;
   d.staticCount = 0;
   d.lastFinder = nullptr;
   d.freeSlots.clear(), d.pendingFree.clear(), d.current.clear(), d.refused.clear();
