@@ -146,7 +146,6 @@ OpenClContext::OpenClContext(const std::string& filter) {
     m_isGpu = candidates[*chosen].isGpu;
     m_sharesHostMemory = hostUnifiedMemory(m_device, m_isGpu);
     m_gpuShaped = kernelShapeIsGpu(m_isGpu);
-    m_maxAllocation = std::size_t(m_device.getInfo<CL_DEVICE_MAX_MEM_ALLOC_SIZE>());
     m_context = cl::Context(m_device);
     m_queue = cl::CommandQueue(m_context, m_device);
   });

@@ -54,9 +54,6 @@ class OpenClContext {
   /// OpenClError carrying the build log. Thread-safe.
   cl::Program program(const std::string& name, const char* source, const std::string& options = {});
 
-  /// The largest buffer the device allows (CL_DEVICE_MAX_MEM_ALLOC_SIZE).
-  std::size_t maxAllocation() const { return m_maxAllocation; }
-
   /// Number of programs built so far (the cache's misses); lets tests check the cache.
   std::size_t programBuilds() const;
 
@@ -77,7 +74,6 @@ class OpenClContext {
   bool m_isGpu = false;
   bool m_gpuShaped = false;
   bool m_sharesHostMemory = true;
-  std::size_t m_maxAllocation = 0;
 
   mutable std::mutex m_programMutex;
   std::map<std::string, cl::Program> m_programs;

@@ -47,16 +47,15 @@ bool boxes_overlap(const GpucolProxyBox a, const GpucolProxyBox b) {
          b.minZ <= a.maxZ;
 }
 
-// Stage 8's filter for slots sa and sb: Bullet's group/mask rule, bit for bit.
-bool filters_accept(const GpucolProxyBox a, const GpucolProxyBox b, __global const uchar* flags, const uint sa,
-                    const uint sb) {
+// Stage 8's filter: Bullet's group/mask rule, bit for bit.
+bool filters_accept(const GpucolProxyBox a, const GpucolProxyBox b) {
   return (a.group & b.mask) != 0 && (b.group & a.mask) != 0;
 }
 
 // Stage 8: overlap and filter of slots sa and sb.
 bool accept_pair(PROXY_PARAMS, const uint sa, const uint sb) {
   const GpucolProxyBox a = load_box(boxes, sa), b = load_box(boxes, sb);
-  return boxes_overlap(a, b) && filters_accept(a, b, flags, sa, sb);
+  return boxes_overlap(a, b) && filters_accept(a, b);
 }
 
 // Stage 4: the cell coordinate, monotone in x (see grid_pair_finder.h).
@@ -312,7 +311,7 @@ __kernel void grid_test_candidates(PROXY_PARAMS, __global const GpucolGridParams
     for (; k < rowEnd; ++k, ++j) {
       const uint b = keySlots[start + (uint)j];
       const GpucolProxyBox boxB = load_box(boxes, b);
-      if (boxes_overlap(boxA, boxB) && filters_accept(boxA, boxB, flags, a, b) &&
+      if (boxes_overlap(boxA, boxB) && filters_accept(boxA, boxB) &&
           overlap_cell(boxA, boxB, g) == (ulong)(runCell != 0 ? runCell[run] : run)) {
         append_pair(min(a, b), max(a, b), slotBits, pairs, capacity, pairCount);
       }
@@ -367,7 +366,7 @@ __kernel void grid_test_huge(PROXY_PARAMS, __global const uint* huge, const uint
         continue;
       }
       const GpucolProxyBox hb = load_box(boxes, sh);
-      if (boxes_overlap(hb, b) && filters_accept(hb, b, flags, sh, s)) {
+      if (boxes_overlap(hb, b) && filters_accept(hb, b)) {
         append_pair(min(sh, s), max(sh, s), slotBits, pairs, capacity, pairCount);
       }
     }
@@ -454,7 +453,7 @@ __kernel void grid_test_moved(PROXY_PARAMS, __global const GpucolGridParams* gri
             continue;
           }
           const GpucolProxyBox box = load_box(boxes, s);
-          if (boxes_overlap(boxM, box) && filters_accept(boxM, box, flags, sm, s) &&
+          if (boxes_overlap(boxM, box) && filters_accept(boxM, box) &&
               overlap_cell(boxM, box, g) == (ulong)c) {
             append_pair(min(sm, s), max(sm, s), slotBits, pairs, capacity, pairCount);
           }

@@ -42,8 +42,8 @@ inline std::uint64_t denseCellLimit(std::size_t binned) {
 /// Stage 3's test: a box that covers more than `limit` cells of edge `cell` (estimated from its extents,
 /// independent of the grid's origin) is tested against all instead of being binned.
 inline bool isHuge(const BoxCorners& b, float cell, std::uint32_t limit) {
-  // A box with min > max on an axis (a user's bug) lies in no cell; tested against every box by the overlap
-  // rule (min <= other max on every axis), its pairs are those btDbvtBroadphase gives it.
+  // A box with min > max on an axis (a user's bug) lies in no cell: kept aside, so that the query index names
+  // it to every query, whose exact test decides (GridBroadphase pairs such boxes itself, apart from the finders).
   if (!(b.lo[0] <= b.hi[0] && b.lo[1] <= b.hi[1] && b.lo[2] <= b.hi[2])) return true;
   const double inv = 1.0 / double(cell);
   const double covered = (double(b.hi[0] - b.lo[0]) * inv + 1.0) * (double(b.hi[1] - b.lo[1]) * inv + 1.0) *

@@ -63,13 +63,6 @@ constexpr std::size_t kHomeCellsFrom = 4096;
 /// Chunks per search at most, so per-chunk bookkeeping stays small next to the work.
 constexpr std::uint64_t kMaxChunks = 256;
 
-inline bool aabbOverlap(const ProxyArrays& p, std::uint32_t a, std::uint32_t b) {
-  // Touching counts: boxes that share a face, edge or corner overlap (min <= other max on every axis).
-  const BoxCorners x = p.box(a), y = p.box(b);
-  return x.lo[0] <= y.hi[0] && y.lo[0] <= x.hi[0] && x.lo[1] <= y.hi[1] && y.lo[1] <= x.hi[1] &&
-         x.lo[2] <= y.hi[2] && y.lo[2] <= x.hi[2];
-}
-
 inline bool passesFilter(const ProxyArrays& p, std::uint32_t a, std::uint32_t b) {
   // Bullet's default filter (btOverlappingPairCache::needsBroadphaseCollision without a callback), bit for bit:
   // static–static pairs go only where the masks refuse them, as Bullet's own filters do.

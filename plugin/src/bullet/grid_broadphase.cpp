@@ -395,7 +395,7 @@ struct GridBroadphase::Impl {
     if (!finderFilters) {
       // The cache's own filter (a user's callback) has the only word: the finder reports every overlapping
       // pair, and the diff offers each new one to the cache (needsBroadphaseCollision).
-      acceptAll.assign(slotCount, -1);
+      acceptAll.resize(slotCount, -1);  // every entry is -1: only new slots are written
       v.group = v.mask = acceptAll.data();
       v.records.groupOffset = v.records.maskOffset = kNoRecordField;
     } else {
