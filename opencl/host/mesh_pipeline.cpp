@@ -262,8 +262,8 @@ void OpenClMeshPipeline::runBatch(const std::vector<DeviceMeshPair>& pairs,
     treeDepths = std::max(treeDepths, in.treeA->depth() + in.treeB->depth());
     smallerTriangles += std::min(in.meshA->triangleCount(), in.meshB->triangleCount());
     GpucolMeshPair& p = m_hostPairs[i];
-    writeBoxMap(boxMapIntoA(*in.treeB, in.treeMap), p.intoA);
-    writeBoxMap(boxMapIntoB(*in.treeA, in.treeMap), p.intoB);
+    writeBoxMap(boxMapIntoA(*in.treeB, in.treeMap, in.reach.inA), p.intoA);
+    writeBoxMap(boxMapIntoB(*in.treeA, in.treeMap, in.reach.inB), p.intoB);
     for (int r = 0; r < 3; ++r) {
       for (int c = 0; c < 3; ++c) p.bLinear[3 * r + c] = in.bLinear(r, c);
       p.bTranslation[r] = in.bTranslation(r);

@@ -50,24 +50,6 @@ TEST(MeshMeshAlgorithm, BoxRestsOnMeshGround) {
   }
 }
 
-// Margins count like those of Bullet's convex shapes: two meshes with margins m rest 2m apart (the contact's
-// distance counts both, and the manifold keeps the points while the gap stays under the breaking threshold,
-// 1.7 cm for these shapes, which is why the margins here are a few millimetres).
-TEST(MeshMeshAlgorithm, MarginsKeepRestingMeshesApart) {
-  for (btScalar margin : {0.0f, 0.002f, 0.004f}) {
-    TestWorld w(DispatchKind::Gpucol);
-    auto ground = meshShape(scenes::makeBox(5, 0.5f, 5));
-    auto boxShape = meshShape(scenes::makeBox(0.5f, 0.5f, 0.5f));
-    ground->setMargin(margin);
-    boxShape->setMargin(margin);
-    w.add(ground, 0, at(0, -0.5f, 0));
-    btRigidBody* box = w.add(boxShape, 1, at(0, 0.5f, 0));
-    w.step(240);
-    EXPECT_NEAR(box->getWorldTransform().getOrigin().y(), 0.5f + 2 * margin, 1e-3f) << "margin " << margin;
-    EXPECT_LT(box->getLinearVelocity().length(), 1e-2f);
-  }
-}
-
 // The plane and the BVH floor are added first or last, so that they are body0 or body1 of the pair: both orders
 // of the algorithm's sides get checked.
 TEST(MeshMeshAlgorithm, BoxRestsOnPlaneInBothPairOrders) {

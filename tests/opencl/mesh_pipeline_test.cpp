@@ -332,6 +332,43 @@ TEST(MeshPipeline, ScaledAndMirroredShapes) {
   EXPECT_GT(expectSameAsCpu(queries, 3.0f).contacts, 20u);
 }
 
+// Shapes with margins: the device's middle phase is widened by them and the contacts of triangles closer than
+// the margins join the crossing ones, as on the CPU. Boxes hovering within their margins of a ground (no
+// triangle crosses), scaled tori and spheres near each other.
+TEST(MeshPipeline, ShapesWithMarginsGiveTheCpusProximityContacts) {
+  GPUCOL_REQUIRE_OPENCL(context);
+  MeshShape top(sharedMesh(scenes::makeBox(0.5f, 0.5f, 0.5f, 2)));
+  MeshShape ground(sharedMesh(scenes::makeBox(3.0f, 3.0f, 1.0f, 1)));
+  MeshShape torus(sharedMesh(scenes::makeTorus(1.0f, 0.35f, 40, 16)));
+  MeshShape sphere(sharedMesh(scenes::makeIcosphere(0.6f, 3)));
+  top.setMargin(0.01f);
+  ground.setMargin(0.02f);
+  torus.setMargin(0.03f);
+  sphere.setMargin(0.01f);
+  torus.setLocalScaling(btVector3(1.5f, 0.7f, 1.2f));
+  const btTransform tGround(btQuaternion::getIdentity(), btVector3(0, 0, -1.0f));
+  std::vector<MeshPairQuery> queries;
+  for (float gap : {0.0f, 0.01f, 0.025f}) {
+    for (float yaw : {0.0f, 0.6f}) {
+      queries.push_back(query(top, btTransform(btQuaternion(btVector3(0, 0, 1), yaw), btVector3(0.2f, -0.1f, 0.5f + gap)),
+                              ground, tGround));
+    }
+  }
+  std::mt19937 rng(7);
+  for (int pose = 0; pose < 4; ++pose) {
+    queries.push_back(query(torus, randomPose(rng, btVector3(0, 0, 0), 0), sphere,
+                            randomPose(rng, btVector3(0, 0, 0), 1.4f)));
+  }
+  const Compared seen = expectSameAsCpu(queries, 3.0f);
+  EXPECT_GT(seen.contacts, 20u);
+  // Not vacuous: the hovering boxes touch only through their margins.
+  Config cpu;
+  cpu.meshBackend = Backend::Cpu;
+  const MeshPairResult hovering = collideMeshes(top, queries[2].transformA, ground, tGround, cpu);
+  EXPECT_TRUE(hovering.intersectingPairs.empty());
+  EXPECT_FALSE(hovering.contacts.empty());
+}
+
 TEST(MeshPipeline, LeavesOfSeveralTriangles) {
   GPUCOL_REQUIRE_OPENCL(context);
   Config four;

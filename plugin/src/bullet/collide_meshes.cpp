@@ -29,6 +29,7 @@
 #include "narrowphase/triangle_contact.h"
 #include "narrowphase/triangle_intersection.h"
 #include "narrowphase/triangle_plane.h"
+#include "narrowphase/triangle_proximity.h"
 #include "opencl/host/opencl_started.h"
 
 namespace gpucol {
@@ -62,7 +63,19 @@ struct PairFrame {
   Eigen::Vector3f bTranslation;  // ... + t_rel.
   AffineMap treeMap;             // B's mesh coordinates into A's unscaled mesh frame, for the traversal.
   btTransform worldFromA;        // A's rigid transform: from A's scaled frame to the world.
+  float reach = 0;               // The sum of the shapes' margins: triangles this close give contacts.
+  CandidateReach candidateReach;  // `reach` along each mesh frame's axes, for the traversal's box tests.
 };
+
+// The sum of the shapes' margins (a negative sum reaches nothing); a margin that is not finite is an error.
+float pairReach(const MeshShape& a, const MeshShape& b) {
+  const double sum = double(a.getMargin()) + double(b.getMargin());
+  if (!std::isfinite(sum)) {
+    throw std::invalid_argument("collideMeshes: the margin of shape " +
+                                std::string(std::isfinite(a.getMargin()) ? "B" : "A") + " is not finite");
+  }
+  return float(std::max(0.0, sum));
+}
 
 PairFrame makePairFrame(const MeshShape& a, const btTransform& transformA, const MeshShape& b,
                         const btTransform& transformB) {
@@ -92,6 +105,13 @@ PairFrame makePairFrame(const MeshShape& a, const btTransform& transformA, const
   frame.treeMap.linear = (inverseScaleA.asDiagonal() * bLinear).cast<float>();
   frame.treeMap.translation = inverseScaleA.cwiseProduct(relativeTranslation).cast<float>();
   frame.worldFromA = transformA;
+  frame.reach = pairReach(a, b);
+  if (frame.reach > 0) {
+    // A world distance d is at most d / |s| along a mesh axis scaled by s; the factor covers the float rounding.
+    const double widen = double(frame.reach) * (1 + 1.0 / 1048576);
+    frame.candidateReach.inA = (widen * scaleA.cwiseAbs().cwiseInverse()).cast<float>();
+    frame.candidateReach.inB = (widen * scaleB.cwiseAbs().cwiseInverse()).cast<float>();
+  }
   return frame;
 }
 
@@ -341,6 +361,53 @@ std::vector<NearHit> runNearPhase(const MeshShape& shapeA, const MeshShape& shap
   return joined;
 }
 
+// A's and B's triangles of one candidate in A's scaled frame, by the same operations as runNearChunk's rows.
+void pairTriangles(const MeshShape& shapeA, const MeshShape& shapeB, const PairFrame& frame,
+                   const TrianglePair& pair, Eigen::Vector3f (&a)[3], Eigen::Vector3f (&b)[3]) {
+  const float* pa = shapeA.triangleSoup() + 9 * std::size_t(pair.triangleA);
+  const float* pb = shapeB.triangleSoup() + 9 * std::size_t(pair.triangleB);
+  const int order[2][3] = {{0, 1, 2}, {0, 2, 1}};
+  const Eigen::Matrix3f& m = frame.bLinear;
+  const Eigen::Vector3f& t = frame.bTranslation;
+  for (int v = 0; v < 3; ++v) {
+    const float* p = pa + 3 * v;
+    a[order[frame.flipA][v]] = Eigen::Vector3f(p[0] * frame.scaleA.x(), p[1] * frame.scaleA.y(), p[2] * frame.scaleA.z());
+    const float* q = pb + 3 * v;
+    b[order[frame.flipB][v]] = Eigen::Vector3f(m(0, 0) * q[0] + (m(0, 1) * q[1] + m(0, 2) * q[2]) + t.x(),
+                                               m(1, 0) * q[0] + (m(1, 1) * q[1] + m(1, 2) * q[2]) + t.y(),
+                                               m(2, 0) * q[0] + (m(2, 1) * q[1] + m(2, 2) * q[2]) + t.z());
+  }
+}
+
+// A contact of a candidate whose triangles do not cross but come within the shapes' margins.
+struct NearbyHit {
+  std::size_t candidate;
+  TriangleContact contact;
+};
+
+// The proximity contacts of every candidate that does not cross (triangle_proximity.h), in candidate order, in
+// parallel; `crossing[i]` is set for the candidates the near phase found intersecting.
+std::vector<NearbyHit> runProximityPass(const MeshShape& shapeA, const MeshShape& shapeB, const PairFrame& frame,
+                                        const std::vector<TrianglePair>& candidates,
+                                        const std::vector<std::uint8_t>& crossing) {
+  const std::size_t chunks = (candidates.size() + kNearChunk - 1) / kNearChunk;
+  std::vector<std::vector<NearbyHit>> chunkHits(chunks);
+  tbb::parallel_for(std::size_t(0), chunks, [&](std::size_t chunk) {
+    const std::size_t end = std::min(candidates.size(), (chunk + 1) * kNearChunk);
+    for (std::size_t i = chunk * kNearChunk; i < end; ++i) {
+      if (crossing[i]) continue;
+      Eigen::Vector3f a[3], b[3];
+      pairTriangles(shapeA, shapeB, frame, candidates[i], a, b);
+      TriangleContact found[kMaxProximityContacts];
+      const int count = proximityContacts(a, b, frame.reach, found);
+      for (int k = 0; k < count; ++k) chunkHits[chunk].push_back({i, found[k]});
+    }
+  });
+  std::vector<NearbyHit> joined;
+  for (const std::vector<NearbyHit>& hits : chunkHits) joined.insert(joined.end(), hits.begin(), hits.end());
+  return joined;
+}
+
 MeshContact toWorld(const TrianglePair& pair, const TriangleContact& contact, const btTransform& worldFromA) {
   MeshContact out;
   out.triangleA = pair.triangleA;
@@ -358,12 +425,19 @@ MeshContact toWorld(const TrianglePair& pair, const TriangleContact& contact, co
 }
 
 // The near phase's hits (NearHit here, DeviceNearHit from the device; both in candidate order) into the
-// result's intersecting pairs and contacts, then the contact reduction. Shared by both paths, so the
-// same-facing rule, the world conversion and the reduction cannot drift apart.
+// result's intersecting pairs and contacts, then, for shapes with margins, the contacts of the candidates that
+// come within them, then the contact reduction. Shared by both paths, so the same-facing rule, the proximity
+// contacts, the world conversion and the reduction cannot drift apart.
 template <class Hit>
-void collectHits(const std::vector<Hit>& hits, const PairFrame& frame, const Config& config,
-                 MeshPairResult& result) {
+void collectHits(const std::vector<Hit>& hits, const MeshShape& shapeA, const MeshShape& shapeB,
+                 const PairFrame& frame, const Config& config, MeshPairResult& result) {
   result.stats.triangleTests = result.candidatePairs.size();
+  std::vector<NearbyHit> nearby;
+  if (frame.reach > 0) {
+    std::vector<std::uint8_t> crossing(result.candidatePairs.size(), 0);
+    for (const Hit& hit : hits) crossing[hit.candidate] = 1;
+    nearby = runProximityPass(shapeA, shapeB, frame, result.candidatePairs, crossing);
+  }
   std::vector<ReductionInput> localContacts;
   result.intersectingPairs.reserve(hits.size());
   result.contacts.reserve(hits.size());
@@ -376,6 +450,10 @@ void collectHits(const std::vector<Hit>& hits, const PairFrame& frame, const Con
     result.intersectingPairs.push_back(pair);
     if (!hit.hasContact || (anyFacingEachOther && hit.contact.sameFacing)) continue;
     result.contacts.push_back(toWorld(pair, hit.contact, frame.worldFromA));
+    localContacts.push_back({hit.contact.point, hit.contact.normalOnB, hit.contact.depth});
+  }
+  for (const NearbyHit& hit : nearby) {
+    result.contacts.push_back(toWorld(result.candidatePairs[hit.candidate], hit.contact, frame.worldFromA));
     localContacts.push_back({hit.contact.point, hit.contact.normalOnB, hit.contact.depth});
   }
 
@@ -407,21 +485,21 @@ MeshPairResult collidePair(const MeshShape& shapeA, const btTransform& transform
   // Root boxes first: a pair whose meshes' boxes miss costs one box test (DESIGN.md, "skip what a scene does
   // not need").
   result.stats.nodeTests = 1;
-  if (!rootBoxesOverlap(shapeA.tree(), shapeB.tree(), frame.treeMap)) {
+  if (!rootBoxesOverlap(shapeA.tree(), shapeB.tree(), frame.treeMap, frame.candidateReach)) {
     result.stats.rootBoxesMissed = true;
     result.stats.middlePhaseMs = millisecondsSince(start);
     return result;
   }
   TraversalStats traversal;
-  findCandidatePairs(shapeA.tree(), shapeB.tree(), frame.treeMap, result.candidatePairs, &traversal);
+  findCandidatePairs(shapeA.tree(), shapeB.tree(), frame.treeMap, result.candidatePairs, &traversal, true,
+                     frame.candidateReach);
   result.stats.nodeTests = traversal.nodeTests;
   result.stats.middlePhaseMs = millisecondsSince(start);
 
   start = Clock::now();
   const std::vector<NearHit> hits = runNearPhase(shapeA, shapeB, frame, result.candidatePairs);
-  const double nearMs = millisecondsSince(start);
-  collectHits(hits, frame, config, result);
-  result.stats.nearPhaseMs = nearMs;
+  collectHits(hits, shapeA, shapeB, frame, config, result);
+  result.stats.nearPhaseMs = millisecondsSince(start) - result.stats.reductionMs;
   return result;
 }
 
@@ -455,7 +533,7 @@ bool collideOnDevice(const std::vector<MeshPairQuery>& queries, const Config& co
   for (std::size_t i = 0; i < queries.size(); ++i) {
     const MeshPairQuery& q = queries[i];
     frames.push_back(makePairFrame(*q.shapeA, q.transformA, *q.shapeB, q.transformB));
-    if (rootBoxesOverlap(q.shapeA->tree(), q.shapeB->tree(), frames.back().treeMap)) {
+    if (rootBoxesOverlap(q.shapeA->tree(), q.shapeB->tree(), frames.back().treeMap, frames.back().candidateReach)) {
       overlapping.push_back(i);
       triangles += q.shapeA->mesh().triangleCount() + q.shapeB->mesh().triangleCount();
     }
@@ -519,6 +597,7 @@ bool collideOnDevice(const std::vector<MeshPairQuery>& queries, const Config& co
     p.bTranslation = frame.bTranslation;
     p.flipA = frame.flipA;
     p.flipB = frame.flipB;
+    p.reach = frame.candidateReach;
   }
   MeshBatchDeviceOptions options;
   {
@@ -559,7 +638,8 @@ bool collideOnDevice(const std::vector<MeshPairQuery>& queries, const Config& co
     result.stats.middlePhaseMs += middleMs;
     result.stats.nearPhaseMs = nearMs;
     result.candidatePairs = std::move(found[k].candidates);
-    collectHits(found[k].hits, frames[overlapping[k]], config, result);
+    collectHits(found[k].hits, *queries[overlapping[k]].shapeA, *queries[overlapping[k]].shapeB,
+                frames[overlapping[k]], config, result);
   }
   if (autoChoice) measured.record(triangles, MeasuredBackendChoice::Path::Device, millisecondsSince(start));
   return true;

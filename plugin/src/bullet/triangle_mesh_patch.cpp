@@ -2,6 +2,8 @@
 
 #include <BulletCollision/CollisionShapes/btTriangleCallback.h>
 
+#include <algorithm>
+
 namespace gpucol {
 namespace {
 
@@ -23,6 +25,10 @@ const MeshShape* TriangleMeshPatch::update(const btConcaveShape& other, const bt
                                            const MeshShape& mesh, const btTransform& meshTransform) {
   btVector3 lo, hi;
   mesh.getAabb(otherTransform.inverseTimes(meshTransform), lo, hi);
+  // The mesh's box holds its own margin; the other's margin reaches further still.
+  const btScalar otherMargin = std::max(btScalar(0), other.getMargin());
+  lo -= btVector3(otherMargin, otherMargin, otherMargin);
+  hi += btVector3(otherMargin, otherMargin, otherMargin);
   TriangleCollector collector;
   other.processAllTriangles(&collector, lo, hi);
   if (collector.ids.empty()) {
@@ -42,6 +48,8 @@ const MeshShape* TriangleMeshPatch::update(const btConcaveShape& other, const bt
     m_shape = std::make_unique<MeshShape>(std::move(patch));
     m_triangleIds = std::move(collector.ids);
   }
+  // The patch stands in for the other shape: its margin too, so that the pair reaches both margins.
+  m_shape->setMargin(other.getMargin());
   return m_shape.get();
 }
 

@@ -34,6 +34,7 @@ struct DeviceMeshPair {
   Eigen::Vector3f bTranslation = Eigen::Vector3f::Zero();  ///< ... plus this.
   bool flipA = false;                                      ///< A's scaling mirrors it: vertices 1 and 2 swap.
   bool flipB = false;                                      ///< The same for B.
+  CandidateReach reach;  ///< The shapes' margins: the middle phase's box tests are widened by them.
 };
 
 /// One candidate whose triangles intersect, by its index in DeviceMeshPairResult::candidates.

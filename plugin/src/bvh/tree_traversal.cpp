@@ -667,16 +667,16 @@ bool rootsOverlap(const AabbTree& a, const AabbTree& b, const BoxCarrier& intoA,
 
 }  // namespace
 
-BoxMap boxMapIntoA(const AabbTree& b, const AffineMap& bToA) {
-  return {bToA, carriedBoxInflation(b, bToA)};
+BoxMap boxMapIntoA(const AabbTree& b, const AffineMap& bToA, const Eigen::Vector3f& reachInA) {
+  return {bToA, carriedBoxInflation(b, bToA) + reachInA};
 }
 
-BoxMap boxMapIntoB(const AabbTree& a, const AffineMap& bToA) {
+BoxMap boxMapIntoB(const AabbTree& a, const AffineMap& bToA, const Eigen::Vector3f& reachInB) {
   const Eigen::Matrix3d inverse = bToA.linear.cast<double>().inverse();
   BoxMap out;
   out.map.linear = inverse.cast<float>();
   out.map.translation = (-(inverse * bToA.translation.cast<double>())).cast<float>();
-  out.inflation = carriedBoxInflation(a, out.map);
+  out.inflation = carriedBoxInflation(a, out.map) + reachInB;
   if (!out.map.linear.allFinite() || !out.map.translation.allFinite() || !out.inflation.allFinite()) {
     out.map = AffineMap();
     out.map.linear.setZero();
@@ -685,8 +685,9 @@ BoxMap boxMapIntoB(const AabbTree& a, const AffineMap& bToA) {
   return out;
 }
 
-bool rootBoxesOverlap(const AabbTree& a, const AabbTree& b, const AffineMap& bToA) {
-  return rootsOverlap(a, b, BoxCarrier(boxMapIntoA(b, bToA)), BoxCarrier(boxMapIntoB(a, bToA)));
+bool rootBoxesOverlap(const AabbTree& a, const AabbTree& b, const AffineMap& bToA, const CandidateReach& reach) {
+  return rootsOverlap(a, b, BoxCarrier(boxMapIntoA(b, bToA, reach.inA)),
+                      BoxCarrier(boxMapIntoB(a, bToA, reach.inB)));
 }
 
 Eigen::Vector3f carriedBoxInflation(const AabbTree& b, const AffineMap& bToA) {
@@ -699,10 +700,11 @@ Eigen::Vector3f carriedBoxInflation(const AabbTree& b, const AffineMap& bToA) {
 }
 
 void findCandidatePairs(const AabbTree& a, const AabbTree& b, const AffineMap& bToA,
-                        std::vector<TrianglePair>& out, TraversalStats* stats, bool parallel) {
+                        std::vector<TrianglePair>& out, TraversalStats* stats, bool parallel,
+                        const CandidateReach& reach) {
   out.clear();
-  const BoxCarrier intoA(boxMapIntoA(b, bToA));
-  const BoxCarrier intoB(boxMapIntoB(a, bToA));
+  const BoxCarrier intoA(boxMapIntoA(b, bToA, reach.inA));
+  const BoxCarrier intoB(boxMapIntoB(a, bToA, reach.inB));
   const Traverser traverser(a, b, intoA, intoB);
 
   std::uint64_t tests = 1;

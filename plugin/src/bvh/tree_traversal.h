@@ -40,19 +40,29 @@ struct BoxMap {
   Eigen::Vector3f inflation = Eigen::Vector3f::Zero();
 };
 
-/// The test in A's frame: B's boxes carried in by bToA, widened by carriedBoxInflation(b, bToA).
-BoxMap boxMapIntoA(const AabbTree& b, const AffineMap& bToA);
+/// How far apart two triangles may be and still be candidates, along each axis of A's and of B's mesh frame: the
+/// sum of the shapes' margins over each frame's local scaling (zero: only boxes that overlap).
+struct CandidateReach {
+  Eigen::Vector3f inA = Eigen::Vector3f::Zero();  ///< Along A's mesh axes.
+  Eigen::Vector3f inB = Eigen::Vector3f::Zero();  ///< Along B's mesh axes.
+};
+
+/// The test in A's frame: B's boxes carried in by bToA, widened by carriedBoxInflation(b, bToA) and `reachInA`.
+BoxMap boxMapIntoA(const AabbTree& b, const AffineMap& bToA,
+                   const Eigen::Vector3f& reachInA = Eigen::Vector3f::Zero());
 
 /// The test in B's frame: A's boxes carried in by the inverse of bToA (inverted in double, then rounded to
 /// float, so each entry is within an ulp or two of the exact inverse's, which the widening covers as it
 /// covers the carry's own rounding), widened by carriedBoxInflation(a, inverse). Where the inverse does not
 /// fit in float (a local scaling near float's limits), a zero map with infinite widening: every carried box
-/// is all of space and the test in A's frame alone decides.
-BoxMap boxMapIntoB(const AabbTree& a, const AffineMap& bToA);
+/// is all of space and the test in A's frame alone decides. `reachInB` widens it further.
+BoxMap boxMapIntoB(const AabbTree& a, const AffineMap& bToA,
+                   const Eigen::Vector3f& reachInB = Eigen::Vector3f::Zero());
 
-/// True when the root boxes of a and b overlap in both frames (the traversal's first test; a pair whose roots
-/// miss has no candidates).
-bool rootBoxesOverlap(const AabbTree& a, const AabbTree& b, const AffineMap& bToA);
+/// True when the root boxes of a and b overlap in both frames, widened by `reach` (the traversal's first test;
+/// a pair whose roots miss has no candidates).
+bool rootBoxesOverlap(const AabbTree& a, const AabbTree& b, const AffineMap& bToA,
+                      const CandidateReach& reach = CandidateReach());
 
 /// All (triangle of A, triangle of B) whose leaf boxes overlap in both meshes' frames: in A's (B's box
 /// carried in) and in B's (A's box carried in by the inverse map); touching counts. Triangles that intersect
@@ -62,8 +72,10 @@ bool rootBoxesOverlap(const AabbTree& a, const AabbTree& b, const AffineMap& bTo
 /// keeps on the thesis scene (16.5% of the tests on armadillo-2766). Sorted by (triangleA, triangleB), no
 /// duplicates. Parallel with oneTBB over the traversal front when `parallel`. `stats`, when given, has its
 /// counters increased (so one struct can sum several calls). Follows thesis Alg. 5.1 (simultaneous descent:
-/// node-node gives 4 tests, leaf-node 2) with an explicit stack.
+/// node-node gives 4 tests, leaf-node 2) with an explicit stack. With a `reach`, every box test is widened by
+/// it, so triangles closer than the shapes' margins are candidates too.
 void findCandidatePairs(const AabbTree& a, const AabbTree& b, const AffineMap& bToA,
-                        std::vector<TrianglePair>& out, TraversalStats* stats = nullptr, bool parallel = true);
+                        std::vector<TrianglePair>& out, TraversalStats* stats = nullptr, bool parallel = true,
+                        const CandidateReach& reach = CandidateReach());
 
 }  // namespace gpucol
