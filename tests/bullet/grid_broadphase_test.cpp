@@ -974,6 +974,82 @@ TEST(GridBroadphase, OverlapFilterCallbackIsHonoured) {
   EXPECT_GT(bp.stats().overlappingPairs, expect.size()) << "the filter should have rejected some pairs";
 }
 
+/// A small scene at rest (boxes on a lattice, faces touching, each jiggling about its place every step so that
+/// pairs of neighbours come and go), with now and then a box thrown far, a filter edited on its proxy, a proxy
+/// destroyed or created: after every step the cache holds the brute-force pairs, the pairs that stay keep
+/// their cache entries, and most steps test only the pairs of the boxes grown at the last search. With and
+/// without a user's filter callback (whose refused pairs are offered again whenever found).
+void expectGrownPairsAnswerSmallScenes(btOverlapFilterCallback* callback) {
+  gpucol::Config config;  // default bruteForceBelow: 90 boxes are a small scene
+  gpucol::GridBroadphase bp(config);
+  btOverlappingPairCache* cache = bp.getOverlappingPairCache();
+  cache->setOverlapFilterCallback(callback);
+  btDefaultCollisionConfiguration configuration;
+  btCollisionDispatcher dispatcher(&configuration);
+  std::mt19937 rng(17);
+  std::uniform_real_distribution<float> jiggle(-0.004f, 0.004f);
+  const int count = 90;
+  std::vector<Box> boxes(count);
+  std::vector<btVector3> rest(count);
+  for (int i = 0; i < count; ++i) {
+    rest[i] = btVector3(float(i % 5), float((i / 5) % 3), float(i / 15));  // unit cubes, faces touching
+    boxes[i].lo = rest[i] - btVector3(0.5f, 0.5f, 0.5f);
+    boxes[i].hi = rest[i] + btVector3(0.5f, 0.5f, 0.5f);
+    if (i % 9 == 0) boxes[i].group = btBroadphaseProxy::StaticFilter, boxes[i].mask = ~btBroadphaseProxy::StaticFilter;
+    if (i % 13 == 0) boxes[i].group = 64, boxes[i].mask = 64 | btBroadphaseProxy::DefaultFilter;
+    addProxy(bp, boxes, i, &dispatcher);
+  }
+  auto expected = [&] {
+    return bruteForce(boxes, callback ? cache : nullptr);
+  };
+  int grownSteps = 0;
+  const int steps = 300;
+  for (int t = 0; t < steps; ++t) {
+    for (int i = 0; i < cache->getNumOverlappingPairs(); ++i)
+      cache->getOverlappingPairArray()[i].m_internalTmpValue = 777;
+    const std::set<IdPair> before = cachePairs(cache);
+    for (int i = 0; i < count; ++i) {
+      Box& b = boxes[i];
+      if (!b.proxy) continue;
+      const btVector3 c = rest[i] + btVector3(jiggle(rng), jiggle(rng), jiggle(rng));
+      b.lo = c - btVector3(0.5f, 0.5f, 0.5f), b.hi = c + btVector3(0.5f, 0.5f, 0.5f);
+      bp.setAabb(b.proxy, b.lo, b.hi, &dispatcher);
+    }
+    const int event = t % 40;
+    Box& victim = boxes[std::size_t(rng() % count)];
+    if (event == 10 && victim.proxy) {  // thrown far and back later
+      victim.lo += btVector3(0, 3, 0), victim.hi += btVector3(0, 3, 0);
+      bp.setAabb(victim.proxy, victim.lo, victim.hi, &dispatcher);
+    } else if (event == 20 && victim.proxy) {  // a filter edited on the proxy, as Bullet code may
+      victim.group = victim.proxy->m_collisionFilterGroup = 64;
+      victim.mask = victim.proxy->m_collisionFilterMask = 64;
+    } else if (event == 30) {  // a proxy destroyed, or created again
+      if (victim.proxy) {
+        bp.destroyProxy(victim.proxy, &dispatcher);
+        victim.proxy = nullptr;
+      } else {
+        addProxy(bp, boxes, int(&victim - boxes.data()), &dispatcher);
+      }
+    }
+    bp.calculateOverlappingPairs(&dispatcher);
+    grownSteps += bp.stats().grownPairsTested;
+    const std::set<IdPair> after = cachePairs(cache);
+    ASSERT_EQ(after, expected()) << "step " << t;
+    for (int i = 0; i < cache->getNumOverlappingPairs(); ++i) {
+      const btBroadphasePair& p = cache->getOverlappingPairArray()[i];
+      if (before.count(idsOf(p))) EXPECT_EQ(p.m_internalTmpValue, 777) << "step " << t << ": a kept pair re-created";
+    }
+  }
+  EXPECT_GT(grownSteps, steps * 3 / 4);
+}
+
+TEST(GridBroadphase, SmallScenesAtRestTestOnlyTheirGrownPairs) { expectGrownPairsAnswerSmallScenes(nullptr); }
+
+TEST(GridBroadphase, SmallScenesAtRestTestOnlyTheirGrownPairsWithAFilterCallback) {
+  OddSumFilter filter;
+  expectGrownPairsAnswerSmallScenes(&filter);
+}
+
 /// Collects the client ids a ray or box query reports.
 struct Collect : btBroadphaseRayCallback {
   std::set<int> ids;

@@ -58,6 +58,10 @@ struct GridBroadphaseStats {
   bool usedGrid = false;
   /// True when the OpenCL pair finder ran.
   bool usedOpenCl = false;
+  /// True when a small scene's step (under Config::bruteForceBelow, CPU path) tested only the pairs of the
+  /// boxes grown at its last search: every box stayed inside its grown box (an eighth of its largest side
+  /// on every side), so its pairs are among those.
+  bool grownPairsTested = false;
   /// Live proxies that were neither re-binned nor tested against each other this step: static or sleeping
   /// ones whose box and filter did not change since the grid was last built (their pairs carry over).
   std::uint32_t restingProxies = 0;

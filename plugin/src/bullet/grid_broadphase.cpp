@@ -30,6 +30,7 @@
 
 #include "broadphase/grid_choice.h"
 #include "broadphase/grid_pair_finder.h"
+#include "broadphase/grown_box_pairs.h"
 #include "broadphase/packed_pairs.h"
 #include "broadphase/pair_diff.h"
 #include "broadphase/query_grid.h"
@@ -174,6 +175,16 @@ struct GridBroadphase::Impl {
   PackedPairs current;
   std::vector<std::uint64_t> refused;
 
+  // Small scenes on the CPU path: the pairs of the last search's grown boxes (GrownBoxPairs), kept while no
+  // proxy comes or goes, no filter changes and every box stays inside its grown box; a step then tests only
+  // those. A list that did not last one step makes the next lists wait (grownWait searches, doubling up to
+  // kGrownWaitMax), so scenes that keep moving do not pay for building them.
+  GrownBoxPairs grown;
+  std::uint32_t grownReuses = 0;  // steps answered from the kept list since it was built
+  std::uint32_t grownWait = 0, grownWaitLeft = 0;
+  static constexpr std::uint32_t kGrownWaitMax = 64;
+  std::vector<std::uint64_t> grownFound;  // scratch of a step answered from the list
+
   // The query index (broadphase/query_grid.h), built by a query when due and dropped when too many boxes
   // changed; the proxies changed since it was built are tested by every query. indexReady is set with
   // release order once the index is complete, so concurrent queries read it without the lock.
@@ -267,9 +278,7 @@ struct GridBroadphase::Impl {
     std::uint32_t* const extentLo = surveyed ? survey.extents.lo.data() : nullptr;
     std::uint32_t* const extentHi = surveyed ? survey.extents.hi.data() : nullptr;
     const int extentAxis = survey.extents.axis;
-    const bool changed = tbb::parallel_reduce(
-        tbb::blocked_range<std::uint32_t>(0, slotCount, kScanGrain), false,
-        [&](const tbb::blocked_range<std::uint32_t>& r, bool changed) {
+    const auto scanRange = [&](const tbb::blocked_range<std::uint32_t>& r, bool changed) {
           SurveyPart* const part = surveyed ? &parts.local() : nullptr;
           for (std::uint32_t s = r.begin(); s != r.end(); ++s) {
             std::uint8_t st = state[s];
@@ -314,8 +323,12 @@ struct GridBroadphase::Impl {
             state[s] = st;
           }
           return changed;
-        },
-        [](bool a, bool b) { return a || b; });
+    };
+    // A small scene's scan on the calling thread: handing one range to the task scheduler costs more.
+    const tbb::blocked_range<std::uint32_t> all(0, slotCount, kScanGrain);
+    const bool changed = slotCount <= kScanGrain
+                             ? scanRange(all, false)
+                             : tbb::parallel_reduce(all, false, scanRange, [](bool a, bool b) { return a || b; });
     staticCount = std::uint32_t(std::int64_t(staticCount) + staticDelta.load());
     if (surveyed) {
       survey.huge.clear();
@@ -504,6 +517,13 @@ struct GridBroadphase::Impl {
   }
 
   void store(std::uint32_t s, const btVector3& lo, const btVector3& hi) {
+    // The common case first: min <= max within float's range on every axis (so finite: NaN fails every
+    // comparison), on a slot that was so before.
+    const btScalar big = btScalar(std::numeric_limits<float>::max());
+    if (-big <= lo.x() && lo.x() <= hi.x() && hi.x() <= big && -big <= lo.y() && lo.y() <= hi.y() &&
+        hi.y() <= big && -big <= lo.z() && lo.z() <= hi.z() && hi.z() <= big &&
+        !(state[s] & (kInverted | kNonFinite)))
+      return;
     bool finite = true;
     for (int a = 0; a < 3; ++a) finite = finite && std::isfinite(lo[a]) && std::isfinite(hi[a]);
     if (!finite) {
@@ -526,6 +546,7 @@ struct GridBroadphase::Impl {
 
   void setInverted(std::uint32_t s, bool value) {
     if (bool(state[s] & kInverted) == value) return;
+    dropGrownPairs();
     state[s] = std::uint8_t(value ? state[s] | kInverted : state[s] & ~kInverted);
     invertedCount += value ? 1 : -1;
     nonFiniteChanged = true;  // a life change for the finder, as a box turning non-finite
@@ -564,8 +585,68 @@ struct GridBroadphase::Impl {
     foundCoded.assign(merged, !PackedPairs::worthCoding(merged.size(), slotCount));
   }
 
+  /// The kept grown pairs no longer answer for the scene (GrownBoxPairs::clear).
+  void dropGrownPairs() {
+    if (!grown.kept()) return;
+    grown.clear();
+    grownWait = grownReuses > 0 ? 0 : std::min(kGrownWaitMax, 2 * grownWait + 1);
+    grownWaitLeft = grownWait;
+  }
+
+  /// After a full CPU search of a small scene, the grown pairs for the next steps (`view` is the search's).
+  void keepGrownPairs(const ProxyArrays& view) {
+    if (grownWaitLeft > 0) {
+      --grownWaitLeft;
+      return;
+    }
+    grown.build(view);
+    grownReuses = 0;
+  }
+
+  /// A step of a small scene whose boxes all stayed inside their grown boxes: the kept pairs are tested on
+  /// the boxes as they are, and the cache is told the difference. Returns false, having done nothing but
+  /// drop the list, when a filter changed since (a full search follows).
+  bool answerFromGrownPairs(btDispatcher* dispatcher, GridBroadphaseStats& st) {
+    if (scan(false) || cacheFiltersByGroupAndMask(*pairCache) != finderFilters) {
+      dropGrownPairs();
+      return false;
+    }
+    const auto start = std::chrono::steady_clock::now();
+    const bool changed = grown.retest(
+        [&](std::uint32_t s) {
+          const GridProxy& p = proxy(s);
+          return BoxCorners{{float(p.m_aabbMin[0]), float(p.m_aabbMin[1]), float(p.m_aabbMin[2])},
+                            {float(p.m_aabbMax[0]), float(p.m_aabbMax[1]), float(p.m_aabbMax[2])}};
+        },
+        grownFound);
+    const auto cacheStart = std::chrono::steady_clock::now();
+    ++grownReuses;
+    st.searched = true;
+    st.grownPairsTested = true;
+    st.overlappingPairs = changed ? grownFound.size() : current.size();
+    st.searchMs = std::chrono::duration<double, std::milli>(cacheStart - start).count();
+    // Nothing for the cache when no pair changed and none was refused (a refused pair found again is offered
+    // again, diffAndUpdateCache); the kept pairs' overlaps were those of `current` after its search.
+    if (changed || !refused.empty()) {
+      if (changed)
+        foundCoded.assign(grownFound);
+      else
+        foundCoded.assign(current.toVector());
+      diffAndUpdateCache(dispatcher, st);
+      for (auto* v : {&addedKeys, &removedKeys}) std::vector<std::uint64_t>().swap(*v);
+    }
+    dirty = false;
+    // The list and its test's scratch are held between steps; the diff's lists of changes are small.
+    st.memoryBytes = st.peakBytes = heldBytes();
+    st.cacheMs =
+        std::chrono::duration<double, std::milli>(std::chrono::steady_clock::now() - cacheStart).count();
+    stats = st;
+    return true;
+  }
+
   void setNonFinite(std::uint32_t s, bool value) {
     if (bool(state[s] & kNonFinite) == value) return;
+    dropGrownPairs();
     state[s] = std::uint8_t(value ? state[s] | kNonFinite : state[s] & ~kNonFinite);
     nonFiniteCount += value ? 1 : -1;
     nonFiniteChanged = true;
@@ -646,7 +727,8 @@ struct GridBroadphase::Impl {
     std::size_t bytes = blockCount() * kBlockSize * sizeof(GridProxy) + (blocks ? blocks->tableBytes() : 0);
     bytes += (group.capacity() + mask.capacity() + acceptAll.capacity()) * sizeof(std::int32_t) + state.capacity();
     bytes += (freeSlots.capacity() + pendingFree.capacity()) * sizeof(std::uint32_t);
-    bytes += current.bytes() + refused.capacity() * sizeof(std::uint64_t);
+    bytes += current.bytes() + refused.capacity() * sizeof(std::uint64_t) + grown.bytes() +
+             grownFound.capacity() * sizeof(std::uint64_t);
     for (const PairFinder* f : {cpuFinder.get(), openClFinder.get()})
       if (f) bytes += f->stats().scratchBytes;
     return bytes;
@@ -688,6 +770,7 @@ btBroadphaseProxy* GridBroadphase::createProxy(const btVector3& aabbMin, const b
     d.growSlots();
     d.group.push_back(0), d.mask.push_back(0), d.state.push_back(0);
   }
+  d.dropGrownPairs();
   GridProxy& p = d.proxy(slot);
   static_cast<btBroadphaseProxy&>(p) =
       btBroadphaseProxy(aabbMin, aabbMax, userPtr, collisionFilterGroup, collisionFilterMask);
@@ -715,6 +798,7 @@ void GridBroadphase::destroyProxy(btBroadphaseProxy* proxy, btDispatcher* dispat
   // Its pairs leave the cache now (algorithms and manifolds freed through the dispatcher); the keys in
   // `current` are dropped at the next search, and the slot is reused only after that search.
   d.pairCache->removeOverlappingPairsContainingProxy(proxy, dispatcher);
+  d.dropGrownPairs();
   if (Impl::flagsOf(d.group[slot]) & kProxyStatic) --d.staticCount;
   d.setNonFinite(slot, false);
   d.setInverted(slot, false);
@@ -741,6 +825,11 @@ void GridBroadphase::setAabb(btBroadphaseProxy* proxy, const btVector3& aabbMin,
   d.store(s, aabbMin, aabbMax);
   d.boxChanged(s);
   d.dirty = true;
+  if (d.grown.kept()) {
+    const float lo[3] = {float(aabbMin.x()), float(aabbMin.y()), float(aabbMin.z())};
+    const float hi[3] = {float(aabbMax.x()), float(aabbMax.y()), float(aabbMax.z())};
+    if (!d.grown.holds(s, lo, hi)) d.dropGrownPairs();
+  }
 }
 
 void GridBroadphase::getAabb(btBroadphaseProxy* proxy, btVector3& aabbMin, btVector3& aabbMax) const {
@@ -809,6 +898,8 @@ void GridBroadphase::calculateOverlappingPairs(btDispatcher* dispatcher) {
   Impl& d = *m_impl;
   GridBroadphaseStats st;
   st.proxies = d.liveCount;
+  st.staticProxies = d.staticCount;
+  if (d.dirty && d.grown.kept() && d.answerFromGrownPairs(dispatcher, st)) return;
   // When a box already changed, the scan fills the finder's view as it goes (a filter it finds changed is
   // marked moved there); otherwise it only looks for filter changes, and the view is filled when it found
   // one. A second filling scan would find the moved marks cleared by the first.
@@ -860,6 +951,10 @@ void GridBroadphase::calculateOverlappingPairs(btDispatcher* dispatcher) {
   }
   PairFinder& finder = *chosen;
   const auto cacheStart = std::chrono::steady_clock::now();
+  if (&finder == d.cpuFinder.get() && d.liveCount < d.options().bruteForceBelow && d.invertedCount == 0)
+    d.keepGrownPairs(view);
+  else
+    d.dropGrownPairs();
   st.searchMs = std::chrono::duration<double, std::milli>(cacheStart - searchStart).count();
   if (d.autoMeasuring) {
     d.autoChoice.record(
@@ -1086,6 +1181,7 @@ void GridBroadphase::resetPool(btDispatcher* /*dispatcher*/) {
   d.staticCount = 0;
   d.lastFinder = nullptr;
   d.freeSlots.clear(), d.pendingFree.clear(), d.current.clear(), d.refused.clear();
+  d.grown.clear();
   d.dropQueryIndex();
   d.nextUniqueId = 0;
   d.dirty = true;
