@@ -117,7 +117,83 @@ struct Options {
   std::vector<std::string> scenes{"uniform", "mixed"};
   int queries = 1000;
   int runs = 5;
+  int movingFrames = 0;                  // > 0: the moving-world frames instead of the static queries
+  std::vector<float> speeds{0.01f, 0.2f};  // box sizes per frame every box moves, for the moving world
 };
+
+/// A frame of a world where every body moves: every box moved along its own direction by `speed` (its
+/// velocity reversed where it would leave the scene), setAabb of every proxy and calculateOverlappingPairs,
+/// then the frame's rays. Returns the milliseconds of the rays alone, and of the frame's broad-phase work.
+struct MovingWorld {
+  MovingWorld(const QueryScene& scene, float speed, std::uint32_t seed)
+      : lo(scene.lo), hi(scene.hi), side(scene.side), dispatcher(&configuration) {
+    std::mt19937 rng(seed);
+    std::uniform_real_distribution<float> dir(-1, 1);
+    for (std::size_t i = 0; i < lo.size(); ++i) {
+      btVector3 d(dir(rng), dir(rng), dir(rng));
+      if (d.length2() < 1e-6f) d = btVector3(0, 1, 0);
+      velocity.push_back(d.normalized() * speed * (hi[i] - lo[i]).x());
+    }
+  }
+  void add(btBroadphaseInterface& bp) {
+    std::vector<btBroadphaseProxy*>& p = proxies.emplace_back();
+    for (std::size_t i = 0; i < lo.size(); ++i)
+      p.push_back(bp.createProxy(lo[i], hi[i], BOX_SHAPE_PROXYTYPE, reinterpret_cast<void*>(i + 1), 1, -1,
+                                 &dispatcher));
+    bp.calculateOverlappingPairs(&dispatcher);
+  }
+  void advance() {
+    for (std::size_t i = 0; i < lo.size(); ++i) {
+      for (int a = 0; a < 3; ++a)
+        if (lo[i][a] + velocity[i][a] < 0 || hi[i][a] + velocity[i][a] > side) velocity[i][a] = -velocity[i][a];
+      lo[i] += velocity[i], hi[i] += velocity[i];
+    }
+  }
+  double update(btBroadphaseInterface& bp, std::size_t which) {
+    return millisecondsOf([&] {
+      for (std::size_t i = 0; i < lo.size(); ++i) bp.setAabb(proxies[which][i], lo[i], hi[i], &dispatcher);
+      bp.calculateOverlappingPairs(&dispatcher);
+    });
+  }
+  std::vector<btVector3> lo, hi, velocity;
+  float side;
+  btDefaultCollisionConfiguration configuration;
+  btCollisionDispatcher dispatcher;
+  std::vector<std::vector<btBroadphaseProxy*>> proxies;
+};
+
+void runMoving(const Options& o) {
+  std::printf("%-8s %9s %6s %6s %12s %12s %12s %12s %9s\n", "scene", "N", "speed", "rays", "rays ms", "btDbvt ms",
+              "frame ms", "btDbvt ms", "hits/ray");
+  for (const std::string& sceneName : o.scenes)
+    for (std::size_t n : o.sizes)
+      for (float speed : o.speeds) {
+        const QueryScene scene = makeScene(sceneName, n, 7);
+        MovingWorld world(scene, speed, 3);
+        gpucol::GridBroadphase grid;
+        btDbvtBroadphase dbvt;
+        world.add(grid), world.add(dbvt);
+        std::vector<double> rayMs[2], frameMs[2];
+        std::size_t hits[2] = {0, 0};
+        btBroadphaseInterface* bps[2] = {&grid, &dbvt};
+        for (int f = 0; f < o.movingFrames; ++f) {
+          world.advance();
+          QueryScene now = scene;
+          now.lo = world.lo, now.hi = world.hi;
+          const std::vector<Query> rays = makeQueries("short", now, o.queries, 100 + f);
+          // Interleaved: each broad phase's frame, then the other's, on the same boxes and rays.
+          for (int b = 0; b < 2; ++b) {
+            const double update = world.update(*bps[b], std::size_t(b));
+            rayMs[b].push_back(millisecondsOf([&] { hits[b] = runQueries(*bps[b], rays); }));
+            frameMs[b].push_back(update + rayMs[b].back());
+          }
+        }
+        std::printf("%-8s %9zu %6.2f %6d %12.3f %12.3f %12.3f %12.3f %9.1f%s\n", sceneName.c_str(), n, speed,
+                    o.queries, median(rayMs[0]), median(rayMs[1]), median(frameMs[0]), median(frameMs[1]),
+                    double(hits[0]) / o.queries, hits[0] == hits[1] ? "" : "  (hits differ!)");
+        std::fflush(stdout);
+      }
+}
 
 void fill(btBroadphaseInterface& bp, const QueryScene& scene) {
   for (std::size_t i = 0; i < scene.lo.size(); ++i)
@@ -175,9 +251,11 @@ const CommandRegistration kRegistration([](CLI::App& app) {
   CLI::App* cmd = app.add_subcommand(
       "queries",
       "rayTest and aabbTest of gpucol::GridBroadphase through its query index and by scanning every proxy, "
-      "beside btDbvtBroadphase on the same (unmoved) boxes: median microseconds per query.");
+      "beside btDbvtBroadphase on the same (unmoved) boxes: median microseconds per query; with --moving, "
+      "rays in a world where every box moves, median ms per frame.");
   cmd->footer(
-      "Example: gpucol-bench queries --n 10000,100000 --scenes uniform,mixed --queries 1000 --runs 5");
+      "Example: gpucol-bench queries --n 10000,100000 --scenes uniform,mixed --queries 1000 --runs 5\n"
+      "         gpucol-bench queries --n 10000 --scenes uniform --queries 500 --moving 60");
   cmd->add_option("--n", options->sizes, "proxy counts")->delimiter(',')->capture_default_str();
   cmd->add_option("--scenes", options->scenes, "uniform, mixed")->delimiter(',')->capture_default_str();
   cmd->add_option("--queries", options->queries, "queries of each kind per run")
@@ -186,7 +264,15 @@ const CommandRegistration kRegistration([](CLI::App& app) {
   cmd->add_option("--runs", options->runs, "timed runs (median reported)")
       ->check(CLI::PositiveNumber)
       ->capture_default_str();
-  cmd->callback([options] { runAll(*options); });
+  cmd->add_option("--moving", options->movingFrames,
+                  "frames of a world where every box moves (setAabb, calculateOverlappingPairs, then --queries "
+                  "short rays), gpucol beside btDbvtBroadphase; 0: the static queries")
+      ->check(CLI::NonNegativeNumber)
+      ->capture_default_str();
+  cmd->add_option("--speeds", options->speeds, "for --moving: box sizes each box moves per frame")
+      ->delimiter(',')
+      ->capture_default_str();
+  cmd->callback([options] { options->movingFrames > 0 ? runMoving(*options) : runAll(*options); });
 });
 
 }  // namespace

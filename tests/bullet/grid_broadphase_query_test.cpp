@@ -265,4 +265,37 @@ TEST(GridBroadphaseQueries, FewProxiesOrFewQueriesScan) {
   EXPECT_EQ(grid.queryStats().indexBuilds, 0u) << "four queries per change should never pay for an index";
 }
 
+// A world where every box drifts every frame and each frame asks many queries: the index files the boxes
+// grown once the boxes moved one away, so it outlives the drift; boxes that leave their grown box are kept
+// aside and, from the next step, filed in an index of moved boxes. Every answer stays the scan's.
+TEST(GridBroadphaseQueries, DriftingWorldsKeepTheirIndexAndItsAnswers) {
+  gpucol::GridBroadphase grid;
+  std::mt19937 rng(8);
+  std::vector<QueryBox> boxes(3000);
+  std::vector<btVector3> velocity(boxes.size());
+  std::uniform_real_distribution<float> dir(-1, 1);
+  for (std::size_t i = 0; i < boxes.size(); ++i) {
+    randomBox(Scene::Uniform, rng, boxes[i]);
+    boxes[i].proxy = grid.createProxy(boxes[i].lo, boxes[i].hi, BOX_SHAPE_PROXYTYPE,
+                                      reinterpret_cast<void*>(std::intptr_t(i)), 1, -1, nullptr);
+    // Most drift slowly; one in 50 fast enough to leave its grown box within a frame or two.
+    const float speed = (i % 50 == 0 ? 0.1f : 0.004f) * (boxes[i].hi - boxes[i].lo).x();
+    velocity[i] = btVector3(dir(rng), dir(rng), dir(rng)) * speed;
+  }
+  grid.calculateOverlappingPairs(nullptr);
+  const int frames = 40;
+  for (int frame = 0; frame < frames; ++frame) {
+    for (std::size_t i = 0; i < boxes.size(); ++i) {
+      boxes[i].lo += velocity[i], boxes[i].hi += velocity[i];
+      grid.setAabb(boxes[i].proxy, boxes[i].lo, boxes[i].hi, nullptr);
+    }
+    grid.calculateOverlappingPairs(nullptr);
+    checkQueries(grid, boxes, rng, 30, "frame " + std::to_string(frame));
+    if (::testing::Test::HasFailure()) return;
+  }
+  const gpucol::GridBroadphaseQueryStats stats = grid.queryStats();
+  EXPECT_LE(stats.indexBuilds, 8u) << "drifting boxes should not cost an index per frame";
+  EXPECT_GT(stats.indexed, stats.scans * 4) << "the index should answer most queries";
+}
+
 }  // namespace

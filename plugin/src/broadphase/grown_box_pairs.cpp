@@ -14,9 +14,7 @@ void GrownBoxPairs::build(const ProxyArrays& p) {
   for (std::uint32_t s = 0; s < p.count; ++s) {
     if (!(p.flags[s] & kProxyActive)) continue;
     const BoxCorners b = p.box(s);
-    BoxCorners g = b;
-    const float grow = kGrowShare * std::max({b.hi[0] - b.lo[0], b.hi[1] - b.lo[1], b.hi[2] - b.lo[2]});
-    for (int a = 0; a < 3; ++a) g.lo[a] -= grow, g.hi[a] += grow;
+    const BoxCorners g = grownBox(b);
     m_dense[s] = std::uint32_t(m_slots.size());
     m_slots.push_back(s);
     m_grown.push_back(g);

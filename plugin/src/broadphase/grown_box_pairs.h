@@ -13,13 +13,21 @@
 
 namespace gpucol {
 
+/// Share of a box's largest side that grownBox grows it by on every side: a resting box's jitter stays inside
+/// for good, a falling one leaves after a few steps.
+inline constexpr float kGrowShare = 0.125f;
+
+/// The box grown by kGrowShare of its largest side on every side.
+inline BoxCorners grownBox(const BoxCorners& b) {
+  const float grow = kGrowShare * std::max({b.hi[0] - b.lo[0], b.hi[1] - b.lo[1], b.hi[2] - b.lo[2]});
+  BoxCorners g = b;
+  for (int a = 0; a < 3; ++a) g.lo[a] -= grow, g.hi[a] += grow;
+  return g;
+}
+
 /// The pairs of grown boxes of one search, and the test of a later step's boxes against them.
 class GrownBoxPairs {
  public:
-  /// Share of a box's largest side that it is grown by on every side: a resting box's jitter stays inside
-  /// for good, a falling one leaves after a few steps.
-  static constexpr float kGrowShare = 0.125f;
-
   /// Grows every active box of `p` and lists the pairs of grown boxes that pass p's group and mask test,
   /// with whether their boxes overlap now, replacing what was kept.
   void build(const ProxyArrays& p);

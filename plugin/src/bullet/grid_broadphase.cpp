@@ -87,6 +87,12 @@ constexpr std::uint32_t kScansBeforeIndex = 6;
 constexpr std::uint32_t kOffIndexShare = 8;  // 1/8
 /// A query's candidates cost about this many proxies of a scan each (gathered, sorted, tested at random).
 constexpr std::uint32_t kScanPerCandidate = 4;
+/// An index that answered this many queries before the boxes moved it away marks a world that queries every
+/// frame: the next index is built by the first query after a change instead of after kScansBeforeIndex scans.
+constexpr std::uint64_t kQueriesOfABusyIndex = 64;
+/// A query's candidate list starts with room for this many: a short ray names about 50 in a uniform cloud,
+/// and growing the list from empty copied it several times.
+constexpr std::size_t kQueryCandidatesReserved = 256;
 
 /// A proxy with its slot in the per-slot arrays (the slot fits the base class's tail padding: 56 bytes).
 struct GridProxy : btBroadphaseProxy {
@@ -191,6 +197,19 @@ struct GridBroadphase::Impl {
   QueryGrid queryGrid;
   std::vector<std::uint32_t> offIndex;
   std::uint32_t indexedProxies = 0;
+  // Once an index was dropped because its boxes moved, the next ones file each box grown as the grown pairs
+  // are (grownBox): a box that stays inside is still where the index says, and the index outlives small
+  // moves. indexBoxes holds the filed boxes by slot (slots not filed hold a box that holds nothing).
+  bool indexGrows = false;
+  std::vector<BoxCorners> indexBoxes;
+  // Boxes that left what the index filed for them are tested by every query (offIndex); at the next step,
+  // once there are more than kLinearOffIndex, they join movedSlots, filed (grown) in a small index of their
+  // own, so a world whose boxes drift keeps its index with a cheap refresh per step instead of a rebuild.
+  QueryGrid movedGrid;
+  std::vector<std::uint32_t> movedSlots;
+  static constexpr std::size_t kLinearOffIndex = 16;
+  std::uint64_t indexedAtBuild = 0;   // queryIndexed when the index was built
+  std::uint64_t lastIndexQueries = 0;  // queries the last dropped index answered
   std::atomic<bool> indexReady{false};
   std::atomic<std::uint32_t> scansSinceChange{0};
   std::atomic<std::uint64_t> queryScans{0}, queryIndexed{0};
@@ -435,15 +454,30 @@ struct GridBroadphase::Impl {
       return;
     }
     if (state[s] & kOffIndex) return;
+    if (s < indexBoxes.size()) {
+      const GridProxy& p = proxy(s);
+      const BoxCorners& b = indexBoxes[s];
+      if (b.lo[0] <= float(p.m_aabbMin[0]) && b.lo[1] <= float(p.m_aabbMin[1]) && b.lo[2] <= float(p.m_aabbMin[2]) &&
+          float(p.m_aabbMax[0]) <= b.hi[0] && float(p.m_aabbMax[1]) <= b.hi[1] && float(p.m_aabbMax[2]) <= b.hi[2])
+        return;  // still inside the box the index filed for its slot
+    }
     state[s] |= kOffIndex;
     offIndex.push_back(s);
-    if (offIndex.size() > indexedProxies / kOffIndexShare + 16) dropQueryIndex();
+    if (offIndex.size() + movedSlots.size() > indexedProxies / kOffIndexShare + 16) {
+      indexGrows = true;
+      dropQueryIndex();
+    }
   }
 
   void dropQueryIndex() {
     for (std::uint32_t s : offIndex)
       if (s < slotCount) state[s] = std::uint8_t(state[s] & ~kOffIndex);
     std::vector<std::uint32_t>().swap(offIndex);
+    std::vector<BoxCorners>().swap(indexBoxes);
+    std::vector<std::uint32_t>().swap(movedSlots);
+    movedGrid.clear();
+    if (indexReady.load(std::memory_order_relaxed))
+      lastIndexQueries = queryIndexed.load(std::memory_order_relaxed) - indexedAtBuild;
     queryGrid.clear();
     indexReady.store(false, std::memory_order_relaxed);
     scansSinceChange.store(0, std::memory_order_relaxed);
@@ -453,48 +487,105 @@ struct GridBroadphase::Impl {
   const QueryGrid* queryIndex() {
     if (indexReady.load(std::memory_order_acquire)) return &queryGrid;
     if (liveCount < kQueryIndexMinProxies || !tuning.queryIndex) return nullptr;
-    if (scansSinceChange.fetch_add(1, std::memory_order_relaxed) < kScansBeforeIndex) return nullptr;
+    if (scansSinceChange.fetch_add(1, std::memory_order_relaxed) < kScansBeforeIndex &&
+        lastIndexQueries < kQueriesOfABusyIndex)
+      return nullptr;
     std::lock_guard<std::mutex> lock(indexBuild);
     if (!indexReady.load(std::memory_order_relaxed)) buildQueryIndex();
     return &queryGrid;
   }
 
   void buildQueryIndex() {
-    // The visible proxies as the index's input; their boxes are read in the proxies, or from float copies
-    // (released after the build) when Bullet's are doubles.
+    // The visible proxies as the index's input, from float copies of their boxes (grown once the boxes
+    // have moved an index away), kept by slot while the index lives.
     std::vector<std::uint32_t> slots;
     slots.reserve(liveCount);
     for (std::uint32_t s = 0; s < slotCount; ++s)
       if (visible(s)) slots.push_back(s);
+    constexpr float kMax = std::numeric_limits<float>::max();
+    indexBoxes.assign(slotCount, BoxCorners{{kMax, kMax, kMax}, {-kMax, -kMax, -kMax}});
+    std::vector<float> copies(std::size_t(slotCount) * 6, 0.0f);
+    float* const axis[6] = {&copies[0],
+                            &copies[std::size_t(slotCount)],
+                            &copies[std::size_t(slotCount) * 2],
+                            &copies[std::size_t(slotCount) * 3],
+                            &copies[std::size_t(slotCount) * 4],
+                            &copies[std::size_t(slotCount) * 5]};
+    for (std::uint32_t s : slots) {
+      const GridProxy& p = proxy(s);
+      BoxCorners b{{float(p.m_aabbMin[0]), float(p.m_aabbMin[1]), float(p.m_aabbMin[2])},
+                   {float(p.m_aabbMax[0]), float(p.m_aabbMax[1]), float(p.m_aabbMax[2])}};
+      if (indexGrows) b = grownBox(b);
+      indexBoxes[s] = b;
+      for (int a = 0; a < 3; ++a) axis[a][s] = b.lo[a], axis[3 + a][s] = b.hi[a];
+    }
     ProxyArrays p;
     p.count = slotCount;
-    std::vector<float> copies;
-    if (kProxyBoxesAreFloats) {
-      p.records = boxRecords();
-    } else {
-      copies.resize(std::size_t(slotCount) * 6);
-      float* const axis[6] = {&copies[0],
-                              &copies[std::size_t(slotCount)],
-                              &copies[std::size_t(slotCount) * 2],
-                              &copies[std::size_t(slotCount) * 3],
-                              &copies[std::size_t(slotCount) * 4],
-                              &copies[std::size_t(slotCount) * 5]};
-      copyBoxes(axis);
-      p.minX = axis[0], p.minY = axis[1], p.minZ = axis[2], p.maxX = axis[3], p.maxY = axis[4],
-      p.maxZ = axis[5];
-    }
+    p.minX = axis[0], p.minY = axis[1], p.minZ = axis[2], p.maxX = axis[3], p.maxY = axis[4], p.maxZ = axis[5];
     if (slots.empty())
       queryGrid.clear();
     else
       queryGrid.build(p, slots, tuning.hugeCellLimit);
     indexedProxies = std::uint32_t(slots.size());
     ++indexBuilds;
+    indexedAtBuild = queryIndexed.load(std::memory_order_relaxed);
     indexReady.store(true, std::memory_order_release);
+  }
+
+  /// Files the boxes that left the index since the last step in the index of moved boxes (see movedGrid).
+  void fileMovedBoxes() {
+    if (!indexReady.load(std::memory_order_relaxed) || offIndex.size() <= kLinearOffIndex) return;
+    constexpr float kMax = std::numeric_limits<float>::max();
+    if (indexBoxes.size() < slotCount)
+      indexBoxes.resize(slotCount, BoxCorners{{kMax, kMax, kMax}, {-kMax, -kMax, -kMax}});
+    for (std::uint32_t s : offIndex) {
+      state[s] = std::uint8_t(state[s] & ~kOffIndex);
+      if (!visible(s)) {
+        // Filed nowhere: any change to it puts it back in offIndex.
+        indexBoxes[s] = BoxCorners{{kMax, kMax, kMax}, {-kMax, -kMax, -kMax}};
+        continue;
+      }
+      const GridProxy& p = proxy(s);
+      indexBoxes[s] = grownBox(BoxCorners{{float(p.m_aabbMin[0]), float(p.m_aabbMin[1]), float(p.m_aabbMin[2])},
+                                          {float(p.m_aabbMax[0]), float(p.m_aabbMax[1]), float(p.m_aabbMax[2])}});
+      movedSlots.push_back(s);
+    }
+    offIndex.clear();
+    std::sort(movedSlots.begin(), movedSlots.end());
+    movedSlots.erase(std::unique(movedSlots.begin(), movedSlots.end()), movedSlots.end());
+    std::vector<float> copies(movedSlots.size() * 6);
+    std::vector<std::uint32_t> dense(movedSlots.size());
+    const std::size_t m = movedSlots.size();
+    for (std::size_t i = 0; i < m; ++i) {
+      const BoxCorners& b = indexBoxes[movedSlots[i]];
+      for (int a = 0; a < 3; ++a) copies[a * m + i] = b.lo[a], copies[(3 + a) * m + i] = b.hi[a];
+      dense[i] = std::uint32_t(i);
+    }
+    // Filed by their rank in movedSlots (the grid's arrays are indexed by what it files), named by slot below.
+    ProxyArrays v;
+    v.count = std::uint32_t(m);
+    v.minX = &copies[0], v.minY = &copies[m], v.minZ = &copies[2 * m];
+    v.maxX = &copies[3 * m], v.maxY = &copies[4 * m], v.maxZ = &copies[5 * m];
+    movedGrid.build(v, dense, tuning.hugeCellLimit);
   }
 
   /// Candidates beyond which a query tests every proxy instead: sorting a candidate costs about as much as
   /// testing kScanPerCandidate proxies in a scan.
   std::size_t maxCandidates() const { return slotCount / kScanPerCandidate; }
+
+  /// The moved boxes' candidates for a query, by slot, appended to `out`: `gather(grid, out)` asks a grid;
+  /// where the moved boxes' own index declines (a region reaching more cells than it has boxes), all of them.
+  template <class Gather>
+  void appendMovedCandidates(Gather&& gather, std::vector<std::uint32_t>& out) const {
+    if (movedSlots.empty()) return;
+    std::vector<std::uint32_t> ranks;
+    ranks.reserve(kQueryCandidatesReserved);
+    if (movedGrid.built() && gather(movedGrid, ranks)) {
+      for (std::uint32_t r : ranks) out.push_back(movedSlots[r]);
+    } else {
+      out.insert(out.end(), movedSlots.begin(), movedSlots.end());
+    }
+  }
 
   /// A query through the index: `candidates` (any order, repeats allowed) and the proxies kept aside are
   /// tested with `test`, and the visible ones that pass go to `process`, in slot order, once each.
@@ -866,8 +957,13 @@ void GridBroadphase::rayTest(const btVector3& rayFrom, const btVector3& /*rayTo*
     }
     sweep.tMax = lambdaMax;
     std::vector<std::uint32_t> candidates;
-    if (usable && index->sweepCandidates(sweep, d.maxCandidates(), candidates))
+    candidates.reserve(kQueryCandidatesReserved);
+    if (usable && index->sweepCandidates(sweep, d.maxCandidates(), candidates)) {
+      d.appendMovedCandidates([&](const QueryGrid& g, std::vector<std::uint32_t>& out) {
+        return g.sweepCandidates(sweep, d.maxCandidates(), out);
+      }, candidates);
       return d.answerFromIndex(candidates, hits, process);
+    }
   }
   d.answerByScan(hits, process);
 }
@@ -888,8 +984,13 @@ void GridBroadphase::aabbTest(const btVector3& aabbMin, const btVector3& aabbMax
     const float lo[3] = {aabbMin.x(), aabbMin.y(), aabbMin.z()};
     const float hi[3] = {aabbMax.x(), aabbMax.y(), aabbMax.z()};
     std::vector<std::uint32_t> candidates;
-    if (index->boxCandidates(lo, hi, d.maxCandidates(), candidates))
+    candidates.reserve(kQueryCandidatesReserved);
+    if (index->boxCandidates(lo, hi, d.maxCandidates(), candidates)) {
+      d.appendMovedCandidates([&](const QueryGrid& g, std::vector<std::uint32_t>& out) {
+        return g.boxCandidates(lo, hi, d.maxCandidates(), out);
+      }, candidates);
       return d.answerFromIndex(candidates, overlaps, process);
+    }
   }
   d.answerByScan(overlaps, process);
 }
@@ -899,6 +1000,7 @@ void GridBroadphase::calculateOverlappingPairs(btDispatcher* dispatcher) {
   GridBroadphaseStats st;
   st.proxies = d.liveCount;
   st.staticProxies = d.staticCount;
+  d.fileMovedBoxes();
   if (d.dirty && d.grown.kept() && d.answerFromGrownPairs(dispatcher, st)) return;
   // When a box already changed, the scan fills the finder's view as it goes (a filter it finds changed is
   // marked moved there); otherwise it only looks for filter changes, and the view is filled when it found
@@ -1215,7 +1317,9 @@ GridBroadphaseQueryStats GridBroadphase::queryStats() const {
   q.indexed = d.queryIndexed.load(std::memory_order_relaxed);
   q.indexBuilds = d.indexBuilds;
   q.indexBytes = d.indexReady.load(std::memory_order_acquire)
-                     ? d.queryGrid.memoryBytes() + d.offIndex.capacity() * sizeof(std::uint32_t)
+                     ? d.queryGrid.memoryBytes() + d.offIndex.capacity() * sizeof(std::uint32_t) +
+                           d.indexBoxes.capacity() * sizeof(BoxCorners) + d.movedGrid.memoryBytes() +
+                           d.movedSlots.capacity() * sizeof(std::uint32_t)
                      : 0;
   return q;
 }
