@@ -216,13 +216,13 @@ void runAll(const Options& o) {
       btCollisionDispatcher* noDispatcher = nullptr;
       indexed.calculateOverlappingPairs(noDispatcher);
       scanned.calculateOverlappingPairs(noDispatcher);
-      // Building the index against one scan: the 7th query after a change builds it (kScansBeforeIndex = 6).
+      // Building the index against one scan: the 11th query after a change builds it (kScansBeforeIndex = 10).
       const std::vector<Query> warm = makeQueries("short", scene, 16, 99);
       std::vector<double> scanMs, buildMs;
       for (int r = 0; r < o.runs; ++r) {
         indexed.setTuning(GridBroadphaseTuning{});  // drops the index
-        for (int i = 0; i < 6; ++i) scanMs.push_back(millisecondsOf([&] { runQueries(indexed, {warm[i]}); }));
-        buildMs.push_back(millisecondsOf([&] { runQueries(indexed, {warm[6]}); }));
+        for (int i = 0; i < 10; ++i) scanMs.push_back(millisecondsOf([&] { runQueries(indexed, {warm[i]}); }));
+        buildMs.push_back(millisecondsOf([&] { runQueries(indexed, {warm[10]}); }));
       }
       const double scan = median(scanMs), build = median(buildMs);
       std::printf(

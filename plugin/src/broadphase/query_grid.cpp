@@ -131,15 +131,28 @@ std::size_t QueryGrid::rowEntries(std::uint32_t x0, std::uint32_t x1, std::uint3
   return m_cellStart[row + x1 + 1] - m_cellStart[row + x0];
 }
 
-void QueryGrid::appendRow(std::uint32_t x0, std::uint32_t x1, std::uint32_t y, std::uint32_t z,
-                          std::vector<std::uint32_t>& out) const {
+std::size_t QueryGrid::appendRow(std::uint32_t x0, std::uint32_t x1, std::uint32_t y, std::uint32_t z,
+                                 std::vector<std::uint32_t>& out, const CandidateTest& keep) const {
   const std::uint64_t row = rowStart(y, z);
-  out.insert(out.end(), m_entries.begin() + std::ptrdiff_t(m_cellStart[row + x0]),
-             m_entries.begin() + std::ptrdiff_t(m_cellStart[row + x1 + 1]));
+  const std::uint32_t begin = m_cellStart[row + x0], end = m_cellStart[row + x1 + 1];
+  for (std::uint32_t e = begin; e < end; ++e)
+    if (keep(m_entries[e])) out.push_back(m_entries[e]);
+  return end - begin;
 }
 
+namespace {
+
+/// The huge boxes that pass `keep`.
+void appendHuge(const std::vector<std::uint32_t>& huge, std::vector<std::uint32_t>& out,
+                const CandidateTest& keep) {
+  for (std::uint32_t id : huge)
+    if (keep(id)) out.push_back(id);
+}
+
+}  // namespace
+
 bool QueryGrid::boxCandidates(const float lo[3], const float hi[3], std::size_t maxCandidates,
-                              std::vector<std::uint32_t>& out) const {
+                              std::vector<std::uint32_t>& out, const CandidateTest& keep) const {
   if (!m_built) return false;
   // A box that overlaps the region contains the point max(its min, the region's min) on each axis, which
   // lies in the region too; cellOf is monotone, so that point's cell is visited and the box is filed there.
@@ -161,15 +174,15 @@ bool QueryGrid::boxCandidates(const float lo[3], const float hi[3], std::size_t 
     for (std::uint32_t z = r.lo[2]; z <= r.hi[2]; ++z)
       for (std::uint32_t y = r.lo[1]; y <= r.hi[1]; ++y) count += rowEntries(r.lo[0], r.hi[0], y, z);
   if (count > maxCandidates) return false;
-  out.insert(out.end(), m_huge.begin(), m_huge.end());
+  appendHuge(m_huge, out, keep);
   if (m_entries.empty() || cells == 0) return true;
   for (std::uint32_t z = r.lo[2]; z <= r.hi[2]; ++z)
-    for (std::uint32_t y = r.lo[1]; y <= r.hi[1]; ++y) appendRow(r.lo[0], r.hi[0], y, z, out);
+    for (std::uint32_t y = r.lo[1]; y <= r.hi[1]; ++y) appendRow(r.lo[0], r.hi[0], y, z, out, keep);
   return true;
 }
 
 bool QueryGrid::sweepCandidates(const QuerySweep& sweep, std::size_t maxCandidates,
-                                std::vector<std::uint32_t>& out) const {
+                                std::vector<std::uint32_t>& out, const CandidateTest& keep) const {
   if (!m_built) return false;
   const std::size_t before = out.size();
   // The region at point q is [q + lowOff, q + highOff] per axis: the cast box, widened by the rounding
@@ -191,7 +204,8 @@ bool QueryGrid::sweepCandidates(const QuerySweep& sweep, std::size_t maxCandidat
     lowOff[a] = std::min(sweep.castLo[a], sweep.castHi[a]) - pad;
     highOff[a] = std::max(sweep.castLo[a], sweep.castHi[a]) + pad;
   }
-  out.insert(out.end(), m_huge.begin(), m_huge.end());
+  std::size_t read = m_huge.size();  // entries read: what maxCandidates bounds
+  appendHuge(m_huge, out, keep);
   if (m_entries.empty()) return true;
   // Clip t to where the region can meet a filed box, all of which lie in [origin, m_hi].
   for (int a = 0; a < 3; ++a) {
@@ -236,21 +250,21 @@ bool QueryGrid::sweepCandidates(const QuerySweep& sweep, std::size_t maxCandidat
       for (std::uint32_t y = r.lo[1]; y <= r.hi[1]; ++y) {
         const bool seen = i > 0 && z >= prev.lo[2] && z <= prev.hi[2] && y >= prev.lo[1] && y <= prev.hi[1];
         if (!seen) {
-          appendRow(r.lo[0], r.hi[0], y, z, out);
+          read += appendRow(r.lo[0], r.hi[0], y, z, out, keep);
           visited += r.hi[0] - r.lo[0] + 1;
         } else {
           if (r.lo[0] < prev.lo[0]) {
             const std::uint32_t x1 = std::min(r.hi[0], prev.lo[0] - 1);
-            appendRow(r.lo[0], x1, y, z, out);
+            read += appendRow(r.lo[0], x1, y, z, out, keep);
             visited += x1 - r.lo[0] + 1;
           }
           if (r.hi[0] > prev.hi[0]) {
             const std::uint32_t x0 = std::max(r.lo[0], prev.hi[0] + 1);
-            appendRow(x0, r.hi[0], y, z, out);
+            read += appendRow(x0, r.hi[0], y, z, out, keep);
             visited += r.hi[0] - x0 + 1;
           }
         }
-        if (double(visited) > budget || out.size() - before > maxCandidates) {
+        if (double(visited) > budget || read > maxCandidates) {
           out.resize(before);
           return false;
         }

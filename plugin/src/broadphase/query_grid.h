@@ -23,6 +23,17 @@ struct QuerySweep {
   double castHi[3] = {0, 0, 0};
 };
 
+/// A test each candidate must pass before it is named, given what the index files (the slot, or whatever id
+/// the caller filed). The broad phase tests the box it filed, which holds the candidate's own: a test that is
+/// monotone in the box loses nothing, and the candidates a cell names in vain are dropped before they are
+/// sorted and their proxies read.
+struct CandidateTest {
+  bool (*test)(const void* context, std::uint32_t id) = nullptr;  ///< nullptr: every candidate passes
+  const void* context = nullptr;                                  ///< handed to `test`
+  /// True when candidate `id` passes (or there is no test).
+  bool operator()(std::uint32_t id) const { return test == nullptr || test(context, id); }
+};
+
 /// Boxes filed by cell for queries; built on demand, dropped when the boxes change (GridBroadphase decides).
 class QueryGrid {
  public:
@@ -38,12 +49,12 @@ class QueryGrid {
   /// Returns false, leaving `out` as it was, when that would be more than `maxCandidates` slots or more
   /// cells than there are filed boxes (testing every box is then cheaper), or the region has a NaN.
   bool boxCandidates(const float lo[3], const float hi[3], std::size_t maxCandidates,
-                     std::vector<std::uint32_t>& out) const;
+                     std::vector<std::uint32_t>& out, const CandidateTest& keep = CandidateTest()) const;
   /// Appends every filed slot whose box the sweep may touch, allowing for the float rounding of the
   /// caller's exact test; repeats are possible. Returns false, leaving `out` as it was, when that would be
   /// more than `maxCandidates` slots or more cells than there are filed boxes, or the sweep is not finite.
-  bool sweepCandidates(const QuerySweep& sweep, std::size_t maxCandidates,
-                       std::vector<std::uint32_t>& out) const;
+  bool sweepCandidates(const QuerySweep& sweep, std::size_t maxCandidates, std::vector<std::uint32_t>& out,
+                       const CandidateTest& keep = CandidateTest()) const;
   /// Bytes held (capacities).
   std::size_t memoryBytes() const;
 
@@ -52,9 +63,10 @@ class QueryGrid {
   std::uint64_t rowStart(std::uint32_t y, std::uint32_t z) const;
   /// Entries in the cells x in [x0, x1] of row (y, z).
   std::size_t rowEntries(std::uint32_t x0, std::uint32_t x1, std::uint32_t y, std::uint32_t z) const;
-  /// Appends the entries of the cells x in [x0, x1] of row (y, z).
-  void appendRow(std::uint32_t x0, std::uint32_t x1, std::uint32_t y, std::uint32_t z,
-                 std::vector<std::uint32_t>& out) const;
+  /// Appends the entries of the cells x in [x0, x1] of row (y, z) that pass `keep`; returns
+  /// how many entries it read.
+  std::size_t appendRow(std::uint32_t x0, std::uint32_t x1, std::uint32_t y, std::uint32_t z,
+                        std::vector<std::uint32_t>& out, const CandidateTest& keep) const;
 
   Grid m_grid;
   float m_hi[3] = {0, 0, 0};               // max corner of the filed boxes (the grid spans [origin, m_hi])

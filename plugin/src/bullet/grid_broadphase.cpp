@@ -77,11 +77,11 @@ constexpr std::uint8_t kFilterChanged = 32;  // filter changed since the last di
 /// Queries (rayTest, aabbTest) test every proxy below this many live proxies: the index's cells and the
 /// sort of its candidates cost more than a scan of so few boxes.
 constexpr std::uint32_t kQueryIndexMinProxies = 512;
-/// The query index is built by the query that follows this many scans since the boxes last changed:
-/// building it cost 5.0-6.6 scans at 10K and 100K boxes (gpucol-bench queries), so a scene that queries
-/// less pays only scans, and one that queries more never pays more than about twice the cheaper of the two
-/// (the ski-rental rule).
-constexpr std::uint32_t kScansBeforeIndex = 6;
+/// The query index is built by the query that follows this many scans since the boxes last changed, about
+/// what building it costs in scans (gpucol-bench queries prints the ratio): a scene that queries less pays
+/// only scans, and one that queries more never pays more than about twice the cheaper of the two (the
+/// ski-rental rule).
+constexpr std::uint32_t kScansBeforeIndex = 10;
 /// The index is dropped once more than this share of its boxes moved since it was built (the moved ones are
 /// tested one by one by every query).
 constexpr std::uint32_t kOffIndexShare = 8;  // 1/8
@@ -99,6 +99,28 @@ struct GridProxy : btBroadphaseProxy {
   std::uint32_t slot = 0;
 };
 static_assert(std::is_trivially_destructible<GridProxy>::value, "proxy blocks are freed without destructors");
+
+/// x as a float no greater (down) or no less than x: a float box that holds a double-precision Bullet's box.
+float floatToward(btScalar x, bool down) {
+  float f = float(x);
+  if (down ? btScalar(f) > x : btScalar(f) < x)
+    f = std::nextafter(f, down ? -std::numeric_limits<float>::infinity() : std::numeric_limits<float>::infinity());
+  return f;
+}
+
+/// A float box holding the proxy's (the proxy's own when Bullet's scalars are floats).
+BoxCorners floatBoxHolding(const btBroadphaseProxy& p) {
+  BoxCorners b;
+  for (int a = 0; a < 3; ++a) b.lo[a] = floatToward(p.m_aabbMin[a], true), b.hi[a] = floatToward(p.m_aabbMax[a], false);
+  return b;
+}
+
+/// True when the float box `filed` holds the proxy's box.
+bool holds(const BoxCorners& filed, const btBroadphaseProxy& p) {
+  for (int a = 0; a < 3; ++a)
+    if (!(btScalar(filed.lo[a]) <= p.m_aabbMin[a] && p.m_aabbMax[a] <= btScalar(filed.hi[a]))) return false;
+  return true;
+}
 
 /// GridBroadphaseTuning::boxesInPlace reads the proxies' boxes as floats (BoxRecords), so it needs Bullet
 /// built in single precision; otherwise every finder gets float copies.
@@ -454,13 +476,8 @@ struct GridBroadphase::Impl {
       return;
     }
     if (state[s] & kOffIndex) return;
-    if (s < indexBoxes.size()) {
-      const GridProxy& p = proxy(s);
-      const BoxCorners& b = indexBoxes[s];
-      if (b.lo[0] <= float(p.m_aabbMin[0]) && b.lo[1] <= float(p.m_aabbMin[1]) && b.lo[2] <= float(p.m_aabbMin[2]) &&
-          float(p.m_aabbMax[0]) <= b.hi[0] && float(p.m_aabbMax[1]) <= b.hi[1] && float(p.m_aabbMax[2]) <= b.hi[2])
-        return;  // still inside the box the index filed for its slot
-    }
+    if (s < indexBoxes.size() && holds(indexBoxes[s], proxy(s)))
+      return;  // still inside the box the index filed for its slot
     state[s] |= kOffIndex;
     offIndex.push_back(s);
     if (offIndex.size() + movedSlots.size() > indexedProxies / kOffIndexShare + 16) {
@@ -512,9 +529,7 @@ struct GridBroadphase::Impl {
                             &copies[std::size_t(slotCount) * 4],
                             &copies[std::size_t(slotCount) * 5]};
     for (std::uint32_t s : slots) {
-      const GridProxy& p = proxy(s);
-      BoxCorners b{{float(p.m_aabbMin[0]), float(p.m_aabbMin[1]), float(p.m_aabbMin[2])},
-                   {float(p.m_aabbMax[0]), float(p.m_aabbMax[1]), float(p.m_aabbMax[2])}};
+      BoxCorners b = floatBoxHolding(proxy(s));
       if (indexGrows) b = grownBox(b);
       indexBoxes[s] = b;
       for (int a = 0; a < 3; ++a) axis[a][s] = b.lo[a], axis[3 + a][s] = b.hi[a];
@@ -545,9 +560,7 @@ struct GridBroadphase::Impl {
         indexBoxes[s] = BoxCorners{{kMax, kMax, kMax}, {-kMax, -kMax, -kMax}};
         continue;
       }
-      const GridProxy& p = proxy(s);
-      indexBoxes[s] = grownBox(BoxCorners{{float(p.m_aabbMin[0]), float(p.m_aabbMin[1]), float(p.m_aabbMin[2])},
-                                          {float(p.m_aabbMax[0]), float(p.m_aabbMax[1]), float(p.m_aabbMax[2])}});
+      indexBoxes[s] = grownBox(floatBoxHolding(proxy(s)));
       movedSlots.push_back(s);
     }
     offIndex.clear();
@@ -572,6 +585,29 @@ struct GridBroadphase::Impl {
   /// Candidates beyond which a query tests every proxy instead: sorting a candidate costs about as much as
   /// testing kScanPerCandidate proxies in a scan.
   std::size_t maxCandidates() const { return slotCount / kScanPerCandidate; }
+
+  /// A query's test run on the boxes the index filed (indexBoxes, which hold the proxies' boxes), for the main
+  /// index (ids are slots) and the moved boxes' (ids are ranks in movedSlots).
+  template <class Test>
+  struct FiledTests {
+    FiledTests(const Impl& impl, const Test& test) : d(impl), t(test) {}
+    CandidateTest bySlot() const {
+      return {[](const void* c, std::uint32_t s) {
+                const FiledTests& f = *static_cast<const FiledTests*>(c);
+                return f.t(f.d.indexBoxes[s]);
+              },
+              this};
+    }
+    CandidateTest byMovedRank() const {
+      return {[](const void* c, std::uint32_t rank) {
+                const FiledTests& f = *static_cast<const FiledTests*>(c);
+                return f.t(f.d.indexBoxes[f.d.movedSlots[rank]]);
+              },
+              this};
+    }
+    const Impl& d;
+    const Test& t;
+  };
 
   /// The moved boxes' candidates for a query, by slot, appended to `out`: `gather(grid, out)` asks a grid;
   /// where the moved boxes' own index declines (a region reaching more cells than it has boxes), all of them.
@@ -958,9 +994,19 @@ void GridBroadphase::rayTest(const btVector3& rayFrom, const btVector3& /*rayTo*
     sweep.tMax = lambdaMax;
     std::vector<std::uint32_t> candidates;
     candidates.reserve(kQueryCandidatesReserved);
-    if (usable && index->sweepCandidates(sweep, d.maxCandidates(), candidates)) {
+    // The exact test on the box filed for a candidate (which holds its box; btRayAabb2 is monotone in the
+    // bounds, rounding included): most of a cell's candidates are dropped before they are sorted and read.
+    auto rayHitsFiled = [&](const BoxCorners& b) {
+      const btVector3 bounds[2] = {btVector3(b.lo[0], b.lo[1], b.lo[2]) - aabbMax,
+                                   btVector3(b.hi[0], b.hi[1], b.hi[2]) - aabbMin};
+      btScalar tmin = 0;
+      return btRayAabb2(rayFrom, rayCallback.m_rayDirectionInverse, rayCallback.m_signs, bounds, tmin, 0,
+                        lambdaMax);
+    };
+    const Impl::FiledTests<decltype(rayHitsFiled)> keep(d, rayHitsFiled);
+    if (usable && index->sweepCandidates(sweep, d.maxCandidates(), candidates, keep.bySlot())) {
       d.appendMovedCandidates([&](const QueryGrid& g, std::vector<std::uint32_t>& out) {
-        return g.sweepCandidates(sweep, d.maxCandidates(), out);
+        return g.sweepCandidates(sweep, d.maxCandidates(), out, keep.byMovedRank());
       }, candidates);
       return d.answerFromIndex(candidates, hits, process);
     }
@@ -985,9 +1031,16 @@ void GridBroadphase::aabbTest(const btVector3& aabbMin, const btVector3& aabbMax
     const float hi[3] = {aabbMax.x(), aabbMax.y(), aabbMax.z()};
     std::vector<std::uint32_t> candidates;
     candidates.reserve(kQueryCandidatesReserved);
-    if (index->boxCandidates(lo, hi, d.maxCandidates(), candidates)) {
+    // The exact test on the box filed for a candidate, which holds its box.
+    auto overlapsFiled = [&](const BoxCorners& b) {
+      return btScalar(b.lo[0]) <= aabbMax.x() && btScalar(b.hi[0]) >= aabbMin.x() &&
+             btScalar(b.lo[1]) <= aabbMax.y() && btScalar(b.hi[1]) >= aabbMin.y() &&
+             btScalar(b.lo[2]) <= aabbMax.z() && btScalar(b.hi[2]) >= aabbMin.z();
+    };
+    const Impl::FiledTests<decltype(overlapsFiled)> keep(d, overlapsFiled);
+    if (index->boxCandidates(lo, hi, d.maxCandidates(), candidates, keep.bySlot())) {
       d.appendMovedCandidates([&](const QueryGrid& g, std::vector<std::uint32_t>& out) {
-        return g.boxCandidates(lo, hi, d.maxCandidates(), out);
+        return g.boxCandidates(lo, hi, d.maxCandidates(), out, keep.byMovedRank());
       }, candidates);
       return d.answerFromIndex(candidates, overlaps, process);
     }
