@@ -68,7 +68,9 @@ int run(const DemoOptions& options) {
   }
 
   WorldOptions worldOptions;
-  worldOptions.backend = options.backend == "gimpact" ? CollisionBackend::GImpact : CollisionBackend::Gpucol;
+  worldOptions.backend = options.backend == "gimpact"      ? CollisionBackend::GImpact
+                         : options.backend == "primitives" ? CollisionBackend::Primitives
+                                                           : CollisionBackend::Gpucol;
   worldOptions.gimpactMargin = options.gimpactMargin;
   worldOptions.allowSleeping = !options.noSleep;
   WorldScene world(scene, worldOptions);
@@ -175,8 +177,9 @@ int main(int argc, char** argv) {
   app.add_option("--steps", options.steps, "steps to run")->check(CLI::PositiveNumber)->capture_default_str();
   app.add_option("--dt", options.dt, "seconds per step")->check(CLI::PositiveNumber)->capture_default_str();
   app.add_option("--backend", options.backend,
-                 "collision code: gpucol or gimpact (GImpact + btDbvtBroadphase)")
-      ->check(CLI::IsMember({"gpucol", "gimpact"}))
+                 "collision code: gpucol, gimpact (GImpact + btDbvtBroadphase) or primitives (the same bodies "
+                 "as Bullet's boxes, spheres and compounds of boxes and capsules: the reference)")
+      ->check(CLI::IsMember({"gpucol", "gimpact", "primitives"}))
       ->capture_default_str();
   app.add_option("--gimpact-margin", options.gimpactMargin, "collision margin of the GImpact shapes (metres)")
       ->check(CLI::NonNegativeNumber)

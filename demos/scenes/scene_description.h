@@ -18,12 +18,24 @@ struct SceneBody {
   btTransform start;     ///< Pose at step 0 (the mesh's frame is the body's frame).
 };
 
+/// One convex piece of a mesh's solid, for the reference world built of Bullet's own convex shapes.
+struct ConvexPiece {
+  enum class Kind { Box, Sphere, Capsule };
+  Kind kind = Kind::Box;
+  /// Box: half extents. Sphere: the radius in x. Capsule: the radius in x, and half the distance between its
+  /// caps' centres in y (the capsule lies along its own y axis).
+  btVector3 size{0, 0, 0};
+  btTransform pose = btTransform::getIdentity();  ///< Where the piece lies in the mesh's frame.
+};
+
 /// A world to build, with either collision backend: meshes shared between bodies (one shape per mesh), the
 /// bodies, gravity and the ground's height. Dynamic meshes are in their principal frame, so that a diagonal
 /// inertia is the whole tensor.
 struct SceneDescription {
   std::string name;                                         ///< "stack", "pile", or the mesh file's name.
   std::vector<std::shared_ptr<const TriangleMesh>> meshes;  ///< Shared by the bodies that use them.
+  /// Per mesh, the same solid as convex pieces (CollisionBackend::Primitives); empty where none is known.
+  std::vector<std::vector<ConvexPiece>> convexPieces;
   std::vector<SceneBody> bodies;                            ///< Static and dynamic bodies, in creation order.
   btVector3 gravity{0, -9.81f, 0};                          ///< Metres per second squared, y is up.
   float groundTop =

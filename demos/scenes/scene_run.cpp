@@ -107,6 +107,8 @@ RunSummary runScene(WorldScene& scene, const RunOptions& options,
     }
     if (progress && (step % progressEvery == 0 || step == options.steps))
       progress(sample(scene, step, options));
+    // Nothing wakes a world whose every body sleeps.
+    if (options.stopWhenAllAsleep && scene.sleepingBodyCount() == int(scene.dynamicBodies().size())) break;
   }
 
   summary.stepsPerSecond = summary.stepSeconds > 0 ? summary.steps / summary.stepSeconds : 0;

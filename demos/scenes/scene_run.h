@@ -17,6 +17,8 @@ struct RunOptions {
   /// A body is moving when it is awake and faster than these (m/s, rad/s).
   float restLinearSpeed = WorldScene::kRestLinearSpeed;
   float restAngularSpeed = WorldScene::kRestAngularSpeed;  ///< See restLinearSpeed.
+  /// Stop after the first step at which every dynamic body sleeps (a world asleep stays so).
+  bool stopWhenAllAsleep = false;
 };
 
 /// What the world looked like after one step, for progress lines.

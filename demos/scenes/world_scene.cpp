@@ -3,6 +3,10 @@
 #include <BulletCollision/BroadphaseCollision/btDbvtBroadphase.h>
 #include <BulletCollision/CollisionDispatch/btCollisionDispatcher.h>
 #include <BulletCollision/CollisionDispatch/btDefaultCollisionConfiguration.h>
+#include <BulletCollision/CollisionShapes/btBoxShape.h>
+#include <BulletCollision/CollisionShapes/btCapsuleShape.h>
+#include <BulletCollision/CollisionShapes/btCompoundShape.h>
+#include <BulletCollision/CollisionShapes/btSphereShape.h>
 #include <BulletCollision/Gimpact/btGImpactCollisionAlgorithm.h>
 #include <BulletDynamics/ConstraintSolver/btSequentialImpulseConstraintSolver.h>
 #include <BulletDynamics/Dynamics/btDiscreteDynamicsWorld.h>
@@ -20,16 +24,28 @@
 namespace gpucol::scenes {
 
 const char* backendName(CollisionBackend backend) {
-  return backend == CollisionBackend::Gpucol ? "gpucol" : "gimpact";
+  switch (backend) {
+    case CollisionBackend::Gpucol:
+      return "gpucol";
+    case CollisionBackend::GImpact:
+      return "gimpact";
+    case CollisionBackend::Primitives:
+      return "primitives";
+  }
+  return "?";
 }
 
 // One collision shape per mesh of the description, of the backend's kind.
 struct WorldScene::Shapes {
   std::vector<std::unique_ptr<MeshShape>> gpucol;
   std::vector<std::unique_ptr<GImpactMesh>> gimpact;
+  std::vector<std::unique_ptr<btCollisionShape>> pieces;  // the primitives' children, destroyed last
+  std::vector<std::unique_ptr<btCollisionShape>> primitives;
 
   btCollisionShape* shape(std::size_t mesh) {
-    return gpucol.empty() ? static_cast<btCollisionShape*>(gimpact[mesh]->shape()) : gpucol[mesh].get();
+    if (!gpucol.empty()) return gpucol[mesh].get();
+    if (!gimpact.empty()) return gimpact[mesh]->shape();
+    return primitives[mesh].get();
   }
 };
 
@@ -44,6 +60,18 @@ btVector3 solidInertia(const TriangleMesh& mesh, float mass) {
   const double scale = double(mass) / properties.mass;
   return btVector3(btScalar(properties.inertia[0] * scale), btScalar(properties.inertia[4] * scale),
                    btScalar(properties.inertia[8] * scale));
+}
+
+std::unique_ptr<btCollisionShape> convexShape(const ConvexPiece& piece) {
+  switch (piece.kind) {
+    case ConvexPiece::Kind::Box:
+      return std::make_unique<btBoxShape>(piece.size);
+    case ConvexPiece::Kind::Sphere:
+      return std::make_unique<btSphereShape>(piece.size.x());
+    case ConvexPiece::Kind::Capsule:
+      return std::make_unique<btCapsuleShape>(piece.size.x(), 2 * piece.size.y());
+  }
+  return nullptr;
 }
 
 }  // namespace
@@ -63,6 +91,26 @@ WorldScene::WorldScene(const SceneDescription& scene, const WorldOptions& option
     m_broadphase = std::make_unique<GridBroadphase>(options.config);
     for (const auto& mesh : m_scene.meshes)
       m_shapes->gpucol.push_back(std::make_unique<MeshShape>(mesh, options.config));
+  } else if (options.backend == CollisionBackend::Primitives) {
+    m_dispatcher = std::make_unique<btCollisionDispatcher>(m_collisionConfiguration.get());
+    m_broadphase = std::make_unique<btDbvtBroadphase>();
+    for (std::size_t mesh = 0; mesh < m_scene.meshes.size(); ++mesh) {
+      if (mesh >= m_scene.convexPieces.size() || m_scene.convexPieces[mesh].empty()) {
+        throw std::invalid_argument("scene '" + m_scene.name + "': mesh " + std::to_string(mesh) +
+                                    " has no convex pieces for the primitives backend");
+      }
+      const std::vector<ConvexPiece>& pieces = m_scene.convexPieces[mesh];
+      if (pieces.size() == 1 && pieces[0].pose == btTransform::getIdentity()) {
+        m_shapes->primitives.push_back(convexShape(pieces[0]));
+        continue;
+      }
+      auto compound = std::make_unique<btCompoundShape>();
+      for (const ConvexPiece& piece : pieces) {
+        m_shapes->pieces.push_back(convexShape(piece));
+        compound->addChildShape(piece.pose, m_shapes->pieces.back().get());
+      }
+      m_shapes->primitives.push_back(std::move(compound));
+    }
   } else {
     m_dispatcher = std::make_unique<btCollisionDispatcher>(m_collisionConfiguration.get());
     btGImpactCollisionAlgorithm::registerAlgorithm(m_dispatcher.get());

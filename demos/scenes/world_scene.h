@@ -27,9 +27,12 @@ namespace gpucol::scenes {
 enum class CollisionBackend {
   Gpucol,   ///< gpucol::MeshShape, gpucol::CollisionDispatcher and gpucol::GridBroadphase.
   GImpact,  ///< btGImpactMeshShape, btCollisionDispatcher with GImpact registered, and btDbvtBroadphase.
+  /// Bullet's convex shapes (boxes, spheres, compounds of boxes and capsules) of the scene's convex pieces,
+  /// btCollisionDispatcher and btDbvtBroadphase: the reference that mesh piles are held to.
+  Primitives,
 };
 
-/// "gpucol" or "gimpact".
+/// "gpucol", "gimpact" or "primitives".
 const char* backendName(CollisionBackend backend);
 
 /// How a WorldScene is built.
@@ -54,7 +57,8 @@ struct WorldOptions {
 class WorldScene {
  public:
   /// Builds the shapes (one per mesh), the world and the bodies. Throws MeshError when a dynamic body's mesh
-  /// has no mass properties (open mesh), std::invalid_argument for a body naming a mesh that does not exist.
+  /// has no mass properties (open mesh), std::invalid_argument for a body naming a mesh that does not exist
+  /// or, on the Primitives backend, a mesh without convex pieces.
   WorldScene(const SceneDescription& scene, const WorldOptions& options);
   ~WorldScene();
   WorldScene(const WorldScene&) = delete;

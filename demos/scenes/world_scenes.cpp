@@ -57,6 +57,46 @@ float boundingRadius(const TriangleMesh& mesh) {
   return std::sqrt(radius2);
 }
 
+ConvexPiece box(const btVector3& half, const btVector3& centre = btVector3(0, 0, 0)) {
+  return {ConvexPiece::Kind::Box, half, btTransform(btQuaternion::getIdentity(), centre)};
+}
+
+// A torus about the z axis as capsules along the chords of its ring (about the mesh's tube).
+std::vector<ConvexPiece> torusPieces(float major, float minor, int capsules) {
+  std::vector<ConvexPiece> pieces;
+  for (int k = 0; k < capsules; ++k) {
+    const double a0 = 2 * kPi * k / capsules, a1 = 2 * kPi * (k + 1) / capsules, mid = 0.5 * (a0 + a1);
+    const btVector3 p0(btScalar(major * std::cos(a0)), btScalar(major * std::sin(a0)), 0);
+    const btVector3 p1(btScalar(major * std::cos(a1)), btScalar(major * std::sin(a1)), 0);
+    // The capsule lies along its y axis: turned about z by `mid`, y points along the chord.
+    pieces.push_back({ConvexPiece::Kind::Capsule, btVector3(minor, 0.5f * (p1 - p0).length(), 0),
+                      btTransform(btQuaternion(btVector3(0, 0, 1), btScalar(mid)), 0.5f * (p0 + p1))});
+  }
+  return pieces;
+}
+
+// makeLShape's two arms as boxes, carried into the frame the mesh was moved to: p' = R^T (p - t) for the
+// transform p = R p' + t that inPrincipalFrame reports.
+std::vector<ConvexPiece> lShapePieces(float size, float depth, const std::array<double, 9>& rotation,
+                                      const std::array<double, 3>& translation) {
+  const float s = size, w = size / 3.0f;
+  const std::vector<ConvexPiece> original = {
+      box(btVector3(s / 2, w / 2, depth / 2), btVector3(0, w / 2 - s / 2, 0)),
+      box(btVector3(w / 2, (s - w) / 2, depth / 2), btVector3(w / 2 - s / 2, (w + s) / 2 - s / 2, 0))};
+  btScalar m[9];
+  for (int i = 0; i < 9; ++i) m[i] = btScalar(rotation[std::size_t(i)]);
+  const btMatrix3x3 r(m[0], m[1], m[2], m[3], m[4], m[5], m[6], m[7], m[8]);
+  const btTransform toPrincipal =
+      btTransform(r, btVector3(btScalar(translation[0]), btScalar(translation[1]), btScalar(translation[2])))
+          .inverse();
+  std::vector<ConvexPiece> pieces;
+  for (ConvexPiece piece : original) {
+    piece.pose = toPrincipal * piece.pose;
+    pieces.push_back(piece);
+  }
+  return pieces;
+}
+
 float massOf(const TriangleMesh& mesh) {
   return float(mesh.massProperties(kSceneDensity).mass);
 }
@@ -69,6 +109,7 @@ SceneDescription makeStackScene(int boxes, float gap) {
   scene.name = "stack";
   scene.meshes.push_back(std::make_shared<const TriangleMesh>(makeBox(10.0f, 0.5f, 10.0f)));
   scene.meshes.push_back(std::make_shared<const TriangleMesh>(makeBox(0.5f, 0.5f, 0.5f)));
+  scene.convexPieces = {{box(btVector3(10.0f, 0.5f, 10.0f))}, {box(btVector3(0.5f, 0.5f, 0.5f))}};
   scene.bodies.push_back({0, 0.0f, at(0, -0.5f, 0)});
   const float mass = massOf(*scene.meshes[1]);
   for (int i = 0; i < boxes; ++i) {
@@ -84,38 +125,57 @@ SceneDescription makePileScene(int bodies, unsigned seed) {
   if (bodies < 0) throw std::invalid_argument("pile scene: negative body count");
   SceneDescription scene;
   scene.name = "pile";
+  // Up to 50 bodies: a 4 x 4 grid over a 6 m bin; more get a wider grid and bin, so that the pile's height
+  // stays that of 50.
+  const int perRow = std::max(4, int(std::ceil(4.0 * std::sqrt(double(bodies) / 50.0))));
+  const float inside = 1.5f * float(perRow);  // the bin's inside width
+  const float h = inside / 2;
   // The bin: the floor spans the walls' footprint; the x walls run the full length, the z walls fit between
   // them.
-  scene.meshes.push_back(std::make_shared<const TriangleMesh>(
-      merged({{makeBox(3.5f, 0.25f, 3.5f), btVector3(0, -0.25f, 0)},
-              {makeBox(0.25f, 1.25f, 3.5f), btVector3(3.25f, 1.25f, 0)},
-              {makeBox(0.25f, 1.25f, 3.5f), btVector3(-3.25f, 1.25f, 0)},
-              {makeBox(3.0f, 1.25f, 0.25f), btVector3(0, 1.25f, 3.25f)},
-              {makeBox(3.0f, 1.25f, 0.25f), btVector3(0, 1.25f, -3.25f)}},
-             "bin")));
+  const std::vector<std::pair<btVector3, btVector3>> binBoxes = {
+      {btVector3(h + 0.5f, 0.25f, h + 0.5f), btVector3(0, -0.25f, 0)},
+      {btVector3(0.25f, 1.25f, h + 0.5f), btVector3(h + 0.25f, 1.25f, 0)},
+      {btVector3(0.25f, 1.25f, h + 0.5f), btVector3(-h - 0.25f, 1.25f, 0)},
+      {btVector3(h, 1.25f, 0.25f), btVector3(0, 1.25f, h + 0.25f)},
+      {btVector3(h, 1.25f, 0.25f), btVector3(0, 1.25f, -h - 0.25f)}};
+  std::vector<std::pair<TriangleMesh, btVector3>> binParts;
+  std::vector<ConvexPiece> binPieces;
+  for (const auto& [half, centre] : binBoxes) {
+    binParts.push_back({makeBox(half.x(), half.y(), half.z()), centre});
+    binPieces.push_back(box(half, centre));
+  }
+  scene.meshes.push_back(std::make_shared<const TriangleMesh>(merged(binParts, "bin")));
   scene.meshes.push_back(std::make_shared<const TriangleMesh>(makeBox(0.35f, 0.35f, 0.35f)));
   scene.meshes.push_back(std::make_shared<const TriangleMesh>(makeIcosphere(0.4f, 2)));
   scene.meshes.push_back(std::make_shared<const TriangleMesh>(makeTorus(0.3f, 0.12f, 24, 12)));
   // The L is not symmetric about its origin: its principal frame puts the centre of mass at the body's
   // origin.
-  scene.meshes.push_back(
-      std::make_shared<const TriangleMesh>(makeLShape(0.8f, 0.3f).inPrincipalFrame(kSceneDensity)));
+  std::array<double, 9> lRotation{};
+  std::array<double, 3> lTranslation{};
+  scene.meshes.push_back(std::make_shared<const TriangleMesh>(
+      makeLShape(0.8f, 0.3f).inPrincipalFrame(kSceneDensity, &lRotation, &lTranslation)));
+  scene.convexPieces = {
+      binPieces,
+      {box(btVector3(0.35f, 0.35f, 0.35f))},
+      {{ConvexPiece::Kind::Sphere, btVector3(0.4f, 0, 0), btTransform::getIdentity()}},
+      torusPieces(0.3f, 0.12f, 12),
+      lShapePieces(0.8f, 0.3f, lRotation, lTranslation)};
   std::array<float, 4> masses{};
   for (std::size_t kind = 0; kind < 4; ++kind) masses[kind] = massOf(*scene.meshes[kind + 1]);
 
   scene.bodies.push_back({0, 0.0f, at(0, 0, 0)});
   std::mt19937 random(seed);
-  constexpr int kPerRow = 4;
   constexpr float kCell = 1.5f;  // Above the largest body's bounding diameter (the L's, 1.4 m).
   for (int i = 0; i < bodies; ++i) {
-    const int layer = i / (kPerRow * kPerRow), row = (i / kPerRow) % kPerRow, column = i % kPerRow;
-    const float x = (float(column) - 1.5f) * kCell, z = (float(row) - 1.5f) * kCell;
+    const int layer = i / (perRow * perRow), row = (i / perRow) % perRow, column = i % perRow;
+    const float x = (float(column) - 0.5f * float(perRow - 1)) * kCell,
+                z = (float(row) - 0.5f * float(perRow - 1)) * kCell;
     const float y = 1.0f + float(layer) * kCell;
     const std::size_t kind = std::size_t(i) % 4;
     scene.bodies.push_back({kind + 1, masses[kind], at(x, y, z, randomRotation(random))});
   }
   scene.groundTop = 0;
-  scene.extent = 10.0f + float(bodies / (kPerRow * kPerRow)) * kCell;
+  scene.extent = 10.0f + inside + float(bodies / (perRow * perRow)) * kCell;
   return scene;
 }
 

@@ -15,9 +15,10 @@ inline constexpr double kSceneDensity = 1000.0;
 SceneDescription makeStackScene(int boxes = 10, float gap = 0.0f);
 
 /// `bodies` procedural meshes, cycling box, icosphere, torus, L-shape, about 0.8 m across, in random
-/// orientations (fixed seed) on a 4 × 4 grid of 1.5 m cells, layer after layer 1.5 m apart, above a static
+/// orientations (from `seed`) on a 4 × 4 grid of 1.5 m cells, layer after layer 1.5 m apart, above a static
 /// bin: one mesh made of a 7 m × 0.5 m × 7 m floor (top face at y = 0) and four 0.5 m thick, 2.5 m high walls
-/// around a 6 m × 6 m inside.
+/// around a 6 m × 6 m inside. Above 50 bodies the grid and the bin widen by sqrt(bodies / 50). Each mesh
+/// comes with its convex pieces (boxes, a sphere, capsules around the torus, the L's two boxes).
 SceneDescription makePileScene(int bodies = 50, unsigned seed = 1);
 
 /// `count` copies of `mesh`, moved to its principal frame (throws MeshError for a mesh without mass

@@ -1,0 +1,185 @@
+// gpucol-bench piles: mesh piles beside the same piles of Bullet's convex shapes (issue 57's reference):
+// for each body count and seed, the pile of gpucol MeshShapes and the pile of boxes, spheres and compounds of
+// boxes and capsules with the same masses, inertia and start poses, stepped until every body sleeps. Per run:
+// the step every body was asleep, the deepest penetration over the run and once the reference had settled,
+// the worst kinetic energy after the reference's first fell below 1% of its peak (as a share of that peak),
+// and steps per second.
+#include <algorithm>
+#include <cstdio>
+#include <fstream>
+#include <memory>
+#include <string>
+#include <vector>
+
+#include "bench_commands.h"
+#include "bench_stats.h"
+#include "scenes/scene_run.h"
+#include "scenes/world_scene.h"
+#include "scenes/world_scenes.h"
+
+namespace gpucol::bench {
+namespace {
+
+struct Options {
+  std::vector<int> bodies{50, 200};
+  std::vector<unsigned> seeds{1, 2, 3, 4, 5};
+  int steps = 3000;
+  std::string csv;
+  std::string series;  // kinetic energy per step, for plots
+};
+
+/// One pile's run, step by step.
+struct Trace {
+  std::vector<double> energy;      // kinetic energy after each step (J)
+  std::vector<float> penetration;  // deepest contact after each step (m)
+  int restStep = -1;               // first step after which every body slept; -1: not within the steps
+  double stepsPerSecond = 0;
+};
+
+Trace runPile(int bodies, unsigned seed, scenes::CollisionBackend backend, int steps) {
+  const scenes::SceneDescription description = scenes::makePileScene(bodies, seed);
+  scenes::WorldOptions options;
+  options.backend = backend;
+  scenes::WorldScene world(description, options);
+  scenes::RunOptions run;
+  run.steps = steps;
+  run.stopWhenAllAsleep = true;
+  Trace t;
+  const scenes::RunSummary summary = scenes::runScene(
+      world, run,
+      [&](const scenes::StepSample& s) {
+        t.energy.push_back(s.kineticEnergy);
+        t.penetration.push_back(s.largestPenetration);
+        if (s.sleepingBodies == bodies && t.restStep < 0) t.restStep = s.step;
+      },
+      1);
+  t.stepsPerSecond = summary.stepsPerSecond;
+  if (summary.failure != scenes::RunFailure::None)
+    std::printf("  %s pile of %d, seed %u: %s\n", scenes::backendName(backend), bodies, seed,
+                summary.failureMessage.c_str());
+  return t;
+}
+
+struct Row {
+  int bodies = 0;
+  unsigned seed = 0;
+  Trace mesh, reference;
+  double peak = 0;           // the reference's peak kinetic energy
+  int settledStep = -1;      // the reference's first step below 1% of its peak, after it
+  double meshWorstShare = 0;  // gpucol's largest kinetic energy from settledStep on, over the peak
+  double referenceWorstShare = 0;
+  float meshDeepest = 0, referenceDeepest = 0;
+  float meshRestingDeepest = 0, referenceRestingDeepest = 0;  // from settledStep on
+};
+
+Row compare(int bodies, unsigned seed, int steps) {
+  Row r;
+  r.bodies = bodies;
+  r.seed = seed;
+  r.reference = runPile(bodies, seed, scenes::CollisionBackend::Primitives, steps);
+  r.mesh = runPile(bodies, seed, scenes::CollisionBackend::Gpucol, steps);
+  const std::vector<double>& e = r.reference.energy;
+  const auto peakAt = std::max_element(e.begin(), e.end());
+  r.peak = peakAt == e.end() ? 0 : *peakAt;
+  for (auto it = peakAt; it != e.end(); ++it) {
+    if (*it < 0.01 * r.peak) {
+      r.settledStep = int(it - e.begin());
+      break;
+    }
+  }
+  // A run that stopped because every body slept holds zero energy from there on.
+  auto worstFrom = [&](const Trace& t) {
+    double worst = 0;
+    for (std::size_t i = std::size_t(std::max(0, r.settledStep)); i < t.energy.size(); ++i)
+      worst = std::max(worst, t.energy[i]);
+    return r.peak > 0 ? worst / r.peak : 0.0;
+  };
+  auto deepestFrom = [&](const Trace& t, int from) {
+    float deepest = 0;
+    for (std::size_t i = std::size_t(std::max(0, from)); i < t.penetration.size(); ++i)
+      deepest = std::max(deepest, t.penetration[i]);
+    return deepest;
+  };
+  if (r.settledStep >= 0) {
+    r.meshWorstShare = worstFrom(r.mesh);
+    r.referenceWorstShare = worstFrom(r.reference);
+    r.meshRestingDeepest = deepestFrom(r.mesh, r.settledStep);
+    r.referenceRestingDeepest = deepestFrom(r.reference, r.settledStep);
+  }
+  r.meshDeepest = deepestFrom(r.mesh, 0);
+  r.referenceDeepest = deepestFrom(r.reference, 0);
+  return r;
+}
+
+void runAll(const Options& o) {
+  std::printf(
+      "Mesh piles (gpucol MeshShape) beside the same piles of Bullet's convex shapes; up to %d steps of 1/60 s.\n"
+      "rest: the step every body slept (-: not within the steps). deepest: the deepest contact over the run, "
+      "and (after /) once the reference's kinetic energy first fell below 1%% of its peak. burst: the largest "
+      "kinetic energy from then on, as %% of the reference's peak.\n\n",
+      o.steps);
+  std::printf("%6s %5s | %6s %6s %7s | %15s %15s | %8s %8s | %9s %9s\n", "bodies", "seed", "rest", "ref",
+              "ratio", "deepest mesh", "deepest ref", "burst", "ref", "steps/s", "ref");
+  std::ofstream csv, series;
+  if (!o.csv.empty()) {
+    csv.open(o.csv);
+    csv << "bodies,seed,mesh_rest_step,reference_rest_step,mesh_deepest_m,reference_deepest_m,"
+           "mesh_resting_deepest_m,reference_resting_deepest_m,reference_peak_j,reference_settled_step,"
+           "mesh_worst_share,reference_worst_share,mesh_steps_per_second,reference_steps_per_second\n";
+  }
+  if (!o.series.empty()) {
+    series.open(o.series);
+    series << "bodies,seed,backend,step,kinetic_energy_j\n";
+  }
+  for (int n : o.bodies) {
+    std::vector<double> ratios;
+    for (unsigned seed : o.seeds) {
+      const Row r = compare(n, seed, o.steps);
+      const double ratio = r.mesh.restStep > 0 && r.reference.restStep > 0
+                               ? double(r.mesh.restStep) / double(r.reference.restStep)
+                               : -1;
+      if (ratio > 0) ratios.push_back(ratio);
+      auto rest = [](int step) { return step < 0 ? std::string("-") : std::to_string(step); };
+      std::printf("%6d %5u | %6s %6s %7.2f | %6.3f / %6.3f %6.3f / %6.3f | %7.2f%% %7.2f%% | %9.1f %9.1f\n", n,
+                  seed, rest(r.mesh.restStep).c_str(), rest(r.reference.restStep).c_str(), ratio,
+                  double(r.meshDeepest), double(r.meshRestingDeepest), double(r.referenceDeepest),
+                  double(r.referenceRestingDeepest), 100 * r.meshWorstShare, 100 * r.referenceWorstShare,
+                  r.mesh.stepsPerSecond, r.reference.stepsPerSecond);
+      std::fflush(stdout);
+      if (csv) {
+        csv << n << ',' << seed << ',' << r.mesh.restStep << ',' << r.reference.restStep << ','
+            << r.meshDeepest << ',' << r.referenceDeepest << ',' << r.meshRestingDeepest << ','
+            << r.referenceRestingDeepest << ',' << r.peak << ',' << r.settledStep << ',' << r.meshWorstShare
+            << ',' << r.referenceWorstShare << ',' << r.mesh.stepsPerSecond << ','
+            << r.reference.stepsPerSecond << '\n';
+      }
+      if (series) {
+        for (std::size_t i = 0; i < r.mesh.energy.size(); ++i)
+          series << n << ',' << seed << ",gpucol," << i + 1 << ',' << r.mesh.energy[i] << '\n';
+        for (std::size_t i = 0; i < r.reference.energy.size(); ++i)
+          series << n << ',' << seed << ",primitives," << i + 1 << ',' << r.reference.energy[i] << '\n';
+      }
+    }
+    if (!ratios.empty())
+      std::printf("%6d bodies: median rest ratio %.2f over %zu seeds that both came to rest\n", n, median(ratios),
+                  ratios.size());
+  }
+}
+
+const CommandRegistration kRegistration([](CLI::App& app) {
+  auto options = std::make_shared<Options>();
+  CLI::App* cmd = app.add_subcommand(
+      "piles",
+      "mesh piles beside the same piles of Bullet's convex shapes: steps to rest, deepest penetration, energy "
+      "bursts after settling, steps per second, per body count and seed");
+  cmd->footer("Example: gpucol-bench piles --bodies 50,200 --seeds 1,2,3,4,5 --steps 3000 --csv piles.csv");
+  cmd->add_option("--bodies", options->bodies, "body counts")->delimiter(',')->capture_default_str();
+  cmd->add_option("--seeds", options->seeds, "seeds of the start poses")->delimiter(',')->capture_default_str();
+  cmd->add_option("--steps", options->steps, "most steps per pile")->check(CLI::PositiveNumber)->capture_default_str();
+  cmd->add_option("--csv", options->csv, "also write the rows to this CSV file");
+  cmd->add_option("--series", options->series, "write each pile's kinetic energy per step to this CSV file");
+  cmd->callback([options] { runAll(*options); });
+});
+
+}  // namespace
+}  // namespace gpucol::bench
