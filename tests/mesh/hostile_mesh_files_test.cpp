@@ -191,7 +191,7 @@ const std::string kBlenderCube =
 
 TEST(HostileMeshFiles, MemoryAndDeclaredCounts) {
   std::vector<Case> cases;
-  // 22 bytes that grew assimp to 24 GB: a format gpucol does not read is not read at all.
+  // 22 bytes on which assimp allocated without bound: a format gpucol does not read is not read at all.
   cases.push_back(
       refused("tiny.nff", "tpp 99999999999 0 0 0\n",
               "unsupported mesh file type '.nff'; gpucol reads PLY (.ply), OBJ (.obj), STL (.stl) and "

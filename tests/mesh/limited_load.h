@@ -9,6 +9,7 @@ namespace gpucol::test {
 
 /// How a load in a child process ended.
 struct LimitedLoad {
+  /// Loaded; threw MeshError; threw something else (std::bad_alloc at the limit); died (signal, time limit).
   enum class Outcome { kLoaded, kMeshError, kOtherException, kKilled };
   Outcome outcome = Outcome::kKilled;
   std::string message;  ///< The MeshError's or other exception's text, or how the child died.

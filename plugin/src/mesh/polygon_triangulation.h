@@ -11,7 +11,7 @@ constexpr std::size_t kMaxNonConvexCorners = 1024;
 
 /// How triangulatePolygon ended.
 enum class PolygonStatus {
-  kOk,
+  kOk,                ///< Split into n - 2 triangles.
   kSelfIntersecting,  ///< Seen along its normal, the polygon's edges cross or it folds back on itself.
   kTooManyCorners,    ///< Non-convex with more than kMaxNonConvexCorners corners.
 };
