@@ -8,7 +8,6 @@ packages=(
   libbullet-dev libbullet-extras-dev
   libeigen3-dev
   libtbb-dev
-  libassimp-dev
   ocl-icd-opencl-dev opencl-headers opencl-clhpp-headers pocl-opencl-icd clinfo
   libgtest-dev libgmock-dev
   libcli11-dev

@@ -4,7 +4,7 @@
 #   scripts/gpu-check.sh pack [PACK]       here (Debian): builds the Release tree and packs into PACK (default
 #                                          build/gpu-check) what a bare x86-64 machine with an NVIDIA driver but
 #                                          no Debian packages needs: the OpenCL test and bench binaries, clinfo,
-#                                          their shared libraries (ocl-icd's libOpenCL.so.1, Bullet, TBB, assimp,
+#                                          their shared libraries (ocl-icd's libOpenCL.so.1, Bullet, TBB,
 #                                          libstdc++ and glibc with its loader), the meshes, and this script.
 #   bash PACK/gpu-check.sh run [OUT]       there: makes an ICD file for the machine's libnvidia-opencl.so.1,
 #                                          lists the devices, runs the OpenCL tests on the GPU only (a skipped

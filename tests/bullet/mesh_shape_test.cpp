@@ -397,8 +397,92 @@ TEST(MeshShapeInertia, OpenMeshGetsItsBoundingBoxInertiaAndAWarningOnce) {
   EXPECT_EQ(said, 1u) << "stderr was: " << warnings;
 }
 
+TEST(MeshShapeInertia, InertiaOutsideFloatsNormalRangeIsRefused) {
+  MeshShape box(shared(scenes::makeBox(0.5f, 0.5f, 0.5f)));
+  const auto refusal = [&](btScalar mass) {
+    btVector3 inertia(7, 7, 7);
+    try {
+      box.calculateLocalInertia(mass, inertia);
+    } catch (const MeshError& e) {
+      EXPECT_EQ(inertia, btVector3(7, 7, 7)) << "left untouched";
+      return std::string(e.what());
+    }
+    ADD_FAILURE() << "no MeshError for mass " << mass << ", inertia " << inertia[0];
+    return std::string();
+  };
+  // At scale 1e-20 the inertia of a unit mass was 1.7e-41, a denormal: the body turned NaN after one step.
+  box.setLocalScaling(btVector3(1e-20f, 1e-20f, 1e-20f));
+  const std::string tiny = refusal(1);
+  EXPECT_NE(tiny.find("the inertia about x for mass 1 at local scaling (1e-20, 1e-20, 1e-20) is 1.66667e-41, "
+                      "outside float's normal range (1.17549e-38 to 3.40282e+38)"),
+            std::string::npos)
+      << tiny;
+  // Large scales are refused by setLocalScaling beyond 1e18; within it a large mass still overflows.
+  box.setLocalScaling(btVector3(1e17f, 1e17f, 1e17f));
+  EXPECT_NE(refusal(1e10f).find("outside float's normal range"), std::string::npos);
+  btVector3 inertia;
+  box.calculateLocalInertia(1, inertia);
+  expectBoxInertia(inertia, 1, 1e17, 1e17, 1e17);
+  box.setLocalScaling(btVector3(1e-15f, 2e-15f, 3e-15f));
+  box.calculateLocalInertia(1, inertia);
+  expectBoxInertia(inertia, 1, 1e-15, 2e-15, 3e-15);
+  // A static body's mass 0 gives 0; a mass that is negative or not finite is refused.
+  box.calculateLocalInertia(0, inertia);
+  EXPECT_EQ(inertia, btVector3(0, 0, 0));
+  EXPECT_NE(refusal(-1).find("calculateLocalInertia needs a finite mass >= 0, got -1"), std::string::npos);
+  EXPECT_NE(refusal(std::numeric_limits<btScalar>::infinity()).find("needs a finite mass"),
+            std::string::npos);
+  // The bounding-box inertia of an open mesh is checked the same way.
+  static int run = 0;
+  const TriangleMesh closed = scenes::makeBox(0.5f, 0.5f, 0.5f);
+  std::vector<std::uint32_t> indices(closed.indices().begin() + 3, closed.indices().end());
+  MeshShape open(shared(TriangleMesh::fromArrays(closed.positions(), std::move(indices),
+                                                 "open tiny box " + std::to_string(run++))));
+  open.setLocalScaling(btVector3(1e-20f, 1e-20f, 1e-20f));
+  testing::internal::CaptureStderr();
+  EXPECT_THROW(open.calculateLocalInertia(1, inertia), MeshError);
+  testing::internal::GetCapturedStderr();
+}
+
 // -----------------------------------------------------------------------------------------------------------
 // setLocalScaling
+
+TEST(MeshShapeScaling, RefusesRatiosAboveTheLimitDenormalsAndMeshesBeyondTheCoordinateLimit) {
+  MeshShape shape(shared(scenes::makeBox(1, 1, 1)));
+  const auto refusal = [&](const btVector3& scaling) {
+    const btVector3 before = shape.getLocalScaling();
+    try {
+      shape.setLocalScaling(scaling);
+    } catch (const MeshError& e) {
+      EXPECT_EQ(shape.getLocalScaling(), before);
+      return std::string(e.what());
+    }
+    ADD_FAILURE() << "no MeshError";
+    return std::string();
+  };
+  // Ratios between axes up to 1e5 are answered (checked against the brute force in tests/stress); beyond, the
+  // float transforms of the pair query gave wrong pairs, so they are refused.
+  shape.setLocalScaling(btVector3(1e5f, 1, -1));
+  shape.setLocalScaling(btVector3(-4, 4.0f / 65536, 1));
+  EXPECT_EQ(
+      refusal(btVector3(1e6f, 1, 1)),
+      "MeshShape 'box': local scaling (1e+06, 1, 1) refused: its components differ in magnitude by 1e+06, "
+      "more than the limit of 100000");
+  EXPECT_NE(refusal(btVector3(1, 1, -9.99e-6f)).find("differ in magnitude by 100100"), std::string::npos);
+  EXPECT_NE(
+      refusal(btVector3(1e-40f, 1e-40f, 1e-40f)).find("it must be finite and non-zero (a normal float)"),
+      std::string::npos);
+  // The scaled mesh must stay within TriangleMesh::kMaxCoordinate, as a mesh must.
+  shape.setLocalScaling(btVector3(1e18f, 1e18f, 1e18f));
+  EXPECT_EQ(refusal(btVector3(1e20f, 1e20f, 1e20f)),
+            "MeshShape 'box': local scaling (1e+20, 1e+20, 1e+20) refused: the scaled mesh reaches 1e+20 on "
+            "axis 0, "
+            "beyond gpucol's limit of +-1e+18");
+  btVector3 lo, hi;
+  shape.getAabb(btTransform::getIdentity(), lo, hi);
+  EXPECT_EQ(hi, btVector3(1e18f, 1e18f, 1e18f));
+  EXPECT_EQ(lo, -hi);
+}
 
 TEST(MeshShapeScaling, RefusesZeroNanAndInfinityAndKeepsThePreviousScaling) {
   MeshShape shape(shared(scenes::makeBox(1, 1, 1)));

@@ -1,6 +1,6 @@
 // libFuzzer target: gpucol::loadMesh on arbitrary bytes. The loader reads files only, so the bytes are written to
-// a temporary file whose extension the first byte chooses (PLY, OBJ, STL, OFF: the formats the loader is meant
-// for). Bad input must end in gpucol::MeshError (the loader's contract); anything else (another exception, a
+// a temporary file whose extension the first byte chooses (PLY, OBJ, STL, OFF: every format the loader reads;
+// scripts/fuzz.sh seeds each, ASCII and binary, and passes mesh_loader_fuzzer.dict). Bad input must end in gpucol::MeshError (the loader's contract); anything else (another exception, a
 // crash, a sanitizer report) is a finding. A mesh that loads must be valid: indices in range, finite coordinates.
 #include <gpucol/mesh_error.h>
 #include <gpucol/triangle_mesh.h>

@@ -186,6 +186,27 @@ TEST(MassProperties, RealMeshVolumesMatchExactReference) {
   }
 }
 
+TEST(MassProperties, ResultsOutsideFloatsNormalRangeAreRefused) {
+  // Bullet takes them in float: an overflow would reach a body as inf, an underflow as NaN after a step.
+  const auto cube = [](double half) {
+    const test::MeshArrays box = test::boxArrays({half, half, half});
+    return TriangleMesh::fromArrays(box.xyz, box.indices, "cube " + std::to_string(half));
+  };
+  EXPECT_EQ(
+      massError(cube(1e17)),
+      "cube 100000000000000000.000000: cannot compute mass properties: the volume is 8e+51, outside float's "
+      "normal range (1.17549e-38 to 3.40282e+38), which Bullet computes in; scale the mesh or change the "
+      "density");
+  EXPECT_NE(massError(cube(1e-15)).find("the volume is 8e-45, outside float's normal range"),
+            std::string::npos);
+  // Volume 8e-30 fits, its inertia (about 5e-60) does not.
+  EXPECT_NE(massError(cube(1e-10)).find("the inertia about x is 5.33333e-50, outside"), std::string::npos);
+  EXPECT_NE(massError(cube(1), 1e39).find("the mass is 8e+39, outside"), std::string::npos);
+  // Within range, the double results are as before.
+  EXPECT_NEAR(cube(1e4).massProperties().volume, 8e12, 1e-3);
+  EXPECT_NEAR(cube(1e-3).massProperties().inertia[0], 8e-9 * 2e-6 / 3, 1e-20);
+}
+
 TEST(MassProperties, RefusesOpenNonManifoldInsideOutAndFlat) {
   auto box = test::boxArrays({1, 1, 1});
   // Open: drop the last triangle.

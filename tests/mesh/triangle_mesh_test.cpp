@@ -56,6 +56,23 @@ TEST(TriangleMeshValidation, NonFiniteCoordinates) {
   EXPECT_EQ(errorOf(xyz, {0, 1, 2}), "probe: vertex 4 has a non-finite coordinate y = inf");
 }
 
+TEST(TriangleMeshValidation, CoordinatesBeyondTheLimitAreRefused) {
+  // Near 3e38 the mesh's box overflowed float (an infinite AABB that never collides); Bullet squares lengths
+  // in float, so the limit is 1e18.
+  std::vector<float> xyz = kQuad;
+  xyz[3 * 1] = 3e38f;
+  EXPECT_EQ(errorOf(xyz, {0, 1, 2, 0, 2, 3}),
+            "probe: vertex 1 has the coordinate x = 3e+38, beyond gpucol's limit of +-1e+18 (Bullet squares "
+            "lengths "
+            "in float)");
+  xyz = kQuad;
+  xyz[3 * 2 + 2] = -std::nextafter(TriangleMesh::kMaxCoordinate, INFINITY);
+  EXPECT_NE(errorOf(xyz, {0, 1, 2, 0, 2, 3}).find("probe: vertex 2 has the coordinate z = -1e+18, beyond"),
+            std::string::npos);
+  xyz = {-1e18f, 0, 0, 1e18f, 0, 0, 0, 1e18f, 0};
+  EXPECT_EQ(TriangleMesh::fromArrays(xyz, {0, 1, 2}).vertexCount(), 3u);
+}
+
 TEST(TriangleMeshValidation, IndexOutOfRange) {
   EXPECT_EQ(errorOf(kQuad, {0, 1, 2, 0, 2, 4}),
             "probe: triangle 1 corner 2 has vertex index 4, out of range for 4 vertices");

@@ -41,8 +41,14 @@ ATTRIBUTE_ALIGNED16(class) MeshShape : public btConcaveShape {
   /// gives them.
   const float* triangleSoup() const { return m_soup.get(); }
 
-  /// Per-axis scale applied to the mesh (1,1,1 by default). Each component must be finite and non-zero: anything
-  /// else throws MeshError and keeps the previous scaling.
+  /// The largest ratio between the magnitudes of two local scaling components: beyond it the float transforms
+  /// of the mesh pair query round the short axis so much that intersecting pairs are lost or made up.
+  static constexpr btScalar kMaxScalingRatio = btScalar(1e5);
+
+  /// Per-axis scale applied to the mesh (1,1,1 by default; negative components mirror). Each component must be
+  /// a finite, non-zero normal float, no two may differ in magnitude by more than kMaxScalingRatio, and the
+  /// scaled mesh must stay within TriangleMesh::kMaxCoordinate: anything else throws MeshError and keeps the
+  /// previous scaling.
   void setLocalScaling(const btVector3& scaling) override;
   /// The current local scaling.
   const btVector3& getLocalScaling() const override { return m_localScaling; }
@@ -56,7 +62,10 @@ ATTRIBUTE_ALIGNED16(class) MeshShape : public btConcaveShape {
   /// Diagonal inertia of a solid of uniform density with this closed mesh as its surface (scaled), from the
   /// mass properties. The body frame must be the mesh's principal frame for this to be the full tensor (see
   /// TriangleMesh::inPrincipalFrame); otherwise the tensor's diagonal is used and a warning is printed once.
-  /// An open mesh has no volume: the inertia of its bounding box is used, with a warning printed once.
+  /// An open mesh has no volume: the inertia of its bounding box is used, with a warning printed once. A mass of
+  /// 0 (a static body) gives 0. Throws MeshError for a mass that is negative or not finite, and for an inertia
+  /// that is not a normal float (overflowing, or so small it would turn the body's motion into NaN), computed in
+  /// double from the scaled mesh before it is rounded to float.
   void calculateLocalInertia(btScalar mass, btVector3& inertia) const override;
   /// "gpucol::MeshShape".
   const char* getName() const override { return "gpucol::MeshShape"; }

@@ -15,7 +15,13 @@ namespace gpucol {
 /// describes what the mesh is (open, non-manifold, degenerate triangles...) without rejecting it.
 class TriangleMesh {
  public:
-  /// Builds a mesh from xyz triples and index triples; `name` appears in error messages.
+  /// The largest coordinate magnitude a mesh may have, locally scaled or not: Bullet squares lengths in
+  /// float, and 1e18 squared (1e36, with room for sums) stays finite there; larger coordinates are refused.
+  static constexpr float kMaxCoordinate = 1e18f;
+
+  /// Builds a mesh from xyz triples and index triples; `name` appears in error messages. Throws MeshError for
+  /// a non-finite coordinate or one beyond kMaxCoordinate, an index out of range, a triangle repeating a
+  /// vertex, or an empty mesh.
   static TriangleMesh fromArrays(std::vector<float> xyz, std::vector<std::uint32_t> indices,
                                  std::string name = "arrays");
 
@@ -34,8 +40,9 @@ class TriangleMesh {
 
   /// Volume, centre of mass and inertia for a uniform density, computed in double about the bounding box
   /// centre. Throws MeshError, saying why, for an open or non-manifold mesh, inconsistent winding, a
-  /// negative signed volume (inward winding: it is reported, never flipped), no enclosed volume, or a
-  /// density that is not finite and positive.
+  /// negative signed volume (inward winding: it is reported, never flipped), no enclosed volume, a density
+  /// that is not finite and positive, or a volume, mass or inertia outside float's normal range (Bullet
+  /// computes in float: an overflow would reach a body as inf, an underflow as NaN after a step).
   MassProperties massProperties(double density = 1.0) const;
 
   /// The same mesh with every vertex mapped by p' = rotation * p + translation (rotation row-major,
@@ -60,10 +67,15 @@ class TriangleMesh {
   MeshReport m_report;
 };
 
-/// Loads a mesh file (PLY, OBJ, STL and the other formats assimp reads); throws MeshError naming the file.
-/// PLY and OFF keep the file's vertices and triangles exactly; formats that give each face corner its own
-/// vertex (OBJ, STL) are welded on exactly equal positions. Polygons are triangulated; points and lines
-/// are refused. All meshes of the scene are merged under their node transforms.
+/// Loads a mesh file: PLY (.ply: ASCII, binary little- or big-endian), OBJ (.obj), STL (.stl: ASCII or
+/// binary) or OFF (.off), chosen by the extension in any case; other files are refused. Each format is read
+/// by gpucol's own strict reader: counts checked against the file's size before anything is allocated, every
+/// number read exactly for its type, every index in range, structure the format does not allow refused (see
+/// README, "Mesh files"). PLY and OFF files of triangles keep their vertices and triangles exactly; PLY and
+/// OFF files with polygons, and every OBJ and STL file, have vertices at exactly equal positions joined
+/// (first one kept). Polygons are split into triangles (fan when convex, ear clipping otherwise); points and
+/// lines are refused. Throws MeshError naming the file, the line or record, and the value; special files
+/// (directories, FIFOs, devices) are refused from their stat, without being opened.
 TriangleMesh loadMesh(const std::string& path);
 
 }  // namespace gpucol

@@ -1,6 +1,8 @@
 #include "gpucol/mesh_shape.h"
 
 #include <algorithm>
+#include <array>
+#include <cfloat>
 #include <cmath>
 #include <sstream>
 
@@ -9,6 +11,7 @@
 #include "bvh/tree_query.h"
 #include "gpucol/mesh_error.h"
 #include "memory/large_array_allocator.h"
+#include "mesh/mesh_analysis.h"
 
 namespace gpucol {
 namespace {
@@ -49,13 +52,37 @@ bool MeshShape::isMeshShape(const btCollisionShape* shape) {
 }
 
 void MeshShape::setLocalScaling(const btVector3& scaling) {
+  const auto refuse = [&](const std::string& why) {
+    std::ostringstream message;
+    message << "MeshShape '" << m_mesh->name() << "': local scaling (" << scaling.x() << ", " << scaling.y()
+            << ", " << scaling.z() << ") refused: " << why;
+    throw MeshError(message.str());
+  };
   for (int axis = 0; axis < 3; ++axis) {
     const btScalar s = scaling[axis];
-    if (!std::isfinite(s) || s == btScalar(0)) {
-      std::ostringstream message;
-      message << "MeshShape '" << m_mesh->name() << "': local scaling component " << axis << " is " << s
-              << "; it must be finite and non-zero";
-      throw MeshError(message.str());
+    if (!std::isfinite(s) || !std::isnormal(s)) {
+      std::ostringstream why;
+      why << "component " << axis << " is " << s << "; it must be finite and non-zero (a normal float)";
+      refuse(why.str());
+    }
+  }
+  const btVector3 magnitude = scaling.absolute();
+  const btScalar smallest = magnitude[magnitude.minAxis()], largest = magnitude[magnitude.maxAxis()];
+  if (largest > kMaxScalingRatio * smallest) {
+    std::ostringstream why;
+    why << "its components differ in magnitude by " << largest / smallest << ", more than the limit of "
+        << kMaxScalingRatio;
+    refuse(why.str());
+  }
+  for (int axis = 0; axis < 3; ++axis) {
+    // In double: the scaled coordinate may overflow float, which is what is being refused.
+    const double extent =
+        std::max(std::abs(double(m_tree->rootMin()[axis])), std::abs(double(m_tree->rootMax()[axis])));
+    if (extent * double(magnitude[axis]) > double(TriangleMesh::kMaxCoordinate)) {
+      std::ostringstream why;
+      why << "the scaled mesh reaches " << extent * double(magnitude[axis]) << " on axis " << axis
+          << ", beyond gpucol's limit of +-" << TriangleMesh::kMaxCoordinate;
+      refuse(why.str());
     }
   }
   m_localScaling = scaling;
@@ -104,44 +131,70 @@ void MeshShape::processAllTriangles(btTriangleCallback* callback, const btVector
 }
 
 void MeshShape::calculateLocalInertia(btScalar mass, btVector3& inertia) const {
-  // Mass properties of the scaled mesh, for a density giving `mass`. A mirroring scale turns the winding
-  // inward, so two corners are swapped back to keep the volume positive.
-  const btVector3& s = m_localScaling;
-  const bool mirrored = s.x() * s.y() * s.z() < 0;
-  std::vector<float> xyz = m_mesh->positions();
-  for (std::size_t i = 0; i < xyz.size(); ++i) xyz[i] *= float(s[int(i % 3)]);
-  std::vector<std::uint32_t> indices = m_mesh->indices();
-  if (mirrored) {
-    for (std::size_t t = 0; t < indices.size(); t += 3) std::swap(indices[t + 1], indices[t + 2]);
+  const std::string& name = m_mesh->name();
+  if (!std::isfinite(mass) || mass < 0) {
+    std::ostringstream message;
+    message << "MeshShape '" << name << "': calculateLocalInertia needs a finite mass >= 0, got " << mass;
+    throw MeshError(message.str());
   }
+  if (mass == 0) {  // a static body: Bullet ignores its inertia
+    inertia.setValue(0, 0, 0);
+    return;
+  }
+  // Mass properties of the scaled mesh in double, for a density giving `mass`; only the inertia handed to
+  // Bullet must fit float, not the volume or the unit-density moments on the way.
+  const btVector3& s = m_localScaling;
+  const std::array<double, 3> scale = {double(s.x()), double(s.y()), double(s.z())};
+  double diagonal[3];
   try {
-    const TriangleMesh scaled = TriangleMesh::fromArrays(std::move(xyz), std::move(indices), m_mesh->name());
-    const MassProperties unitDensity = scaled.massProperties(1.0);
+    const MassProperties unitDensity =
+        integrateMassProperties(m_mesh->positions(), m_mesh->indices(), m_mesh->report(), 1.0, name, scale);
     const double density = double(mass) / unitDensity.volume;
     const auto& I = unitDensity.inertia;
-    inertia.setValue(btScalar(I[0] * density), btScalar(I[4] * density), btScalar(I[8] * density));
+    for (int axis = 0; axis < 3; ++axis) diagonal[axis] = I[std::size_t(4 * axis)] * density;
     const double offDiagonal = std::max({std::abs(I[1]), std::abs(I[2]), std::abs(I[5])});
-    const double diagonal = std::max({I[0], I[4], I[8]});
+    const double largest = std::max({I[0], I[4], I[8]});
     const auto& c = unitDensity.centerOfMass;
-    const double size = (btVector3(m_tree->rootMax().x(), m_tree->rootMax().y(), m_tree->rootMax().z()) -
-                         btVector3(m_tree->rootMin().x(), m_tree->rootMin().y(), m_tree->rootMin().z()))
-                            .length();
+    double size = 0;
+    for (int axis = 0; axis < 3; ++axis) {
+      const double d =
+          (double(m_tree->rootMax()[axis]) - double(m_tree->rootMin()[axis])) * scale[std::size_t(axis)];
+      size += d * d;
+    }
+    size = std::sqrt(size);
     // 1e-3 relative: far above the rounding of the double integrals, far below an inertia that matters.
-    if (offDiagonal > 1e-3 * diagonal || std::sqrt(c[0] * c[0] + c[1] * c[1] + c[2] * c[2]) > 1e-3 * size) {
-      warnOnce("inertia frame " + m_mesh->name(),
-               "MeshShape '" + m_mesh->name() +
-                   "': the mesh is not in its principal frame (centre of mass off the origin or a non-diagonal "
-                   "inertia tensor); the body gets the tensor's diagonal. Use TriangleMesh::inPrincipalFrame.");
+    if (offDiagonal > 1e-3 * largest || std::sqrt(c[0] * c[0] + c[1] * c[1] + c[2] * c[2]) > 1e-3 * size) {
+      warnOnce(
+          "inertia frame " + name,
+          "MeshShape '" + name +
+              "': the mesh is not in its principal frame (centre of mass off the origin or a non-diagonal "
+              "inertia tensor); the body gets the tensor's diagonal. Use TriangleMesh::inPrincipalFrame.");
     }
   } catch (const MeshError& e) {
     // No volume to integrate: the box of the scaled mesh stands in, as btCollisionShape's default would.
-    warnOnce("inertia box " + m_mesh->name(), std::string(e.what()) + "; using the inertia of its bounding box");
-    btVector3 lo, hi;
-    getAabb(btTransform::getIdentity(), lo, hi);
-    const btVector3 d = hi - lo;
-    inertia.setValue(mass / 12 * (d.y() * d.y() + d.z() * d.z()), mass / 12 * (d.x() * d.x() + d.z() * d.z()),
-                     mass / 12 * (d.x() * d.x() + d.y() * d.y()));
+    warnOnce("inertia box " + name, std::string(e.what()) + "; using the inertia of its bounding box");
+    double d[3];
+    for (int axis = 0; axis < 3; ++axis)
+      d[axis] = (double(m_tree->rootMax()[axis]) - double(m_tree->rootMin()[axis])) *
+                    std::abs(scale[std::size_t(axis)]) +
+                2 * double(getMargin());
+    diagonal[0] = double(mass) / 12 * (d[1] * d[1] + d[2] * d[2]);
+    diagonal[1] = double(mass) / 12 * (d[0] * d[0] + d[2] * d[2]);
+    diagonal[2] = double(mass) / 12 * (d[0] * d[0] + d[1] * d[1]);
   }
+  // Bullet inverts the inertia in float: inf gives a body that never turns, a denormal or 0 an infinite
+  // inverse, and its motion turns NaN after one step.
+  for (int axis = 0; axis < 3; ++axis) {
+    if (!(diagonal[axis] >= double(FLT_MIN) && diagonal[axis] <= double(FLT_MAX))) {
+      std::ostringstream message;
+      message << "MeshShape '" << name << "': the inertia about "
+              << "xyz"[axis] << " for mass " << mass << " at local scaling (" << s.x() << ", " << s.y()
+              << ", " << s.z() << ") is " << diagonal[axis] << ", outside float's normal range (" << FLT_MIN
+              << " to " << FLT_MAX << "); scale the mesh or the mass so that it fits";
+      throw MeshError(message.str());
+    }
+  }
+  inertia.setValue(btScalar(diagonal[0]), btScalar(diagonal[1]), btScalar(diagonal[2]));
 }
 
 }  // namespace gpucol

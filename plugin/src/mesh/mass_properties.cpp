@@ -1,5 +1,6 @@
 #include <Eigen/Dense>
 #include <algorithm>
+#include <cfloat>
 #include <cmath>
 #include <sstream>
 
@@ -20,9 +21,10 @@ constexpr double kMinRelativeVolume = 1e-12;
 
 }  // namespace
 
-MassProperties computeMassProperties(const std::vector<float>& positions,
-                                     const std::vector<std::uint32_t>& indices, const MeshReport& report,
-                                     double density, const std::string& name) {
+MassProperties integrateMassProperties(const std::vector<float>& positions,
+                                       const std::vector<std::uint32_t>& indices, const MeshReport& report,
+                                       double density, const std::string& name,
+                                       const std::array<double, 3>& scale) {
   // Thesis §5.3.1: volume, centre of mass and inertia are only meaningful for a closed manifold.
   if (!(std::isfinite(density) && density > 0)) {
     std::ostringstream out;
@@ -47,8 +49,8 @@ MassProperties computeMassProperties(const std::vector<float>& positions,
   // the tetrahedra below are then small, and so are their products.
   double lo[3] = {INFINITY, INFINITY, INFINITY}, hi[3] = {-INFINITY, -INFINITY, -INFINITY};
   for (std::size_t i = 0; i < positions.size(); ++i) {
-    lo[i % 3] = std::min(lo[i % 3], double(positions[i]));
-    hi[i % 3] = std::max(hi[i % 3], double(positions[i]));
+    lo[i % 3] = std::min(lo[i % 3], scale[i % 3] * positions[i]);
+    hi[i % 3] = std::max(hi[i % 3], scale[i % 3] * positions[i]);
   }
   const Eigen::Vector3d reference(0.5 * (lo[0] + hi[0]), 0.5 * (lo[1] + hi[1]), 0.5 * (lo[2] + hi[2]));
   const double diagonal = std::sqrt((hi[0] - lo[0]) * (hi[0] - lo[0]) + (hi[1] - lo[1]) * (hi[1] - lo[1]) +
@@ -63,14 +65,17 @@ MassProperties computeMassProperties(const std::vector<float>& positions,
   Eigen::Vector3d firstMoment24 = Eigen::Vector3d::Zero();
   Eigen::Matrix3d secondMoment120 = Eigen::Matrix3d::Zero();
   const auto corner = [&](std::uint32_t v) -> Eigen::Vector3d {
-    return Eigen::Vector3d(positions[3 * std::size_t(v)], positions[3 * std::size_t(v) + 1],
-                           positions[3 * std::size_t(v) + 2]) -
+    return Eigen::Vector3d(scale[0] * positions[3 * std::size_t(v)],
+                           scale[1] * positions[3 * std::size_t(v) + 1],
+                           scale[2] * positions[3 * std::size_t(v) + 2]) -
            reference;
   };
+  // A mirror turns outward winding inward: its tetrahedra count with the opposite sign.
+  const double orientation = scale[0] * scale[1] * scale[2] < 0 ? -1.0 : 1.0;
   for (std::size_t t = 0; t < indices.size() / 3; ++t) {
     const Eigen::Vector3d a = corner(indices[3 * t]), b = corner(indices[3 * t + 1]),
                           c = corner(indices[3 * t + 2]);
-    const double det = a.dot(b.cross(c));
+    const double det = orientation * a.dot(b.cross(c));
     const Eigen::Vector3d s = a + b + c;
     sixVolume += det;
     firstMoment24 += det * s;
@@ -109,6 +114,30 @@ MassProperties computeMassProperties(const std::vector<float>& positions,
   for (int i = 0; i < 3; ++i) {
     result.principalMoments[i] = solver.eigenvalues()[i];
     for (int j = 0; j < 3; ++j) result.principalAxes[3 * i + j] = axes(i, j);
+  }
+  return result;
+}
+
+MassProperties computeMassProperties(const std::vector<float>& positions,
+                                     const std::vector<std::uint32_t>& indices, const MeshReport& report,
+                                     double density, const std::string& name) {
+  const MassProperties result = integrateMassProperties(positions, indices, report, density, name, {1, 1, 1});
+  // Bullet works in float: a volume or inertia that overflows float, or underflows into its denormals or
+  // zero, would reach a rigid body as inf or as a NaN after one step.
+  const auto requireNormalFloat = [&](double value, const std::string& what) {
+    if (std::abs(value) >= double(FLT_MIN) && std::abs(value) <= double(FLT_MAX)) return;
+    std::ostringstream out;
+    out << what << " is " << value << ", outside float's normal range (" << FLT_MIN << " to " << FLT_MAX
+        << "), which Bullet computes in; scale the mesh or change the density";
+    refuse(name, out.str());
+  };
+  requireNormalFloat(result.volume, "the volume");
+  requireNormalFloat(result.mass, "the mass");
+  for (int axis = 0; axis < 3; ++axis) {
+    requireNormalFloat(result.inertia[std::size_t(4 * axis)],
+                       std::string("the inertia about ") + "xyz"[axis]);
+    requireNormalFloat(result.principalMoments[std::size_t(axis)],
+                       "principal moment " + std::to_string(axis));
   }
   return result;
 }

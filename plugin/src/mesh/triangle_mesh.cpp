@@ -42,6 +42,13 @@ void validate(const std::vector<float>& xyz, const std::vector<std::uint32_t>& i
           << xyz[i];
       throw MeshError(out.str());
     }
+    if (std::abs(xyz[i]) > TriangleMesh::kMaxCoordinate) {
+      std::ostringstream out;
+      out << name << ": vertex " << i / 3 << " has the coordinate " << kAxisNames[i % 3] << " = " << xyz[i]
+          << ", beyond gpucol's limit of +-" << TriangleMesh::kMaxCoordinate
+          << " (Bullet squares lengths in float)";
+      throw MeshError(out.str());
+    }
   }
   for (std::size_t t = 0; t < triangles; ++t) {
     const std::uint32_t* tri = &indices[3 * t];
