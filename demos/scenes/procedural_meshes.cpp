@@ -116,6 +116,41 @@ TriangleMesh makeTorus(float major, float minor, int ringSegments, int tubeSegme
   return TriangleMesh::fromArrays(std::move(arrays.xyz), std::move(arrays.indices), "torus");
 }
 
+TriangleMesh makeBin(float outerHalf, float innerHalf, float floorThickness, float height) {
+  MeshArrays arrays;
+  const float corners[4][2] = {{-1, -1}, {1, -1}, {1, 1}, {-1, 1}};
+  std::uint32_t outerBottom[4], outerTop[4], innerTop[4], innerBottom[4];
+  for (int i = 0; i < 4; ++i) {
+    const float x = corners[i][0], z = corners[i][1];
+    outerBottom[i] = arrays.addVertex(x * outerHalf, -floorThickness, z * outerHalf);
+    outerTop[i] = arrays.addVertex(x * outerHalf, height, z * outerHalf);
+    innerTop[i] = arrays.addVertex(x * innerHalf, height, z * innerHalf);
+    innerBottom[i] = arrays.addVertex(x * innerHalf, 0, z * innerHalf);
+  }
+  // Each quad wound so that its normal points along `outward`.
+  auto quad = [&](std::uint32_t a, std::uint32_t b, std::uint32_t c, std::uint32_t d, float ox, float oy,
+                  float oz) {
+    auto at = [&](std::uint32_t v, int k) { return arrays.xyz[3 * v + std::size_t(k)]; };
+    const float e1[3] = {at(b, 0) - at(a, 0), at(b, 1) - at(a, 1), at(b, 2) - at(a, 2)};
+    const float e2[3] = {at(c, 0) - at(a, 0), at(c, 1) - at(a, 1), at(c, 2) - at(a, 2)};
+    const float n[3] = {e1[1] * e2[2] - e1[2] * e2[1], e1[2] * e2[0] - e1[0] * e2[2], e1[0] * e2[1] - e1[1] * e2[0]};
+    if (n[0] * ox + n[1] * oy + n[2] * oz >= 0)
+      arrays.addQuad(a, b, c, d);
+    else
+      arrays.addQuad(d, c, b, a);
+  };
+  quad(outerBottom[0], outerBottom[1], outerBottom[2], outerBottom[3], 0, -1, 0);
+  quad(innerBottom[0], innerBottom[1], innerBottom[2], innerBottom[3], 0, 1, 0);
+  for (int i = 0; i < 4; ++i) {
+    const int j = (i + 1) % 4;
+    const float mx = corners[i][0] + corners[j][0], mz = corners[i][1] + corners[j][1];  // the side's direction
+    quad(outerBottom[i], outerBottom[j], outerTop[j], outerTop[i], mx, 0, mz);
+    quad(outerTop[i], outerTop[j], innerTop[j], innerTop[i], 0, 1, 0);
+    quad(innerTop[i], innerTop[j], innerBottom[j], innerBottom[i], -mx, 0, -mz);
+  }
+  return TriangleMesh::fromArrays(std::move(arrays.xyz), std::move(arrays.indices), "bin");
+}
+
 TriangleMesh makeLShape(float size, float depth) {
   // The L's outline in the xy plane, counter-clockwise, extruded along z from -depth/2 to +depth/2.
   const float s = size, w = size / 3.0f;

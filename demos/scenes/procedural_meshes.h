@@ -13,6 +13,10 @@ TriangleMesh makeIcosphere(float radius, int levels);
 /// A closed torus about the z axis: ring radius `major`, tube radius `minor`, `ringSegments` × `tubeSegments`.
 TriangleMesh makeTorus(float major, float minor, int ringSegments, int tubeSegments);
 
+/// A closed bin, open at the top, as one watertight surface: a floor of `floorThickness` below y = 0 and walls
+/// up to y = `height`, square, `outerHalf` from the centre outside and `innerHalf` inside.
+TriangleMesh makeBin(float outerHalf, float innerHalf, float floorThickness, float height);
+
 /// A closed, concave L-shaped prism: an L of arm length `size` and thickness `size / 3`, `depth` thick in z.
 TriangleMesh makeLShape(float size, float depth);
 

@@ -130,21 +130,19 @@ SceneDescription makePileScene(int bodies, unsigned seed) {
   const int perRow = std::max(4, int(std::ceil(4.0 * std::sqrt(double(bodies) / 50.0))));
   const float inside = 1.5f * float(perRow);  // the bin's inside width
   const float h = inside / 2;
-  // The bin: the floor spans the walls' footprint; the x walls run the full length, the z walls fit between
-  // them.
+  // The bin's convex pieces (the reference's): the floor spans the walls' footprint; the x walls run the full
+  // length, the z walls fit between them.
   const std::vector<std::pair<btVector3, btVector3>> binBoxes = {
       {btVector3(h + 0.5f, 0.25f, h + 0.5f), btVector3(0, -0.25f, 0)},
       {btVector3(0.25f, 1.25f, h + 0.5f), btVector3(h + 0.25f, 1.25f, 0)},
       {btVector3(0.25f, 1.25f, h + 0.5f), btVector3(-h - 0.25f, 1.25f, 0)},
       {btVector3(h, 1.25f, 0.25f), btVector3(0, 1.25f, h + 0.25f)},
       {btVector3(h, 1.25f, 0.25f), btVector3(0, 1.25f, -h - 0.25f)}};
-  std::vector<std::pair<TriangleMesh, btVector3>> binParts;
   std::vector<ConvexPiece> binPieces;
-  for (const auto& [half, centre] : binBoxes) {
-    binParts.push_back({makeBox(half.x(), half.y(), half.z()), centre});
-    binPieces.push_back(box(half, centre));
-  }
-  scene.meshes.push_back(std::make_shared<const TriangleMesh>(merged(binParts, "bin")));
+  for (const auto& [half, centre] : binBoxes) binPieces.push_back(box(half, centre));
+  // One watertight surface: boxes merged into one mesh would leave the faces where they meet inside it (a
+  // wall's bottom face on the floor), and a body pressed into the floor there would be pushed down.
+  scene.meshes.push_back(std::make_shared<const TriangleMesh>(makeBin(h + 0.5f, h, 0.5f, 2.5f)));
   scene.meshes.push_back(std::make_shared<const TriangleMesh>(makeBox(0.35f, 0.35f, 0.35f)));
   scene.meshes.push_back(std::make_shared<const TriangleMesh>(makeIcosphere(0.4f, 2)));
   scene.meshes.push_back(std::make_shared<const TriangleMesh>(makeTorus(0.3f, 0.12f, 24, 12)));
