@@ -13,6 +13,10 @@ namespace {
 
 using Vec = Eigen::Vector3d;
 
+// Tolerance of the outer-side test: it keeps faces at right angles (a box's side against the face it stands
+// on), whose contact normal is perpendicular to one of them.
+constexpr double kSideTolerance = 1e-6;
+
 // A triangle in double with its unit outward normal; `valid` is false for a degenerate or non-finite one, with
 // the same threshold as trianglesIntersect (sin^2 of the angle at v0 below 1e-12).
 struct Face {
@@ -89,10 +93,19 @@ int proximityContacts(const Eigen::Vector3f (&a)[3], const Eigen::Vector3f (&b)[
   if (!(reach > 0)) return 0;
   const Face fa = makeFace(a), fb = makeFace(b);
   if (!fa.valid || !fb.valid) return 0;
+  // Most candidates lie wholly beyond the reach of the other's plane, or wholly behind it by more than the
+  // outer-side test's tolerance allows a contact within the reach: six distances to two planes settle them.
+  const auto outOfReach = [reach](const Face& plane, const Face& other) {
+    double lo = std::numeric_limits<double>::infinity(), hi = -lo;
+    for (const Vec& v : other.v) {
+      const double d = plane.normal.dot(v - plane.v[0]);
+      lo = std::min(lo, d), hi = std::max(hi, d);
+    }
+    return lo >= reach || hi < -kSideTolerance * reach;
+  };
+  if (outOfReach(fb, fa) || outOfReach(fa, fb)) return 0;
   // Each contact's point on A on B's outer side and its point on B on A's outer side: along the contact's
-  // normal n (from B to A), n.nB >= 0 and n.nA <= 0. A small tolerance keeps faces at right angles (a box's
-  // side against the face it stands on), whose normal is perpendicular to one of them.
-  constexpr double kSideTolerance = 1e-6;
+  // normal n (from B to A), n.nB >= 0 and n.nA <= 0 (within kSideTolerance).
   const auto outerSides = [&](const Vec& normal) {
     return normal.dot(fb.normal) >= -kSideTolerance && normal.dot(fa.normal) <= kSideTolerance;
   };
