@@ -26,6 +26,7 @@ struct Options {
   int steps = 3000;
   std::string csv;
   std::string series;  // kinetic energy per step, for plots
+  float meshMargin = 0;
 };
 
 /// One pile's run, step by step.
@@ -36,10 +37,11 @@ struct Trace {
   double stepsPerSecond = 0;
 };
 
-Trace runPile(int bodies, unsigned seed, scenes::CollisionBackend backend, int steps) {
+Trace runPile(int bodies, unsigned seed, scenes::CollisionBackend backend, int steps, float meshMargin) {
   const scenes::SceneDescription description = scenes::makePileScene(bodies, seed);
   scenes::WorldOptions options;
   options.backend = backend;
+  options.meshMargin = meshMargin;
   scenes::WorldScene world(description, options);
   scenes::RunOptions run;
   run.steps = steps;
@@ -72,12 +74,12 @@ struct Row {
   float meshRestingDeepest = 0, referenceRestingDeepest = 0;  // from settledStep on
 };
 
-Row compare(int bodies, unsigned seed, int steps) {
+Row compare(int bodies, unsigned seed, int steps, float meshMargin) {
   Row r;
   r.bodies = bodies;
   r.seed = seed;
-  r.reference = runPile(bodies, seed, scenes::CollisionBackend::Primitives, steps);
-  r.mesh = runPile(bodies, seed, scenes::CollisionBackend::Gpucol, steps);
+  r.reference = runPile(bodies, seed, scenes::CollisionBackend::Primitives, steps, meshMargin);
+  r.mesh = runPile(bodies, seed, scenes::CollisionBackend::Gpucol, steps, meshMargin);
   const std::vector<double>& e = r.reference.energy;
   const auto peakAt = std::max_element(e.begin(), e.end());
   r.peak = peakAt == e.end() ? 0 : *peakAt;
@@ -113,11 +115,12 @@ Row compare(int bodies, unsigned seed, int steps) {
 
 void runAll(const Options& o) {
   std::printf(
-      "Mesh piles (gpucol MeshShape) beside the same piles of Bullet's convex shapes; up to %d steps of 1/60 s.\n"
+      "Mesh piles (gpucol MeshShape, margin %g m) beside the same piles of Bullet's convex shapes; up to %d "
+      "steps of 1/60 s.\n"
       "rest: the step every body slept (-: not within the steps). deepest: the deepest contact over the run, "
       "and (after /) once the reference's kinetic energy first fell below 1%% of its peak. burst: the largest "
       "kinetic energy from then on, as %% of the reference's peak.\n\n",
-      o.steps);
+      double(o.meshMargin), o.steps);
   std::printf("%6s %5s | %6s %6s %7s | %15s %15s | %8s %8s | %9s %9s\n", "bodies", "seed", "rest", "ref",
               "ratio", "deepest mesh", "deepest ref", "burst", "ref", "steps/s", "ref");
   std::ofstream csv, series;
@@ -134,7 +137,7 @@ void runAll(const Options& o) {
   for (int n : o.bodies) {
     std::vector<double> ratios;
     for (unsigned seed : o.seeds) {
-      const Row r = compare(n, seed, o.steps);
+      const Row r = compare(n, seed, o.steps, o.meshMargin);
       const double ratio = r.mesh.restStep > 0 && r.reference.restStep > 0
                                ? double(r.mesh.restStep) / double(r.reference.restStep)
                                : -1;
@@ -178,6 +181,9 @@ const CommandRegistration kRegistration([](CLI::App& app) {
   cmd->add_option("--steps", options->steps, "most steps per pile")->check(CLI::PositiveNumber)->capture_default_str();
   cmd->add_option("--csv", options->csv, "also write the rows to this CSV file");
   cmd->add_option("--series", options->series, "write each pile's kinetic energy per step to this CSV file");
+  cmd->add_option("--mesh-margin", options->meshMargin, "collision margin of the MeshShapes (m)")
+      ->check(CLI::NonNegativeNumber)
+      ->capture_default_str();
   cmd->callback([options] { runAll(*options); });
 });
 

@@ -31,6 +31,7 @@ struct DemoOptions {
   float dt = 1.0f / 60.0f;
   std::string backend = "gpucol";
   float gimpactMargin = gpucol::scenes::WorldOptions().gimpactMargin;
+  float meshMargin = gpucol::scenes::WorldOptions().meshMargin;
   bool noSleep = false;
   int every = 60;
   std::string picturePath;
@@ -72,6 +73,7 @@ int run(const DemoOptions& options) {
                          : options.backend == "primitives" ? CollisionBackend::Primitives
                                                            : CollisionBackend::Gpucol;
   worldOptions.gimpactMargin = options.gimpactMargin;
+  worldOptions.meshMargin = options.meshMargin;
   worldOptions.allowSleeping = !options.noSleep;
   WorldScene world(scene, worldOptions);
 
@@ -180,6 +182,9 @@ int main(int argc, char** argv) {
                  "collision code: gpucol, gimpact (GImpact + btDbvtBroadphase) or primitives (the same bodies "
                  "as Bullet's boxes, spheres and compounds of boxes and capsules: the reference)")
       ->check(CLI::IsMember({"gpucol", "gimpact", "primitives"}))
+      ->capture_default_str();
+  app.add_option("--mesh-margin", options.meshMargin, "collision margin of gpucol's MeshShapes (metres)")
+      ->check(CLI::NonNegativeNumber)
       ->capture_default_str();
   app.add_option("--gimpact-margin", options.gimpactMargin, "collision margin of the GImpact shapes (metres)")
       ->check(CLI::NonNegativeNumber)

@@ -89,8 +89,10 @@ WorldScene::WorldScene(const SceneDescription& scene, const WorldOptions& option
   if (options.backend == CollisionBackend::Gpucol) {
     m_dispatcher = std::make_unique<CollisionDispatcher>(m_collisionConfiguration.get(), options.config);
     m_broadphase = std::make_unique<GridBroadphase>(options.config);
-    for (const auto& mesh : m_scene.meshes)
+    for (const auto& mesh : m_scene.meshes) {
       m_shapes->gpucol.push_back(std::make_unique<MeshShape>(mesh, options.config));
+      m_shapes->gpucol.back()->setMargin(options.meshMargin);
+    }
   } else if (options.backend == CollisionBackend::Primitives) {
     m_dispatcher = std::make_unique<btCollisionDispatcher>(m_collisionConfiguration.get());
     m_broadphase = std::make_unique<btDbvtBroadphase>();

@@ -44,6 +44,9 @@ struct WorldOptions {
   /// about twice the margin apart. Ten boxes fall over with any margin from 0 to 0.04. Ignored by the Gpucol
   /// backend, whose shapes keep margin 0.
   float gimpactMargin = 0.01f;
+  /// Collision margin of every MeshShape (metres; Gpucol backend): 0 is Bullet's default for concave shapes.
+  /// With a margin, triangles that come within both margins give contacts and bodies rest that far apart.
+  float meshMargin = 0.0f;
   /// Whether bodies may fall asleep (Bullet's default deactivation). False keeps every body simulated, so
   /// that resting contacts are tested every step.
   bool allowSleeping = true;
