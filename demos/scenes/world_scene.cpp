@@ -20,7 +20,12 @@
 namespace gpucol::scenes {
 
 const char* backendName(CollisionBackend backend) {
-  return backend == CollisionBackend::Gpucol ? "gpucol" : "gimpact";
+  switch (backend) {
+    case CollisionBackend::Gpucol: return "gpucol";
+    case CollisionBackend::GImpact: return "gimpact";
+    case CollisionBackend::GImpactOnGpucol: return "gimpact-gpucol";
+  }
+  return "?";
 }
 
 // One collision shape per mesh of the description, of the backend's kind.
@@ -64,7 +69,12 @@ WorldScene::WorldScene(const SceneDescription& scene, const WorldOptions& option
     for (const auto& mesh : m_scene.meshes)
       m_shapes->gpucol.push_back(std::make_unique<MeshShape>(mesh, options.config));
   } else {
-    m_dispatcher = std::make_unique<btCollisionDispatcher>(m_collisionConfiguration.get());
+    // The one line a GImpact world changes to move over to gpucol.
+    if (options.backend == CollisionBackend::GImpactOnGpucol) {
+      m_dispatcher = std::make_unique<CollisionDispatcher>(m_collisionConfiguration.get(), options.config);
+    } else {
+      m_dispatcher = std::make_unique<btCollisionDispatcher>(m_collisionConfiguration.get());
+    }
     btGImpactCollisionAlgorithm::registerAlgorithm(m_dispatcher.get());
     m_broadphase = std::make_unique<btDbvtBroadphase>();
     for (const auto& mesh : m_scene.meshes) {
@@ -121,7 +131,7 @@ void WorldScene::step(float dt) {
 }
 
 const CollisionDispatcher* WorldScene::gpucolDispatcher() const {
-  return m_options.backend == CollisionBackend::Gpucol
+  return m_options.backend != CollisionBackend::GImpact
              ? static_cast<const CollisionDispatcher*>(m_dispatcher.get())
              : nullptr;
 }

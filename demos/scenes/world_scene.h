@@ -27,9 +27,12 @@ namespace gpucol::scenes {
 enum class CollisionBackend {
   Gpucol,   ///< gpucol::MeshShape, gpucol::CollisionDispatcher and gpucol::GridBroadphase.
   GImpact,  ///< btGImpactMeshShape, btCollisionDispatcher with GImpact registered, and btDbvtBroadphase.
+  /// The GImpact world with one line changed: gpucol::CollisionDispatcher in place of btCollisionDispatcher
+  /// (GImpact still registered on it, btGImpactMeshShape bodies, btDbvtBroadphase).
+  GImpactOnGpucol,
 };
 
-/// "gpucol" or "gimpact".
+/// "gpucol", "gimpact" or "gimpact-gpucol".
 const char* backendName(CollisionBackend backend);
 
 /// How a WorldScene is built.

@@ -61,6 +61,17 @@ float massOf(const TriangleMesh& mesh) {
   return float(mesh.massProperties(kSceneDensity).mass);
 }
 
+// The bin of the pile scenes: the floor spans the walls' footprint; the x walls run the full length, the z walls
+// fit between them.
+TriangleMesh binMesh() {
+  return merged({{makeBox(3.5f, 0.25f, 3.5f), btVector3(0, -0.25f, 0)},
+                 {makeBox(0.25f, 1.25f, 3.5f), btVector3(3.25f, 1.25f, 0)},
+                 {makeBox(0.25f, 1.25f, 3.5f), btVector3(-3.25f, 1.25f, 0)},
+                 {makeBox(3.0f, 1.25f, 0.25f), btVector3(0, 1.25f, 3.25f)},
+                 {makeBox(3.0f, 1.25f, 0.25f), btVector3(0, 1.25f, -3.25f)}},
+                "bin");
+}
+
 }  // namespace
 
 SceneDescription makeStackScene(int boxes, float gap) {
@@ -84,15 +95,7 @@ SceneDescription makePileScene(int bodies, unsigned seed) {
   if (bodies < 0) throw std::invalid_argument("pile scene: negative body count");
   SceneDescription scene;
   scene.name = "pile";
-  // The bin: the floor spans the walls' footprint; the x walls run the full length, the z walls fit between
-  // them.
-  scene.meshes.push_back(std::make_shared<const TriangleMesh>(
-      merged({{makeBox(3.5f, 0.25f, 3.5f), btVector3(0, -0.25f, 0)},
-              {makeBox(0.25f, 1.25f, 3.5f), btVector3(3.25f, 1.25f, 0)},
-              {makeBox(0.25f, 1.25f, 3.5f), btVector3(-3.25f, 1.25f, 0)},
-              {makeBox(3.0f, 1.25f, 0.25f), btVector3(0, 1.25f, 3.25f)},
-              {makeBox(3.0f, 1.25f, 0.25f), btVector3(0, 1.25f, -3.25f)}},
-             "bin")));
+  scene.meshes.push_back(std::make_shared<const TriangleMesh>(binMesh()));
   scene.meshes.push_back(std::make_shared<const TriangleMesh>(makeBox(0.35f, 0.35f, 0.35f)));
   scene.meshes.push_back(std::make_shared<const TriangleMesh>(makeIcosphere(0.4f, 2)));
   scene.meshes.push_back(std::make_shared<const TriangleMesh>(makeTorus(0.3f, 0.12f, 24, 12)));
@@ -112,6 +115,31 @@ SceneDescription makePileScene(int bodies, unsigned seed) {
     const float x = (float(column) - 1.5f) * kCell, z = (float(row) - 1.5f) * kCell;
     const float y = 1.0f + float(layer) * kCell;
     const std::size_t kind = std::size_t(i) % 4;
+    scene.bodies.push_back({kind + 1, masses[kind], at(x, y, z, randomRotation(random))});
+  }
+  scene.groundTop = 0;
+  scene.extent = 10.0f + float(bodies / (kPerRow * kPerRow)) * kCell;
+  return scene;
+}
+
+SceneDescription makeToriAndCratesScene(int bodies, unsigned seed) {
+  if (bodies < 0) throw std::invalid_argument("tori scene: negative body count");
+  SceneDescription scene;
+  scene.name = "tori";
+  scene.meshes.push_back(std::make_shared<const TriangleMesh>(binMesh()));
+  scene.meshes.push_back(std::make_shared<const TriangleMesh>(makeTorus(0.4f, 0.12f, 32, 16)));
+  scene.meshes.push_back(std::make_shared<const TriangleMesh>(makeBox(0.3f, 0.3f, 0.3f, 4)));
+  const float masses[2] = {massOf(*scene.meshes[1]), massOf(*scene.meshes[2])};
+  scene.bodies.push_back({0, 0.0f, at(0, 0, 0)});
+  std::mt19937 random(seed);
+  constexpr int kPerRow = 4;
+  constexpr float kCell = 1.5f;  // Above the torus's bounding diameter (1.04 m).
+  for (int i = 0; i < bodies; ++i) {
+    const int layer = i / (kPerRow * kPerRow), row = (i / kPerRow) % kPerRow, column = i % kPerRow;
+    const float x = (float(column) - 1.5f) * kCell, z = (float(row) - 1.5f) * kCell;
+    const float y = 1.0f + float(layer) * kCell;
+    // A checkerboard of tori and crates, shifted by one each layer: tori land on crates and crates in tori.
+    const std::size_t kind = std::size_t(row + column + layer) % 2;
     scene.bodies.push_back({kind + 1, masses[kind], at(x, y, z, randomRotation(random))});
   }
   scene.groundTop = 0;
