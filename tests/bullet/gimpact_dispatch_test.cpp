@@ -163,7 +163,9 @@ struct MixedWorld {
     EXPECT_NEAR(lowerCrate->getWorldTransform().getOrigin().y(), 0.3f, tolerance);
     EXPECT_NEAR(meshTorus->getWorldTransform().getOrigin().y(), 0.6f + 0.12f, tolerance);
     EXPECT_NEAR(crateOnMesh->getWorldTransform().getOrigin().y(), 0.5f + 0.3f, tolerance);
-    if (box) EXPECT_NEAR(boxOnSlab->getWorldTransform().getOrigin().y(), 1.1f + 0.3f, tolerance);
+    if (box) {
+      EXPECT_NEAR(boxOnSlab->getWorldTransform().getOrigin().y(), 1.1f + 0.3f, tolerance);
+    }
   }
 
   const btQuaternion flat{btVector3(1, 0, 0), SIMD_HALF_PI};

@@ -13,3 +13,4 @@
 #include "gpucol/opencl_status.h"
 #include "gpucol/principal_mesh_body.h"
 #include "gpucol/triangle_mesh.h"
+#include "gpucol/world_importer.h"
