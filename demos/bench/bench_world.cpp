@@ -52,7 +52,8 @@ scenes::SceneDescription makeScene(const std::string& name) {
   if (name == "pile") return scenes::makePileScene();
   if (name == "stack") return scenes::makeStackScene();
   if (name == "tori") return scenes::makeToriAndCratesScene();
-  throw std::invalid_argument("unknown scene '" + name + "' (pile, stack or tori)");
+  if (name == "tori-x3") return scenes::makeToriAndCratesScene(32, 1, 3);
+  throw std::invalid_argument("unknown scene '" + name + "' (pile, stack, tori or tori-x3)");
 }
 
 Row measure(const std::string& sceneName, const std::string& backend, const WorldBenchOptions& options) {
@@ -189,9 +190,9 @@ const CommandRegistration kRegistration([](CLI::App& app) {
   command
       ->add_option("--scenes", options->scenes,
                    "built-in scenes: pile (50 mixed meshes in a bin), stack (10 boxes), tori (32 tori and "
-                   "crates in a bin)")
+                   "crates in a bin), tori-x3 (the same with 9 times the triangles)")
       ->delimiter(',')
-      ->check(CLI::IsMember({"pile", "stack", "tori"}))
+      ->check(CLI::IsMember({"pile", "stack", "tori", "tori-x3"}))
       ->capture_default_str();
   command
       ->add_option("--backends", options->backends,

@@ -9,6 +9,7 @@
 #include <memory>
 #include <random>
 #include <stdexcept>
+#include <string>
 #include <utility>
 #include <vector>
 
@@ -122,13 +123,14 @@ SceneDescription makePileScene(int bodies, unsigned seed) {
   return scene;
 }
 
-SceneDescription makeToriAndCratesScene(int bodies, unsigned seed) {
+SceneDescription makeToriAndCratesScene(int bodies, unsigned seed, int detail) {
   if (bodies < 0) throw std::invalid_argument("tori scene: negative body count");
+  if (detail < 1) throw std::invalid_argument("tori scene: detail must be at least 1");
   SceneDescription scene;
-  scene.name = "tori";
+  scene.name = detail == 1 ? "tori" : "tori-x" + std::to_string(detail);
   scene.meshes.push_back(std::make_shared<const TriangleMesh>(binMesh()));
-  scene.meshes.push_back(std::make_shared<const TriangleMesh>(makeTorus(0.4f, 0.12f, 32, 16)));
-  scene.meshes.push_back(std::make_shared<const TriangleMesh>(makeBox(0.3f, 0.3f, 0.3f, 4)));
+  scene.meshes.push_back(std::make_shared<const TriangleMesh>(makeTorus(0.4f, 0.12f, 32 * detail, 16 * detail)));
+  scene.meshes.push_back(std::make_shared<const TriangleMesh>(makeBox(0.3f, 0.3f, 0.3f, 4 * detail)));
   const float masses[2] = {massOf(*scene.meshes[1]), massOf(*scene.meshes[2])};
   scene.bodies.push_back({0, 0.0f, at(0, 0, 0)});
   std::mt19937 random(seed);

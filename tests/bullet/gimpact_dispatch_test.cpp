@@ -226,6 +226,29 @@ TEST(GImpactDispatch, ConfigSwitchLeavesGImpactPairsToGImpact) {
   mixed.expectResting(0.05f, false);
 }
 
+TEST(GImpactDispatch, GImpactChildOfACompoundRestsOnAGImpactSlab) {
+  // A compound pair goes to Bullet's compound algorithm, whose child pairs come back to the dispatcher's
+  // findAlgorithm: the GImpact crate inside the compound is collided by gpucol, pair by pair.
+  test::TestWorld world(test::DispatchKind::Gpucol);
+  btGImpactCollisionAlgorithm::registerAlgorithm(&world.dispatcher());
+  GImpactMeshBody slab(scenes::makeBox(1, 0.25f, 1, 2)), crate(scenes::makeBox(0.3f, 0.3f, 0.3f, 2));
+  world.add(slab.shape, 0, test::at(0, 0.25f, 0));
+  auto compound = std::make_shared<btCompoundShape>();
+  compound->addChildShape(test::at(0, 0.1f, 0), crate.shape.get());
+  btRigidBody* body = world.add(compound, 1, test::at(0, 0.9f, 0));
+  body->setActivationState(DISABLE_DEACTIVATION);
+  std::uint64_t built = 0;
+  for (int i = 0; i < 120; ++i) {
+    world.step(1);
+    built += static_cast<CollisionDispatcher&>(world.dispatcher()).lastStepStats().gimpactStandInsBuilt;
+  }
+  EXPECT_EQ(built, 2u) << "the slab's and the crate's stand-ins: gpucol collided the child";
+  // The crate's centre 0.3 m above the slab's top at 0.5, plus both margins (2 cm).
+  EXPECT_NEAR(body->getWorldTransform().getOrigin().y() + 0.1f, 0.8f, 0.04f);
+  EXPECT_EQ(static_cast<CollisionDispatcher&>(world.dispatcher()).lastStepStats().gimpactPairs, 0u)
+      << "a compound's child pairs are not in the batch";
+}
+
 TEST(GImpactDispatch, StandInIsBuiltAgainWhenTheVerticesChange) {
   test::TestWorld world(test::DispatchKind::Gpucol);
   btGImpactCollisionAlgorithm::registerAlgorithm(&world.dispatcher());

@@ -28,8 +28,9 @@ class GImpactStandIns;
 /// It takes btGImpactMeshShape pairs too (Config::collideGImpactShapes): two GImpact meshes, a GImpact mesh and a
 /// MeshShape, a GImpact mesh and a plane or other concave shape. A MeshShape with the GImpact mesh's triangles,
 /// scaling and margin stands in for it, built once per shape and again when its vertices change, and its pairs
-/// join the batch. It does so whether or not btGImpactCollisionAlgorithm::registerAlgorithm was called on it, before
-/// or after: a GImpact mesh against a convex shape stays with the algorithm the configuration gives.
+/// join the batch. A GImpact mesh against a compound goes to the configuration's compound algorithm, whose child
+/// pairs come back here. It does so whether or not btGImpactCollisionAlgorithm::registerAlgorithm was called on
+/// it, before or after; a GImpact mesh against a convex shape stays with the algorithm registered for it.
 class CollisionDispatcher : public btCollisionDispatcher {
  public:
   /// `collisionConfiguration` must outlive the dispatcher, as for btCollisionDispatcher.
@@ -40,8 +41,8 @@ class CollisionDispatcher : public btCollisionDispatcher {
   void dispatchAllCollisionPairs(btOverlappingPairCache* pairCache, const btDispatcherInfo& dispatchInfo,
                                  btDispatcher* dispatcher) override;
 
-  /// MeshMeshAlgorithm for the GImpact pairs it takes (above), whatever create function is registered for them;
-  /// btCollisionDispatcher's answer for every other pair.
+  /// MeshMeshAlgorithm (or the compound algorithm) for the GImpact pairs it takes (above), whatever create
+  /// function is registered for them; btCollisionDispatcher's answer for every other pair.
   btCollisionAlgorithm* findAlgorithm(const btCollisionObjectWrapper* body0, const btCollisionObjectWrapper* body1,
                                       btPersistentManifold* sharedManifold, ebtDispatcherQueryType queryType) override;
 

@@ -1,6 +1,7 @@
 #include "gpucol/collision_dispatcher.h"
 
 #include <BulletCollision/BroadphaseCollision/btOverlappingPairCache.h>
+#include <BulletCollision/CollisionDispatch/btCollisionConfiguration.h>
 #include <BulletCollision/CollisionDispatch/btCollisionObject.h>
 #include <BulletCollision/CollisionDispatch/btCollisionObjectWrapper.h>
 #include <BulletCollision/Gimpact/btGImpactShape.h>
@@ -99,12 +100,21 @@ btCollisionAlgorithm* CollisionDispatcher::findAlgorithm(const btCollisionObject
       take = true;
       standIns = m_standIns.get();
     }
+    btCollisionAlgorithmConstructionInfo info;
+    info.m_dispatcher1 = this;
+    info.m_manifold = sharedManifold;
     if (take) {
-      btCollisionAlgorithmConstructionInfo info;
-      info.m_dispatcher1 = this;
-      info.m_manifold = sharedManifold;
       void* memory = allocateCollisionAlgorithm(sizeof(MeshMeshAlgorithm));
       return new (memory) MeshMeshAlgorithm(info, body0, body1, m_config, standIns);
+    }
+    if (m_config.collideGImpactShapes && other->isCompound()) {
+      // The configuration's compound algorithm (GImpact's would collide the children itself): its child pairs
+      // come back here.
+      btCollisionAlgorithmCreateFunc* create =
+          queryType == BT_CONTACT_POINT_ALGORITHMS
+              ? m_collisionConfiguration->getCollisionAlgorithmCreateFunc(s0->getShapeType(), s1->getShapeType())
+              : m_collisionConfiguration->getClosestPointsAlgorithmCreateFunc(s0->getShapeType(), s1->getShapeType());
+      return create->CreateCollisionAlgorithm(info, body0, body1);
     }
   }
   return btCollisionDispatcher::findAlgorithm(body0, body1, sharedManifold, queryType);
