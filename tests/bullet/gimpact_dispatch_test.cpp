@@ -205,6 +205,37 @@ TEST(GImpactDispatch, MixedWorldRestsWithOrWithoutGImpactRegistered) {
   }
 }
 
+TEST(GImpactDispatch, MeshShapesAndGImpactMeshesRestOnEachOtherUnderEitherAlgorithm) {
+  // GImpact's registerAlgorithm, called last, takes every pair with a GImpact shape, a MeshShape's too: on a stock
+  // dispatcher with MeshMeshAlgorithm registered first, GImpact's algorithm collides them (through the MeshShape's
+  // processAllTriangles) and nothing falls through; gpucol::CollisionDispatcher takes the same pairs itself.
+  for (const auto kind : {test::DispatchKind::StockRegistered, test::DispatchKind::Gpucol}) {
+    const bool gpucol = kind == test::DispatchKind::Gpucol;
+    SCOPED_TRACE(gpucol ? "gpucol::CollisionDispatcher" : "registerWith, then GImpact's registerAlgorithm");
+    test::TestWorld world(kind);
+    btGImpactCollisionAlgorithm::registerAlgorithm(&world.dispatcher());
+    GImpactMeshBody slab(scenes::makeBox(1, 0.25f, 1, 2)), crate(scenes::makeBox(0.3f, 0.3f, 0.3f, 2));
+    world.add(slab.shape, 0, test::at(0, 0.25f, 0));                                             // 0
+    world.add(test::meshShape(scenes::makeBox(1, 0.25f, 1, 2)), 0, test::at(3, 0.25f, 0));       // 1
+    const btQuaternion flat(btVector3(1, 0, 0), SIMD_HALF_PI);
+    btRigidBody* meshCrate =
+        world.add(test::meshShape(scenes::makeBox(0.3f, 0.3f, 0.3f, 2)), 1, test::at(0.5f, 0.85f, 0));  // 2
+    btRigidBody* meshTorus = world.add(test::meshShape(scenes::makeTorus(0.4f, 0.12f, 24, 12)), 1,
+                                       btTransform(flat, btVector3(-0.4f, 0.7f, 0)));                   // 3
+    btRigidBody* gimpactCrate = world.add(crate.shape, 1, test::at(3, 0.85f, 0));                        // 4
+    for (btRigidBody* body : {meshCrate, meshTorus, gimpactCrate}) body->setActivationState(DISABLE_DEACTIVATION);
+    world.step(120);
+    // On the slabs' tops at 0.5, 1 cm margins on the GImpact sides.
+    EXPECT_NEAR(meshCrate->getWorldTransform().getOrigin().y(), 0.81f, 0.02f);
+    EXPECT_NEAR(meshTorus->getWorldTransform().getOrigin().y(), 0.63f, 0.02f);
+    EXPECT_NEAR(gimpactCrate->getWorldTransform().getOrigin().y(), 0.81f, 0.02f);
+    const std::map<std::pair<int, int>, std::string> algorithms = algorithmsOf(world.world());
+    for (const auto& pair : {std::make_pair(0, 2), std::make_pair(0, 3), std::make_pair(1, 4)}) {
+      EXPECT_EQ(algorithms.at(pair), gpucol ? "gpucol" : "gimpact") << pair.first << "-" << pair.second;
+    }
+  }
+}
+
 TEST(GImpactDispatch, ConfigSwitchLeavesGImpactPairsToGImpact) {
   Config config;
   config.collideGImpactShapes = false;
