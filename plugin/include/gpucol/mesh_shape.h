@@ -81,6 +81,9 @@ ATTRIBUTE_ALIGNED16(class) MeshShape : public btConcaveShape {
   /// shape is concave static; the scaling in the mesh interface, because the importer rewrites a scaled BVH's
   /// record as it reads it. The child's name, "gpucol::MeshShape", lets WorldImporter bring back a MeshShape.
   const char* serialize(void* dataBuffer, btSerializer* serializer) const override;
+  /// Writes the shape's record unless the serializer holds it already: btCollisionWorld writes every body's shape
+  /// even when a compound wrote it as a child, and a second record under the same address breaks the file.
+  void serializeSingleShape(btSerializer* serializer) const override;
   /// The name serialize() gives the compound's child; WorldImporter recognises a saved MeshShape by it.
   static constexpr const char* kSerializedName = "gpucol::MeshShape";
 

@@ -14,6 +14,11 @@ namespace gpucol {
 
 int MeshShape::calculateSerializeBufferSize() const { return int(sizeof(btCompoundShapeData)); }
 
+void MeshShape::serializeSingleShape(btSerializer* serializer) const {
+  if (serializer->findPointer(const_cast<MeshShape*>(this)) != nullptr) return;
+  btConcaveShape::serializeSingleShape(serializer);
+}
+
 const char* MeshShape::serialize(void* dataBuffer, btSerializer* serializer) const {
   // The compound: the shape's own record (its user's name, if any, stays on it).
   auto* compound = static_cast<btCompoundShapeData*>(dataBuffer);
