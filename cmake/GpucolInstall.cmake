@@ -17,4 +17,5 @@ write_basic_package_version_file(${CMAKE_CURRENT_BINARY_DIR}/gpucolConfigVersion
   COMPATIBILITY SameMinorVersion)
 install(FILES ${CMAKE_CURRENT_BINARY_DIR}/gpucolConfig.cmake
   ${CMAKE_CURRENT_BINARY_DIR}/gpucolConfigVersion.cmake
+  ${CMAKE_CURRENT_LIST_DIR}/GpucolBulletWorldImporter.cmake
   DESTINATION ${CMAKE_INSTALL_LIBDIR}/cmake/gpucol)

@@ -1,6 +1,7 @@
 // gpucol-bench world: whole Bullet worlds stepped with gpucol (MeshShape, CollisionDispatcher,
-// GridBroadphase) and with GImpact (btGImpactMeshShape, btCollisionDispatcher, btDbvtBroadphase) in one run,
-// same scene, same steps: speed, contacts, and how well the bodies rest once they should.
+// GridBroadphase), with GImpact (btGImpactMeshShape, btCollisionDispatcher, btDbvtBroadphase) and with the GImpact
+// world whose dispatcher alone is gpucol's, in one run, same scene, same steps: speed, contacts, and how well the
+// bodies rest once they should.
 #include <fstream>
 #include <iomanip>
 #include <iostream>
@@ -50,14 +51,17 @@ struct Row {
 scenes::SceneDescription makeScene(const std::string& name) {
   if (name == "pile") return scenes::makePileScene();
   if (name == "stack") return scenes::makeStackScene();
-  throw std::invalid_argument("unknown scene '" + name + "' (pile or stack)");
+  if (name == "tori") return scenes::makeToriAndCratesScene();
+  if (name == "tori-x3") return scenes::makeToriAndCratesScene(32, 1, 3);
+  throw std::invalid_argument("unknown scene '" + name + "' (pile, stack, tori or tori-x3)");
 }
 
 Row measure(const std::string& sceneName, const std::string& backend, const WorldBenchOptions& options) {
   const scenes::SceneDescription description = makeScene(sceneName);
   scenes::WorldOptions worldOptions;
-  worldOptions.backend =
-      backend == "gimpact" ? scenes::CollisionBackend::GImpact : scenes::CollisionBackend::Gpucol;
+  worldOptions.backend = backend == "gimpact"          ? scenes::CollisionBackend::GImpact
+                         : backend == "gimpact-gpucol" ? scenes::CollisionBackend::GImpactOnGpucol
+                                                       : scenes::CollisionBackend::Gpucol;
   worldOptions.gimpactMargin = options.gimpactMargin;
   worldOptions.allowSleeping = !options.noSleep;
   scenes::RunOptions runOptions;
@@ -185,13 +189,16 @@ const CommandRegistration kRegistration([](CLI::App& app) {
                                          "btDbvtBroadphase: speed, contacts, resting error");
   command
       ->add_option("--scenes", options->scenes,
-                   "built-in scenes: pile (50 mixed meshes in a bin), stack (10 boxes)")
+                   "built-in scenes: pile (50 mixed meshes in a bin), stack (10 boxes), tori (32 tori and "
+                   "crates in a bin), tori-x3 (the same with 9 times the triangles)")
       ->delimiter(',')
-      ->check(CLI::IsMember({"pile", "stack"}))
+      ->check(CLI::IsMember({"pile", "stack", "tori", "tori-x3"}))
       ->capture_default_str();
-  command->add_option("--backends", options->backends, "gpucol, gimpact")
+  command
+      ->add_option("--backends", options->backends,
+                   "gpucol, gimpact, gimpact-gpucol (the GImpact world with gpucol::CollisionDispatcher)")
       ->delimiter(',')
-      ->check(CLI::IsMember({"gpucol", "gimpact"}))
+      ->check(CLI::IsMember({"gpucol", "gimpact", "gimpact-gpucol"}))
       ->capture_default_str();
   command->add_option("--steps", options->steps, "steps per run")
       ->check(CLI::PositiveNumber)

@@ -31,6 +31,8 @@ const char* backendName(CollisionBackend backend) {
       return "gimpact";
     case CollisionBackend::Primitives:
       return "primitives";
+    case CollisionBackend::GImpactOnGpucol:
+      return "gimpact-gpucol";
   }
   return "?";
 }
@@ -114,7 +116,12 @@ WorldScene::WorldScene(const SceneDescription& scene, const WorldOptions& option
       m_shapes->primitives.push_back(std::move(compound));
     }
   } else {
-    m_dispatcher = std::make_unique<btCollisionDispatcher>(m_collisionConfiguration.get());
+    // The one line a GImpact world changes to move over to gpucol.
+    if (options.backend == CollisionBackend::GImpactOnGpucol) {
+      m_dispatcher = std::make_unique<CollisionDispatcher>(m_collisionConfiguration.get(), options.config);
+    } else {
+      m_dispatcher = std::make_unique<btCollisionDispatcher>(m_collisionConfiguration.get());
+    }
     btGImpactCollisionAlgorithm::registerAlgorithm(m_dispatcher.get());
     m_broadphase = std::make_unique<btDbvtBroadphase>();
     for (const auto& mesh : m_scene.meshes) {
@@ -171,7 +178,7 @@ void WorldScene::step(float dt) {
 }
 
 const CollisionDispatcher* WorldScene::gpucolDispatcher() const {
-  return m_options.backend == CollisionBackend::Gpucol
+  return m_options.backend != CollisionBackend::GImpact
              ? static_cast<const CollisionDispatcher*>(m_dispatcher.get())
              : nullptr;
 }

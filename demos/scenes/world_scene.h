@@ -30,9 +30,12 @@ enum class CollisionBackend {
   /// Bullet's convex shapes (boxes, spheres, compounds of boxes and capsules) of the scene's convex pieces,
   /// btCollisionDispatcher and btDbvtBroadphase: the reference that mesh piles are held to.
   Primitives,
+  /// The GImpact world with one line changed: gpucol::CollisionDispatcher in place of btCollisionDispatcher
+  /// (GImpact still registered on it, btGImpactMeshShape bodies, btDbvtBroadphase).
+  GImpactOnGpucol,
 };
 
-/// "gpucol", "gimpact" or "primitives".
+/// "gpucol", "gimpact", "primitives" or "gimpact-gpucol".
 const char* backendName(CollisionBackend backend);
 
 /// How a WorldScene is built.

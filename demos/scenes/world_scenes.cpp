@@ -9,6 +9,7 @@
 #include <memory>
 #include <random>
 #include <stdexcept>
+#include <string>
 #include <utility>
 #include <vector>
 
@@ -32,19 +33,6 @@ btQuaternion randomRotation(std::mt19937& random) {
   const double a = std::sqrt(1 - u1), b = std::sqrt(u1);
   return btQuaternion(btScalar(a * std::sin(u2)), btScalar(a * std::cos(u2)), btScalar(b * std::sin(u3)),
                       btScalar(b * std::cos(u3)));
-}
-
-// Several closed meshes, each moved by a translation, as one mesh (a static body made of parts).
-TriangleMesh merged(const std::vector<std::pair<TriangleMesh, btVector3>>& parts, const std::string& name) {
-  std::vector<float> xyz;
-  std::vector<std::uint32_t> indices;
-  for (const auto& [part, offset] : parts) {
-    const TriangleMesh moved = part.transformed(kIdentity, {offset.x(), offset.y(), offset.z()});
-    const auto base = static_cast<std::uint32_t>(xyz.size() / 3);
-    xyz.insert(xyz.end(), moved.positions().begin(), moved.positions().end());
-    for (std::uint32_t index : moved.indices()) indices.push_back(base + index);
-  }
-  return TriangleMesh::fromArrays(std::move(xyz), std::move(indices), name);
 }
 
 // Largest distance of a vertex from the mesh's origin.
@@ -100,6 +88,11 @@ std::vector<ConvexPiece> lShapePieces(float size, float depth, const std::array<
 float massOf(const TriangleMesh& mesh) {
   return float(mesh.massProperties(kSceneDensity).mass);
 }
+
+// The bin of the pile scenes: the floor spans the walls' footprint; the x walls run the full length, the z walls
+// fit between them.
+// The 6 m bin of the pile of 50 as one watertight mesh (makePileScene's).
+TriangleMesh binMesh() { return makeBin(3.5f, 3.0f, 0.5f, 2.5f); }
 
 }  // namespace
 
@@ -174,6 +167,32 @@ SceneDescription makePileScene(int bodies, unsigned seed) {
   }
   scene.groundTop = 0;
   scene.extent = 10.0f + inside + float(bodies / (perRow * perRow)) * kCell;
+  return scene;
+}
+
+SceneDescription makeToriAndCratesScene(int bodies, unsigned seed, int detail) {
+  if (bodies < 0) throw std::invalid_argument("tori scene: negative body count");
+  if (detail < 1) throw std::invalid_argument("tori scene: detail must be at least 1");
+  SceneDescription scene;
+  scene.name = detail == 1 ? "tori" : "tori-x" + std::to_string(detail);
+  scene.meshes.push_back(std::make_shared<const TriangleMesh>(binMesh()));
+  scene.meshes.push_back(std::make_shared<const TriangleMesh>(makeTorus(0.4f, 0.12f, 32 * detail, 16 * detail)));
+  scene.meshes.push_back(std::make_shared<const TriangleMesh>(makeBox(0.3f, 0.3f, 0.3f, 4 * detail)));
+  const float masses[2] = {massOf(*scene.meshes[1]), massOf(*scene.meshes[2])};
+  scene.bodies.push_back({0, 0.0f, at(0, 0, 0)});
+  std::mt19937 random(seed);
+  constexpr int kPerRow = 4;
+  constexpr float kCell = 1.5f;  // Above the torus's bounding diameter (1.04 m).
+  for (int i = 0; i < bodies; ++i) {
+    const int layer = i / (kPerRow * kPerRow), row = (i / kPerRow) % kPerRow, column = i % kPerRow;
+    const float x = (float(column) - 1.5f) * kCell, z = (float(row) - 1.5f) * kCell;
+    const float y = 1.0f + float(layer) * kCell;
+    // A checkerboard of tori and crates, shifted by one each layer: tori land on crates and crates in tori.
+    const std::size_t kind = std::size_t(row + column + layer) % 2;
+    scene.bodies.push_back({kind + 1, masses[kind], at(x, y, z, randomRotation(random))});
+  }
+  scene.groundTop = 0;
+  scene.extent = 10.0f + float(bodies / (kPerRow * kPerRow)) * kCell;
   return scene;
 }
 

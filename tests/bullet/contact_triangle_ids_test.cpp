@@ -1,6 +1,8 @@
 // Contacts say which triangles touched (issue 52): every contact of a MeshShape carries the part and triangle of
 // each side that has triangles, in btManifoldPoint's m_partId0/1 and m_index0/1 and in gContactAddedCallback,
 // the sides right whichever body is the pair's first, as Bullet's concave algorithms give them.
+#include <BulletCollision/Gimpact/btGImpactCollisionAlgorithm.h>
+#include <BulletCollision/Gimpact/btGImpactShape.h>
 #include <btBulletDynamicsCommon.h>
 #include <gtest/gtest.h>
 
@@ -120,22 +122,36 @@ btScalar distanceBetweenTriangles(const std::array<btVector3, 3>& t0, const std:
   return best;
 }
 
-/// The world corners of triangle (part, index) of `object`'s shape: a MeshShape (part 0) or a
-/// btBvhTriangleMeshShape's mesh interface. False for an id that names no triangle.
+/// The world corners of triangle (part, index) of `object`'s shape: a MeshShape (its parts), or the mesh interface
+/// of a btBvhTriangleMeshShape or a btGImpactMeshShape. False for an id that names no triangle.
 bool worldTriangle(const btCollisionObject* object, int part, int index, std::array<btVector3, 3>& corners) {
   const btCollisionShape* shape = object->getCollisionShape();
   const btTransform& t = object->getWorldTransform();
   if (MeshShape::isMeshShape(shape)) {
     const TriangleMesh& mesh = static_cast<const MeshShape*>(shape)->mesh();
-    if (part != 0 || index < 0 || std::size_t(index) >= mesh.triangleCount()) return false;
+    if (part < 0 || std::size_t(part) >= mesh.parts().size() || index < 0 ||
+        std::uint32_t(index) >= mesh.parts()[std::size_t(part)].triangleCount)
+      return false;
+    const std::size_t triangle = mesh.parts()[std::size_t(part)].firstTriangle + std::size_t(index);
     for (int i = 0; i < 3; ++i) {
-      const float* p = mesh.positions().data() + 3 * std::size_t(mesh.indices()[3 * std::size_t(index) + i]);
+      const float* p = mesh.positions().data() + 3 * std::size_t(mesh.indices()[3 * triangle + i]);
       corners[i] = t(btVector3(p[0], p[1], p[2]) * shape->getLocalScaling());
     }
     return true;
   }
-  if (shape->getShapeType() != TRIANGLE_MESH_SHAPE_PROXYTYPE) return false;
-  const btStridingMeshInterface* meshInterface = static_cast<const btBvhTriangleMeshShape*>(shape)->getMeshInterface();
+  // A BVH mesh scales by its mesh interface's scaling, a GImpact mesh by its parts'.
+  const btStridingMeshInterface* meshInterface = nullptr;
+  btVector3 scaling = shape->getLocalScaling();
+  if (shape->getShapeType() == TRIANGLE_MESH_SHAPE_PROXYTYPE) {
+    meshInterface = static_cast<const btBvhTriangleMeshShape*>(shape)->getMeshInterface();
+  } else if (shape->getShapeType() == GIMPACT_SHAPE_PROXYTYPE) {
+    const auto* gimpact = static_cast<const btGImpactMeshShape*>(shape);
+    meshInterface = gimpact->getMeshInterface();
+    if (part < 0 || part >= gimpact->getMeshPartCount()) return false;
+    scaling = gimpact->getMeshPart(part)->getLocalScaling();
+  } else {
+    return false;
+  }
   if (part < 0 || part >= meshInterface->getNumSubParts()) return false;
   const unsigned char *vertices, *indices;
   int vertexCount, faceCount, vertexStride, indexStride;
@@ -147,7 +163,7 @@ bool worldTriangle(const btCollisionObject* object, int part, int index, std::ar
     const int* face = reinterpret_cast<const int*>(indices + std::size_t(index) * indexStride);
     for (int i = 0; i < 3; ++i) {
       const float* p = reinterpret_cast<const float*>(vertices + std::size_t(face[i]) * vertexStride);
-      corners[i] = t(btVector3(p[0], p[1], p[2]) * shape->getLocalScaling());
+      corners[i] = t(btVector3(p[0], p[1], p[2]) * scaling);
     }
   }
   meshInterface->unLockReadOnlyVertexBase(part);
@@ -251,6 +267,81 @@ TEST(ContactTriangleIds, MeshOnABvhOfTwoPartsNamesThePartAndTriangle) {
     if (groundPart == 0 || groundPart == 1) parts[groundPart] = true;
   }
   EXPECT_TRUE(parts[0] && parts[1]) << "the box across the seam touches both parts";
+}
+
+/// Two 4 x 4 m quads side by side at y = 0, each a part of two triangles, as Bullet's mesh interface.
+std::shared_ptr<btTriangleIndexVertexArray> twoPartGround() {
+  static const float vertices[2][12] = {{-4, 0, -2, 0, 0, -2, 0, 0, 2, -4, 0, 2}, {0, 0, -2, 4, 0, -2, 4, 0, 2, 0, 0, 2}};
+  static const int faces[6] = {0, 2, 1, 0, 3, 2};
+  auto meshInterface = std::make_shared<btTriangleIndexVertexArray>();
+  for (int part = 0; part < 2; ++part) {
+    btIndexedMesh m;
+    m.m_numTriangles = 2;
+    m.m_triangleIndexBase = reinterpret_cast<const unsigned char*>(faces);
+    m.m_triangleIndexStride = 3 * sizeof(int);
+    m.m_numVertices = 4;
+    m.m_vertexBase = reinterpret_cast<const unsigned char*>(vertices[part]);
+    m.m_vertexStride = 3 * sizeof(float);
+    meshInterface->addIndexedMesh(m, PHY_INTEGER);
+  }
+  return meshInterface;
+}
+
+TEST(ContactTriangleIds, GImpactMeshesNameTheirPartAndTriangleAsGImpactDoes) {
+  // Under gpucol::CollisionDispatcher (GImpact registered after it, as a world moved over keeps it), a GImpact box
+  // and a MeshShape box made of two parts rest across the seam of a two-part GImpact ground: each contact names
+  // the part and the triangle within it on both sides, and the two triangles touch; so do GImpact's own contacts.
+  const auto ground = twoPartGround();
+  const TriangleMesh boxMesh = scenes::makeBox(0.5f, 0.5f, 0.5f, 2);
+  std::vector<float> boxXyz(boxMesh.positions().begin(), boxMesh.positions().end());
+  std::vector<int> boxFaces(boxMesh.indices().begin(), boxMesh.indices().end());
+  btTriangleIndexVertexArray boxArrays(int(boxMesh.triangleCount()), boxFaces.data(), 3 * sizeof(int),
+                                       int(boxMesh.vertexCount()), boxXyz.data(), 3 * sizeof(float));
+  // The MeshShape box: the same box in two parts, its first triangle alone and the rest (each part with its own
+  // copy of the vertices), so that its bottom's triangles are named from 1 triangle into the mesh.
+  std::vector<float> twoXyz(boxXyz);
+  twoXyz.insert(twoXyz.end(), boxXyz.begin(), boxXyz.end());
+  std::vector<std::uint32_t> twoIndices(boxMesh.indices().begin(), boxMesh.indices().end());
+  const std::uint32_t rest = std::uint32_t(boxMesh.triangleCount() - 1), verts = std::uint32_t(boxMesh.vertexCount());
+  for (std::size_t i = 3; i < twoIndices.size(); ++i) twoIndices[i] += verts;
+  const std::vector<MeshPart> parts = {{0, 1, 0, verts}, {1, rest, verts, verts}};
+
+  // GImpact's own algorithm first, alone with the GImpact box: its ids read the same way (part, index in part).
+  for (const bool gpucol : {false, true}) {
+    SCOPED_TRACE(gpucol ? "gpucol::CollisionDispatcher" : "btCollisionDispatcher and GImpact");
+    CallbackGuard guard;
+    test::TestWorld world(gpucol ? test::DispatchKind::Gpucol : test::DispatchKind::Stock);
+    btGImpactCollisionAlgorithm::registerAlgorithm(&world.dispatcher());
+    auto groundShape = std::make_shared<btGImpactMeshShape>(ground.get());
+    groundShape->setMargin(0.005f);
+    groundShape->updateBound();
+    world.add(groundShape, 0, at(btVector3(0, 0, 0)));
+    auto boxShape = std::make_shared<btGImpactMeshShape>(&boxArrays);
+    boxShape->setMargin(0.005f);
+    boxShape->updateBound();
+    std::vector<btRigidBody*> boxes = {world.add(boxShape, 1, at(btVector3(0, 0.52f, 0.8f), 0.2f))};
+    if (gpucol) {
+      boxes.push_back(world.add(std::make_shared<MeshShape>(std::make_shared<const TriangleMesh>(
+                                    TriangleMesh::fromParts(twoXyz, twoIndices, parts))),
+                                1, at(btVector3(0.1f, 0.52f, -0.9f), -0.3f)));
+    }
+    for (btRigidBody* b : boxes) b->setCollisionFlags(b->getCollisionFlags() | btCollisionObject::CF_CUSTOM_MATERIAL_CALLBACK);
+    world.step(30);
+    EXPECT_GT(expectTouchingTriangles(0.03f, [](const btCollisionObject*) { return true; }), 4u);
+    bool groundParts[2] = {false, false}, meshParts[2] = {false, false};
+    for (const Seen& s : seen()) {
+      const bool groundFirst = s.object0->getCollisionShape() == groundShape.get();
+      const int groundPart = groundFirst ? s.part0 : s.part1, otherPart = groundFirst ? s.part1 : s.part0;
+      const btCollisionObject* other = groundFirst ? s.object1 : s.object0;
+      if (groundPart == 0 || groundPart == 1) groundParts[groundPart] = true;
+      if (MeshShape::isMeshShape(other->getCollisionShape()) && (otherPart == 0 || otherPart == 1)) meshParts[otherPart] = true;
+    }
+    EXPECT_TRUE(groundParts[0] && groundParts[1]) << "the boxes across the seam touch both parts of the ground";
+    if (!gpucol) continue;
+    EXPECT_TRUE(meshParts[1]) << "the MeshShape box's bottom is in its second part";
+    const auto& stats = static_cast<CollisionDispatcher&>(world.dispatcher()).lastStepStats();
+    EXPECT_EQ(stats.gimpactPairs, 2u) << "both boxes against the GImpact ground, in the batch";
+  }
 }
 
 TEST(ContactTriangleIds, MeshOnAPlaneNamesTheMeshTriangleAndNoPlaneTriangle) {

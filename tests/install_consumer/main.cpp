@@ -6,6 +6,7 @@
 #include <cmath>
 #include <iostream>
 #include <memory>
+#include <vector>
 
 namespace {
 
@@ -40,6 +41,20 @@ int main() {
   world.addRigidBody(&box);
   for (int step = 0; step < 240; ++step) world.stepSimulation(1.0f / 60);
   const float y = box.getWorldTransform().getOrigin().y();
+
+  // Saved and loaded back as MeshShape bodies (gpucol::WorldImporter links Bullet's world importer).
+  btDefaultSerializer serializer;
+  world.serialize(&serializer);
+  std::vector<char> file(serializer.getBufferPointer(), serializer.getBufferPointer() + serializer.getCurrentBufferSize());
+  gpucol::WorldImporter importer(nullptr, config);
+  const bool loaded = importer.loadFileFromMemory(file.data(), int(file.size()));
+  const int meshes = importer.meshShapesImported(), bodies = importer.getNumRigidBodies();
+  importer.deleteAllData();
+  if (!loaded || meshes != 2 || bodies != 2) {
+    std::cerr << "install check: the saved world should load back as 2 MeshShape bodies; got " << bodies
+              << " bodies and " << meshes << " MeshShapes\n";
+    return 1;
+  }
   world.removeRigidBody(&box);
   world.removeRigidBody(&ground);
   if (!(std::abs(y - 0.5f) < 0.01f)) {
@@ -55,6 +70,7 @@ int main() {
   }
   std::cout << "install check: find_package(gpucol) works; a mesh box rests at y = " << y << " in a world with "
             << "gpucol::CollisionDispatcher and gpucol::GridBroadphase; the direct query finds "
-            << result.intersectingPairs.size() << " intersecting triangle pairs\n";
+            << result.intersectingPairs.size() << " intersecting triangle pairs; a saved world loads back through "
+            << "gpucol::WorldImporter\n";
   return 0;
 }

@@ -11,4 +11,6 @@
 #include "gpucol/mesh_report.h"
 #include "gpucol/mesh_shape.h"
 #include "gpucol/opencl_status.h"
+#include "gpucol/principal_mesh_body.h"
 #include "gpucol/triangle_mesh.h"
+#include "gpucol/world_importer.h"

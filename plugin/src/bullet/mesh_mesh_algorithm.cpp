@@ -5,12 +5,15 @@
 #include <BulletCollision/CollisionDispatch/btCollisionConfiguration.h>
 #include <BulletCollision/CollisionDispatch/btManifoldResult.h>
 #include <BulletCollision/CollisionShapes/btStaticPlaneShape.h>
+#include <BulletCollision/Gimpact/btGImpactShape.h>
 
 #include <list>
 #include <mutex>
+#include <stdexcept>
 #include <string>
 
 #include "bullet/contact_manifold_set.h"
+#include "bullet/gimpact_stand_ins.h"
 #include "bullet/mesh_plane_contacts.h"
 #include "bullet/triangle_mesh_patch.h"
 #include "bullet/warn_once.h"
@@ -53,17 +56,20 @@ bool handles(const btCollisionShape* s0, const btCollisionShape* s1) {
 }
 
 // Reduced mesh contacts as manifold contacts: the point moves onto B's margin surface and the distance counts
-// both margins, so that bodies with margins rest that far apart (as Bullet's convex shapes do).
-std::vector<PairContact> toPairContacts(const std::vector<MeshContact>& reduced, btScalar marginA,
-                                        btScalar marginB) {
+// both margins, so that bodies with margins rest that far apart (as Bullet's convex shapes do). Each side's
+// triangle is named by its part and its index within the part, as Bullet's mesh shapes name theirs.
+std::vector<PairContact> toPairContacts(const std::vector<MeshContact>& reduced, const MeshShape& a,
+                                        const MeshShape& b) {
+  const btScalar marginA = a.getMargin(), marginB = b.getMargin();
   std::vector<PairContact> out;
   out.reserve(reduced.size());
   for (const MeshContact& c : reduced) {
     PairContact p{c.pointOnBWorld + c.normalWorldOnB * marginB, c.normalWorldOnB, c.depth - marginA - marginB};
-    // A MeshShape is one part: part 0, and its triangle's index.
-    p.partId0 = p.partId1 = 0;
-    p.index0 = int(c.triangleA);
-    p.index1 = int(c.triangleB);
+    const PartTriangle t0 = a.mesh().partTriangle(c.triangleA), t1 = b.mesh().partTriangle(c.triangleB);
+    p.partId0 = t0.part;
+    p.index0 = t0.index;
+    p.partId1 = t1.part;
+    p.index1 = t1.index;
     out.push_back(p);
   }
   return out;
@@ -103,23 +109,32 @@ class MeshMeshCreateFunc : public btCollisionAlgorithmCreateFunc {
 
 MeshMeshAlgorithm::MeshMeshAlgorithm(const btCollisionAlgorithmConstructionInfo& info,
                                      const btCollisionObjectWrapper* body0, const btCollisionObjectWrapper* body1,
-                                     const Config& config)
+                                     const Config& config, GImpactStandIns* standIns)
     : btActivatingCollisionAlgorithm(info, body0, body1),
       m_config(config),
+      m_standIns(standIns),
       m_manifolds(std::make_unique<ContactManifoldSet>(info.m_dispatcher1)),
       m_patch(std::make_unique<TriangleMeshPatch>()) {}
 
 MeshMeshAlgorithm::~MeshMeshAlgorithm() = default;
 
+const MeshShape* MeshMeshAlgorithm::asMesh(const btCollisionShape* shape) const {
+  if (MeshShape::isMeshShape(shape)) return static_cast<const MeshShape*>(shape);
+  if (m_standIns != nullptr && GImpactStandIns::isGImpactMesh(shape)) {
+    return m_standIns->get(*static_cast<const btGImpactMeshShape*>(shape));
+  }
+  return nullptr;
+}
+
 std::optional<MeshPairQuery> MeshMeshAlgorithm::meshPairQuery(const btCollisionObjectWrapper* body0,
                                                               const btCollisionObjectWrapper* body1) const {
-  if (!MeshShape::isMeshShape(body0->getCollisionShape()) || !MeshShape::isMeshShape(body1->getCollisionShape())) {
-    return std::nullopt;
-  }
+  const MeshShape* a = asMesh(body0->getCollisionShape());
+  const MeshShape* b = a ? asMesh(body1->getCollisionShape()) : nullptr;
+  if (b == nullptr) return std::nullopt;
   MeshPairQuery query;
-  query.shapeA = static_cast<const MeshShape*>(body0->getCollisionShape());
+  query.shapeA = a;
   query.transformA = body0->getWorldTransform();
-  query.shapeB = static_cast<const MeshShape*>(body1->getCollisionShape());
+  query.shapeB = b;
   query.transformB = body1->getWorldTransform();
   return query;
 }
@@ -135,6 +150,12 @@ void MeshMeshAlgorithm::processCollision(const btCollisionObjectWrapper* body0, 
   std::unique_ptr<Precomputed> precomputed = std::move(m_precomputed);
   std::vector<PairContact> contacts;
   try {
+    const MeshShape* mesh0 = asMesh(s0);
+    const MeshShape* mesh1 = asMesh(s1);
+    if (mesh0 == nullptr && mesh1 == nullptr) {
+      // Only a GImpact mesh's pair comes here without a mesh: its triangles could not be read this step.
+      throw std::runtime_error("the GImpact mesh's triangles cannot be read");
+    }
     if (const std::optional<MeshPairQuery> query = meshPairQuery(body0, body1)) {
       // The batch's result is used only for the very shapes and transforms it was computed with: a compound's
       // child or a user calling processCollision again gets its own query.
@@ -145,26 +166,28 @@ void MeshMeshAlgorithm::processCollision(const btCollisionObjectWrapper* body0, 
       const MeshPairResult result =
           batched ? std::move(precomputed->result)
                   : collideMeshes(*query->shapeA, query->transformA, *query->shapeB, query->transformB, m_config);
-      contacts = toPairContacts(result.reducedContacts, s0->getMargin(), s1->getMargin());
-    } else if (handles(s0, s1)) {
+      contacts = toPairContacts(result.reducedContacts, *query->shapeA, *query->shapeB);
+    } else {
       // A mesh against a plane or another concave shape: computed with the mesh as body0, then turned round if
       // the mesh is body1.
-      const bool meshFirst = MeshShape::isMeshShape(s0);
+      const bool meshFirst = mesh0 != nullptr;
       const btCollisionObjectWrapper* meshBody = meshFirst ? body0 : body1;
       const btCollisionObjectWrapper* otherBody = meshFirst ? body1 : body0;
-      const MeshShape& mesh = *static_cast<const MeshShape*>(meshBody->getCollisionShape());
+      const MeshShape& mesh = meshFirst ? *mesh0 : *mesh1;
       const btCollisionShape* other = otherBody->getCollisionShape();
       if (other->getShapeType() == STATIC_PLANE_PROXYTYPE) {
         contacts = meshPlaneContacts(mesh, meshBody->getWorldTransform(), *static_cast<const btStaticPlaneShape*>(other),
                                      otherBody->getWorldTransform(), m_config.reductionResolution);
-      } else if (const MeshShape* patch = m_patch->update(*static_cast<const btConcaveShape*>(other),
-                                                          otherBody->getWorldTransform(), mesh,
-                                                          meshBody->getWorldTransform())) {
-        const MeshPairResult result =
-            collideMeshes(mesh, meshBody->getWorldTransform(), *patch, otherBody->getWorldTransform(), m_config);
-        contacts = toPairContacts(result.reducedContacts, mesh.getMargin(), other->getMargin());
-        // The patch's triangles are the other shape's: their part and index as its processAllTriangles gave.
-        for (PairContact& c : contacts) m_patch->sourceTriangle(std::uint32_t(c.index1), c.partId1, c.index1);
+      } else if (isOtherConcave(other)) {
+        if (const MeshShape* patch = m_patch->update(*static_cast<const btConcaveShape*>(other),
+                                                     otherBody->getWorldTransform(), mesh,
+                                                     meshBody->getWorldTransform())) {
+          const MeshPairResult result =
+              collideMeshes(mesh, meshBody->getWorldTransform(), *patch, otherBody->getWorldTransform(), m_config);
+          contacts = toPairContacts(result.reducedContacts, mesh, *patch);
+          // The patch's triangles are the other shape's: their part and index as its processAllTriangles gave.
+          for (PairContact& c : contacts) m_patch->sourceTriangle(std::uint32_t(c.index1), c.partId1, c.index1);
+        }
       }
       if (!meshFirst) contacts = swapSides(std::move(contacts));
     }

@@ -54,8 +54,10 @@ std::vector<PairContact> meshPlaneContacts(const MeshShape& mesh, const btTransf
     // On the plane's margin surface; the distance counts both margins, so bodies rest `margins` apart.
     const btVector3 onPlane = world - normalWorld * (distance - plane.getMargin());
     PairContact contact{onPlane, normalWorld, distance - margins};
-    contact.partId0 = 0;  // the mesh's part and triangle; the plane has none
-    contact.index0 = int(std::uint32_t(vertexAndTriangle));
+    // The mesh's part and triangle; the plane has none.
+    const PartTriangle triangle = mesh.mesh().partTriangle(std::uint32_t(vertexAndTriangle));
+    contact.partId0 = triangle.part;
+    contact.index0 = triangle.index;
     contacts.push_back(contact);
     binned.push_back({Eigen::Vector3f(float(world.x()), float(world.y()), float(world.z())),
                       Eigen::Vector3f(float(normalWorld.x()), float(normalWorld.y()), float(normalWorld.z())),

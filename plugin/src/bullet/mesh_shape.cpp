@@ -126,7 +126,8 @@ void MeshShape::processAllTriangles(btTriangleCallback* callback, const btVector
       const float* p = positions + 3 * std::size_t(indices[3 * std::size_t(t) + i]);
       corners[i] = btVector3(p[0], p[1], p[2]) * m_localScaling;
     }
-    callback->processTriangle(corners, 0, int(t));
+    const PartTriangle id = m_mesh->partTriangle(t);
+    callback->processTriangle(corners, id.part, id.index);
   });
 }
 
@@ -168,7 +169,7 @@ void MeshShape::calculateLocalInertia(btScalar mass, btVector3& inertia) const {
           "inertia frame " + name,
           "MeshShape '" + name +
               "': the mesh is not in its principal frame (centre of mass off the origin or a non-diagonal "
-              "inertia tensor); the body gets the tensor's diagonal. Use TriangleMesh::inPrincipalFrame.");
+              "inertia tensor); the body gets the tensor's diagonal. Build the body with principalMeshBody().");
     }
   } catch (const MeshError& e) {
     // No volume to integrate: the box of the scaled mesh stands in, as btCollisionShape's default would.
