@@ -68,14 +68,16 @@ int run(const DemoOptions& options) {
   }
 
   WorldOptions worldOptions;
-  worldOptions.backend = options.backend == "gimpact" ? CollisionBackend::GImpact : CollisionBackend::Gpucol;
+  worldOptions.backend = options.backend == "gimpact"          ? CollisionBackend::GImpact
+                         : options.backend == "gimpact-gpucol" ? CollisionBackend::GImpactOnGpucol
+                                                               : CollisionBackend::Gpucol;
   worldOptions.gimpactMargin = options.gimpactMargin;
   worldOptions.allowSleeping = !options.noSleep;
   WorldScene world(scene, worldOptions);
 
   std::printf("scene %s: %zu dynamic bodies, %zu triangles in all; backend %s", scene.name.c_str(),
               world.dynamicBodies().size(), triangleCount(scene), backendName(worldOptions.backend));
-  if (worldOptions.backend == CollisionBackend::GImpact)
+  if (worldOptions.backend != CollisionBackend::Gpucol)
     std::printf(" (margin %g m)", worldOptions.gimpactMargin);
   std::printf("; %d steps of %g s; sleeping %s\n", options.steps, options.dt, options.noSleep ? "off" : "on");
 
@@ -175,8 +177,9 @@ int main(int argc, char** argv) {
   app.add_option("--steps", options.steps, "steps to run")->check(CLI::PositiveNumber)->capture_default_str();
   app.add_option("--dt", options.dt, "seconds per step")->check(CLI::PositiveNumber)->capture_default_str();
   app.add_option("--backend", options.backend,
-                 "collision code: gpucol or gimpact (GImpact + btDbvtBroadphase)")
-      ->check(CLI::IsMember({"gpucol", "gimpact"}))
+                 "collision code: gpucol, gimpact (GImpact + btDbvtBroadphase) or gimpact-gpucol (that GImpact "
+                 "world with gpucol::CollisionDispatcher)")
+      ->check(CLI::IsMember({"gpucol", "gimpact", "gimpact-gpucol"}))
       ->capture_default_str();
   app.add_option("--gimpact-margin", options.gimpactMargin, "collision margin of the GImpact shapes (metres)")
       ->check(CLI::NonNegativeNumber)

@@ -213,19 +213,6 @@ TEST(FromStridingMesh, BadInputNamesThePartAndTheElement) {
   }
 }
 
-TEST(FromParts, RefusesPartsThatDoNotTileTheMesh) {
-  const TriangleMesh box = scenes::makeBox(1, 1, 1, 1);
-  MeshPart a{0, 6, 0, 8}, b{6, 6, 0, 8};
-  EXPECT_NE(errorOf([&] { TriangleMesh::fromParts(box.positions(), box.indices(), {a, b}); }).find("part 1 starts"),
-            std::string::npos);
-  // Triangle 6 (part 1's first) uses vertices of part 0.
-  std::vector<float> xyz = box.positions();
-  xyz.insert(xyz.end(), box.positions().begin(), box.positions().end());
-  MeshPart c{0, 6, 0, 8}, d{6, 6, 8, 8};
-  const std::string message = errorOf([&] { TriangleMesh::fromParts(xyz, box.indices(), {c, d}); });
-  EXPECT_NE(message.find("part 1 triangle 0 corner 0"), std::string::npos) << message;
-}
-
 TEST(MeshShapeFromBullet, GImpactKeepsTrianglesScalingAndTheTrianglesMargin) {
   TwoKindsOfArrays source;
   btGImpactMeshShape gimpact(&source.arrays);
