@@ -176,9 +176,10 @@ int main(int argc, char** argv) {
       ->needs(mesh);
   app.add_option("--steps", options.steps, "steps to run")->check(CLI::PositiveNumber)->capture_default_str();
   app.add_option("--dt", options.dt, "seconds per step")->check(CLI::PositiveNumber)->capture_default_str();
-  app.add_option("--backend", options.backend,
-                 "collision code: gpucol, gimpact (GImpact + btDbvtBroadphase) or gimpact-gpucol (that GImpact "
-                 "world with gpucol::CollisionDispatcher)")
+  app.add_option(
+         "--backend", options.backend,
+         "collision code: gpucol, gimpact (GImpact + btDbvtBroadphase) or gimpact-gpucol (that GImpact "
+         "world with gpucol::CollisionDispatcher)")
       ->check(CLI::IsMember({"gpucol", "gimpact", "gimpact-gpucol"}))
       ->capture_default_str();
   app.add_option("--gimpact-margin", options.gimpactMargin, "collision margin of the GImpact shapes (metres)")

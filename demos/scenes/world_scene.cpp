@@ -21,9 +21,12 @@ namespace gpucol::scenes {
 
 const char* backendName(CollisionBackend backend) {
   switch (backend) {
-    case CollisionBackend::Gpucol: return "gpucol";
-    case CollisionBackend::GImpact: return "gimpact";
-    case CollisionBackend::GImpactOnGpucol: return "gimpact-gpucol";
+    case CollisionBackend::Gpucol:
+      return "gpucol";
+    case CollisionBackend::GImpact:
+      return "gimpact";
+    case CollisionBackend::GImpactOnGpucol:
+      return "gimpact-gpucol";
   }
   return "?";
 }

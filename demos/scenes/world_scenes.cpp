@@ -62,8 +62,8 @@ float massOf(const TriangleMesh& mesh) {
   return float(mesh.massProperties(kSceneDensity).mass);
 }
 
-// The bin of the pile scenes: the floor spans the walls' footprint; the x walls run the full length, the z walls
-// fit between them.
+// The bin of the pile scenes: the floor spans the walls' footprint; the x walls run the full length, the z
+// walls fit between them.
 TriangleMesh binMesh() {
   return merged({{makeBox(3.5f, 0.25f, 3.5f), btVector3(0, -0.25f, 0)},
                  {makeBox(0.25f, 1.25f, 3.5f), btVector3(3.25f, 1.25f, 0)},
@@ -129,7 +129,8 @@ SceneDescription makeToriAndCratesScene(int bodies, unsigned seed, int detail) {
   SceneDescription scene;
   scene.name = detail == 1 ? "tori" : "tori-x" + std::to_string(detail);
   scene.meshes.push_back(std::make_shared<const TriangleMesh>(binMesh()));
-  scene.meshes.push_back(std::make_shared<const TriangleMesh>(makeTorus(0.4f, 0.12f, 32 * detail, 16 * detail)));
+  scene.meshes.push_back(
+      std::make_shared<const TriangleMesh>(makeTorus(0.4f, 0.12f, 32 * detail, 16 * detail)));
   scene.meshes.push_back(std::make_shared<const TriangleMesh>(makeBox(0.3f, 0.3f, 0.3f, 4 * detail)));
   const float masses[2] = {massOf(*scene.meshes[1]), massOf(*scene.meshes[2])};
   scene.bodies.push_back({0, 0.0f, at(0, 0, 0)});

@@ -1,5 +1,6 @@
-// Validation of TriangleMesh::fromArrays and fromParts (thesis §5.3.1): every bad input gives a MeshError whose
-// message names the source, the element (and its part) and the value; valid but poor input is kept and reported.
+// Validation of TriangleMesh::fromArrays and fromParts (thesis §5.3.1): every bad input gives a MeshError
+// whose message names the source, the element (and its part) and the value; valid but poor input is kept and
+// reported.
 #include "gpucol/triangle_mesh.h"
 
 #include <gtest/gtest.h>
@@ -124,7 +125,8 @@ TEST(TriangleMeshTransform, MapsEveryVertex) {
 }
 
 /// The message of the MeshError that fromParts throws ("" when it throws none).
-std::string partsErrorOf(std::vector<float> xyz, std::vector<std::uint32_t> indices, std::vector<MeshPart> parts) {
+std::string partsErrorOf(std::vector<float> xyz, std::vector<std::uint32_t> indices,
+                         std::vector<MeshPart> parts) {
   try {
     TriangleMesh::fromParts(std::move(xyz), std::move(indices), std::move(parts), "parts");
   } catch (const MeshError& e) {
@@ -174,16 +176,19 @@ TEST(TriangleMeshParts, RefuseWhatDoesNotTileTheMeshAndNameThePart) {
   {
     TwoQuads q;
     q.parts[1].vertexCount = 3;
-    EXPECT_NE(partsErrorOf(q.xyz, q.indices, q.parts).find("the parts cover 4 triangles and 7 vertices of 4 and 8"),
-              std::string::npos);
+    EXPECT_NE(
+        partsErrorOf(q.xyz, q.indices, q.parts).find("the parts cover 4 triangles and 7 vertices of 4 and 8"),
+        std::string::npos);
   }
   {
     // Triangle 0 of part 1 uses a vertex of part 0.
     TwoQuads q;
     q.indices[6] = 0;
     const std::string message = partsErrorOf(q.xyz, q.indices, q.parts);
-    EXPECT_NE(message.find("part 1 triangle 0 corner 0 has vertex index 0, out of range for the part's vertices 4 to 7"),
-              std::string::npos)
+    EXPECT_NE(
+        message.find(
+            "part 1 triangle 0 corner 0 has vertex index 0, out of range for the part's vertices 4 to 7"),
+        std::string::npos)
         << message;
   }
   {

@@ -129,10 +129,12 @@ void MeshShape::calculateLocalInertia(btScalar mass, btVector3& inertia) const {
                             .length();
     // 1e-3 relative: far above the rounding of the double integrals, far below an inertia that matters.
     if (offDiagonal > 1e-3 * diagonal || std::sqrt(c[0] * c[0] + c[1] * c[1] + c[2] * c[2]) > 1e-3 * size) {
-      warnOnce("inertia frame " + m_mesh->name(),
-               "MeshShape '" + m_mesh->name() +
-                   "': the mesh is not in its principal frame (centre of mass off the origin or a non-diagonal "
-                   "inertia tensor); the body gets the tensor's diagonal. Build the body with principalMeshBody().");
+      warnOnce(
+          "inertia frame " + m_mesh->name(),
+          "MeshShape '" + m_mesh->name() +
+              "': the mesh is not in its principal frame (centre of mass off the origin or a non-diagonal "
+              "inertia tensor); the body gets the tensor's diagonal. Build the body with "
+              "principalMeshBody().");
     }
   } catch (const MeshError& e) {
     // No volume to integrate: the box of the scaled mesh stands in, as btCollisionShape's default would.
