@@ -1,7 +1,7 @@
 // gpucol-bench world: whole Bullet worlds stepped with gpucol (MeshShape, CollisionDispatcher,
-// GridBroadphase), with GImpact (btGImpactMeshShape, btCollisionDispatcher, btDbvtBroadphase) and with the GImpact
-// world whose dispatcher alone is gpucol's, in one run, same scene, same steps: speed, contacts, and how well the
-// bodies rest once they should.
+// GridBroadphase), with GImpact (btGImpactMeshShape, btCollisionDispatcher, btDbvtBroadphase) and with the
+// GImpact world whose dispatcher alone is gpucol's, in one run, same scene, same steps: speed, contacts, and
+// how well the bodies rest once they should.
 #include <fstream>
 #include <iomanip>
 #include <iostream>

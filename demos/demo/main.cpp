@@ -69,9 +69,10 @@ int run(const DemoOptions& options) {
   }
 
   WorldOptions worldOptions;
-  worldOptions.backend = options.backend == "gimpact"      ? CollisionBackend::GImpact
-                         : options.backend == "primitives" ? CollisionBackend::Primitives
-                                                           : CollisionBackend::Gpucol;
+  worldOptions.backend = options.backend == "gimpact"          ? CollisionBackend::GImpact
+                         : options.backend == "gimpact-gpucol" ? CollisionBackend::GImpactOnGpucol
+                         : options.backend == "primitives"     ? CollisionBackend::Primitives
+                                                               : CollisionBackend::Gpucol;
   worldOptions.gimpactMargin = options.gimpactMargin;
   worldOptions.meshMargin = options.meshMargin;
   worldOptions.allowSleeping = !options.noSleep;
@@ -79,7 +80,7 @@ int run(const DemoOptions& options) {
 
   std::printf("scene %s: %zu dynamic bodies, %zu triangles in all; backend %s", scene.name.c_str(),
               world.dynamicBodies().size(), triangleCount(scene), backendName(worldOptions.backend));
-  if (worldOptions.backend == CollisionBackend::GImpact)
+  if (worldOptions.backend != CollisionBackend::Gpucol)
     std::printf(" (margin %g m)", worldOptions.gimpactMargin);
   std::printf("; %d steps of %g s; sleeping %s\n", options.steps, options.dt, options.noSleep ? "off" : "on");
 
@@ -179,9 +180,10 @@ int main(int argc, char** argv) {
   app.add_option("--steps", options.steps, "steps to run")->check(CLI::PositiveNumber)->capture_default_str();
   app.add_option("--dt", options.dt, "seconds per step")->check(CLI::PositiveNumber)->capture_default_str();
   app.add_option("--backend", options.backend,
-                 "collision code: gpucol, gimpact (GImpact + btDbvtBroadphase) or primitives (the same bodies "
-                 "as Bullet's boxes, spheres and compounds of boxes and capsules: the reference)")
-      ->check(CLI::IsMember({"gpucol", "gimpact", "primitives"}))
+                 "collision code: gpucol, gimpact (GImpact + btDbvtBroadphase), gimpact-gpucol (that GImpact "
+                 "world with gpucol::CollisionDispatcher) or primitives (the same bodies as Bullet's boxes, "
+                 "spheres and compounds of boxes and capsules: the reference)")
+      ->check(CLI::IsMember({"gpucol", "gimpact", "gimpact-gpucol", "primitives"}))
       ->capture_default_str();
   app.add_option("--mesh-margin", options.meshMargin, "collision margin of gpucol's MeshShapes (metres)")
       ->check(CLI::NonNegativeNumber)

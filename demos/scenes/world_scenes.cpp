@@ -18,7 +18,6 @@
 namespace gpucol::scenes {
 namespace {
 
-constexpr std::array<double, 9> kIdentity = {1, 0, 0, 0, 1, 0, 0, 0, 1};
 constexpr double kPi = 3.14159265358979323846;
 
 btTransform at(float x, float y, float z, const btQuaternion& rotation = btQuaternion::getIdentity()) {
@@ -89,9 +88,7 @@ float massOf(const TriangleMesh& mesh) {
   return float(mesh.massProperties(kSceneDensity).mass);
 }
 
-// The bin of the pile scenes: the floor spans the walls' footprint; the x walls run the full length, the z walls
-// fit between them.
-// The 6 m bin of the pile of 50 as one watertight mesh (makePileScene's).
+// The 6 m bin of the pile of 50 as one watertight mesh (makePileScene's), for the tori scene.
 TriangleMesh binMesh() { return makeBin(3.5f, 3.0f, 0.5f, 2.5f); }
 
 }  // namespace
@@ -176,7 +173,8 @@ SceneDescription makeToriAndCratesScene(int bodies, unsigned seed, int detail) {
   SceneDescription scene;
   scene.name = detail == 1 ? "tori" : "tori-x" + std::to_string(detail);
   scene.meshes.push_back(std::make_shared<const TriangleMesh>(binMesh()));
-  scene.meshes.push_back(std::make_shared<const TriangleMesh>(makeTorus(0.4f, 0.12f, 32 * detail, 16 * detail)));
+  scene.meshes.push_back(
+      std::make_shared<const TriangleMesh>(makeTorus(0.4f, 0.12f, 32 * detail, 16 * detail)));
   scene.meshes.push_back(std::make_shared<const TriangleMesh>(makeBox(0.3f, 0.3f, 0.3f, 4 * detail)));
   const float masses[2] = {massOf(*scene.meshes[1]), massOf(*scene.meshes[2])};
   scene.bodies.push_back({0, 0.0f, at(0, 0, 0)});

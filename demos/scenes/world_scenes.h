@@ -22,9 +22,9 @@ SceneDescription makeStackScene(int boxes = 10, float gap = 0.0f);
 SceneDescription makePileScene(int bodies = 50, unsigned seed = 1);
 
 /// `bodies` tori (ring 0.4 m, tube 0.12 m, 1024 × detail² triangles) and crates (0.6 m boxes, 192 × detail²
-/// triangles) in a checkerboard, in random orientations (fixed seed), 4 × 4 to a layer 1.5 m apart, above the pile
-/// scene's bin: the GImpact pile that GImpact and gpucol::CollisionDispatcher step side by side. Named "tori", or
-/// "tori-x<detail>" above detail 1.
+/// triangles) in a checkerboard, in random orientations (fixed seed), 4 × 4 to a layer 1.5 m apart, above the
+/// pile scene's bin: the GImpact pile that GImpact and gpucol::CollisionDispatcher step side by side. Named
+/// "tori", or "tori-x<detail>" above detail 1.
 SceneDescription makeToriAndCratesScene(int bodies = 32, unsigned seed = 1, int detail = 1);
 
 /// `count` copies of `mesh`, moved to its principal frame (throws MeshError for a mesh without mass

@@ -122,8 +122,8 @@ btScalar distanceBetweenTriangles(const std::array<btVector3, 3>& t0, const std:
   return best;
 }
 
-/// The world corners of triangle (part, index) of `object`'s shape: a MeshShape (its parts), or the mesh interface
-/// of a btBvhTriangleMeshShape or a btGImpactMeshShape. False for an id that names no triangle.
+/// The world corners of triangle (part, index) of `object`'s shape: a MeshShape (its parts), or the mesh
+/// interface of a btBvhTriangleMeshShape or a btGImpactMeshShape. False for an id that names no triangle.
 bool worldTriangle(const btCollisionObject* object, int part, int index, std::array<btVector3, 3>& corners) {
   const btCollisionShape* shape = object->getCollisionShape();
   const btTransform& t = object->getWorldTransform();
@@ -271,7 +271,8 @@ TEST(ContactTriangleIds, MeshOnABvhOfTwoPartsNamesThePartAndTriangle) {
 
 /// Two 4 x 4 m quads side by side at y = 0, each a part of two triangles, as Bullet's mesh interface.
 std::shared_ptr<btTriangleIndexVertexArray> twoPartGround() {
-  static const float vertices[2][12] = {{-4, 0, -2, 0, 0, -2, 0, 0, 2, -4, 0, 2}, {0, 0, -2, 4, 0, -2, 4, 0, 2, 0, 0, 2}};
+  static const float vertices[2][12] = {{-4, 0, -2, 0, 0, -2, 0, 0, 2, -4, 0, 2},
+                                        {0, 0, -2, 4, 0, -2, 4, 0, 2, 0, 0, 2}};
   static const int faces[6] = {0, 2, 1, 0, 3, 2};
   auto meshInterface = std::make_shared<btTriangleIndexVertexArray>();
   for (int part = 0; part < 2; ++part) {
@@ -288,25 +289,28 @@ std::shared_ptr<btTriangleIndexVertexArray> twoPartGround() {
 }
 
 TEST(ContactTriangleIds, GImpactMeshesNameTheirPartAndTriangleAsGImpactDoes) {
-  // Under gpucol::CollisionDispatcher (GImpact registered after it, as a world moved over keeps it), a GImpact box
-  // and a MeshShape box made of two parts rest across the seam of a two-part GImpact ground: each contact names
-  // the part and the triangle within it on both sides, and the two triangles touch; so do GImpact's own contacts.
+  // Under gpucol::CollisionDispatcher (GImpact registered after it, as a world moved over keeps it), a
+  // GImpact box and a MeshShape box made of two parts rest across the seam of a two-part GImpact ground: each
+  // contact names the part and the triangle within it on both sides, and the two triangles touch; so do
+  // GImpact's own contacts.
   const auto ground = twoPartGround();
   const TriangleMesh boxMesh = scenes::makeBox(0.5f, 0.5f, 0.5f, 2);
   std::vector<float> boxXyz(boxMesh.positions().begin(), boxMesh.positions().end());
   std::vector<int> boxFaces(boxMesh.indices().begin(), boxMesh.indices().end());
   btTriangleIndexVertexArray boxArrays(int(boxMesh.triangleCount()), boxFaces.data(), 3 * sizeof(int),
                                        int(boxMesh.vertexCount()), boxXyz.data(), 3 * sizeof(float));
-  // The MeshShape box: the same box in two parts, its first triangle alone and the rest (each part with its own
-  // copy of the vertices), so that its bottom's triangles are named from 1 triangle into the mesh.
+  // The MeshShape box: the same box in two parts, its first triangle alone and the rest (each part with its
+  // own copy of the vertices), so that its bottom's triangles are named from 1 triangle into the mesh.
   std::vector<float> twoXyz(boxXyz);
   twoXyz.insert(twoXyz.end(), boxXyz.begin(), boxXyz.end());
   std::vector<std::uint32_t> twoIndices(boxMesh.indices().begin(), boxMesh.indices().end());
-  const std::uint32_t rest = std::uint32_t(boxMesh.triangleCount() - 1), verts = std::uint32_t(boxMesh.vertexCount());
+  const std::uint32_t rest = std::uint32_t(boxMesh.triangleCount() - 1),
+                      verts = std::uint32_t(boxMesh.vertexCount());
   for (std::size_t i = 3; i < twoIndices.size(); ++i) twoIndices[i] += verts;
   const std::vector<MeshPart> parts = {{0, 1, 0, verts}, {1, rest, verts, verts}};
 
-  // GImpact's own algorithm first, alone with the GImpact box: its ids read the same way (part, index in part).
+  // GImpact's own algorithm first, alone with the GImpact box: its ids read the same way (part, index in
+  // part).
   for (const bool gpucol : {false, true}) {
     SCOPED_TRACE(gpucol ? "gpucol::CollisionDispatcher" : "btCollisionDispatcher and GImpact");
     CallbackGuard guard;
@@ -325,7 +329,8 @@ TEST(ContactTriangleIds, GImpactMeshesNameTheirPartAndTriangleAsGImpactDoes) {
                                     TriangleMesh::fromParts(twoXyz, twoIndices, parts))),
                                 1, at(btVector3(0.1f, 0.52f, -0.9f), -0.3f)));
     }
-    for (btRigidBody* b : boxes) b->setCollisionFlags(b->getCollisionFlags() | btCollisionObject::CF_CUSTOM_MATERIAL_CALLBACK);
+    for (btRigidBody* b : boxes)
+      b->setCollisionFlags(b->getCollisionFlags() | btCollisionObject::CF_CUSTOM_MATERIAL_CALLBACK);
     world.step(30);
     EXPECT_GT(expectTouchingTriangles(0.03f, [](const btCollisionObject*) { return true; }), 4u);
     bool groundParts[2] = {false, false}, meshParts[2] = {false, false};
@@ -334,9 +339,11 @@ TEST(ContactTriangleIds, GImpactMeshesNameTheirPartAndTriangleAsGImpactDoes) {
       const int groundPart = groundFirst ? s.part0 : s.part1, otherPart = groundFirst ? s.part1 : s.part0;
       const btCollisionObject* other = groundFirst ? s.object1 : s.object0;
       if (groundPart == 0 || groundPart == 1) groundParts[groundPart] = true;
-      if (MeshShape::isMeshShape(other->getCollisionShape()) && (otherPart == 0 || otherPart == 1)) meshParts[otherPart] = true;
+      if (MeshShape::isMeshShape(other->getCollisionShape()) && (otherPart == 0 || otherPart == 1))
+        meshParts[otherPart] = true;
     }
-    EXPECT_TRUE(groundParts[0] && groundParts[1]) << "the boxes across the seam touch both parts of the ground";
+    EXPECT_TRUE(groundParts[0] && groundParts[1])
+        << "the boxes across the seam touch both parts of the ground";
     if (!gpucol) continue;
     EXPECT_TRUE(meshParts[1]) << "the MeshShape box's bottom is in its second part";
     const auto& stats = static_cast<CollisionDispatcher&>(world.dispatcher()).lastStepStats();

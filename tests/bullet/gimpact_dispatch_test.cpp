@@ -1,8 +1,8 @@
 // GImpact worlds under gpucol::CollisionDispatcher (issue 54): with the dispatcher swapped in (GImpact's
-// registerAlgorithm kept, after it, or removed), GImpact mesh pairs, GImpact against MeshShape and GImpact against
-// a plane go through gpucol's batch, built once per shape and again when its vertices change; a pile of GImpact
-// tori and crates rests with no body through another, beside the same pile under GImpact; Config's switch leaves
-// GImpact pairs to GImpact.
+// registerAlgorithm kept, after it, or removed), GImpact mesh pairs, GImpact against MeshShape and GImpact
+// against a plane go through gpucol's batch, built once per shape and again when its vertices change; a pile
+// of GImpact tori and crates rests with no body through another, beside the same pile under GImpact; Config's
+// switch leaves GImpact pairs to GImpact.
 #include <BulletCollision/Gimpact/btGImpactCollisionAlgorithm.h>
 #include <BulletCollision/Gimpact/btGImpactShape.h>
 #include <btBulletDynamicsCommon.h>
@@ -26,7 +26,8 @@ namespace {
 /// A btGImpactMeshShape over its own copy of a mesh's arrays (which it keeps, as GImpact needs).
 struct GImpactMeshBody {
   explicit GImpactMeshBody(const TriangleMesh& mesh, float margin = 0.01f)
-      : xyz(mesh.positions().begin(), mesh.positions().end()), faces(mesh.indices().begin(), mesh.indices().end()),
+      : xyz(mesh.positions().begin(), mesh.positions().end()),
+        faces(mesh.indices().begin(), mesh.indices().end()),
         arrays(int(mesh.triangleCount()), faces.data(), 3 * sizeof(int), int(mesh.vertexCount()), xyz.data(),
                3 * sizeof(float)),
         shape(std::make_shared<btGImpactMeshShape>(&arrays)) {
@@ -40,15 +41,16 @@ struct GImpactMeshBody {
 };
 
 /// The deepest crossing of any two of `bodies`' mesh shapes (GImpact meshes through MeshShape::fromGImpact,
-/// MeshShapes as they are; other shapes left out), from gpucol's exact triangle test at their current poses: 0 when no triangles cross, else minus
-/// the depth of the deepest contact (metres). Also names the pair.
+/// MeshShapes as they are; other shapes left out), from gpucol's exact triangle test at their current poses:
+/// 0 when no triangles cross, else minus the depth of the deepest contact (metres). Also names the pair.
 btScalar deepestCrossing(const std::vector<const btCollisionObject*>& bodies, std::string& where) {
   std::map<const btCollisionShape*, std::shared_ptr<const MeshShape>> meshes;
   for (const btCollisionObject* body : bodies) {
     const btCollisionShape* shape = body->getCollisionShape();
     if (meshes.count(shape)) continue;
     if (MeshShape::isMeshShape(shape)) {
-      meshes[shape] = std::shared_ptr<const MeshShape>(std::shared_ptr<void>(), static_cast<const MeshShape*>(shape));
+      meshes[shape] =
+          std::shared_ptr<const MeshShape>(std::shared_ptr<void>(), static_cast<const MeshShape*>(shape));
     } else if (shape->getShapeType() == GIMPACT_SHAPE_PROXYTYPE) {
       meshes[shape] = MeshShape::fromGImpact(*static_cast<const btGImpactMeshShape*>(shape));
     }
@@ -57,8 +59,9 @@ btScalar deepestCrossing(const std::vector<const btCollisionObject*>& bodies, st
   for (std::size_t i = 0; i < bodies.size(); ++i) {
     for (std::size_t j = i + 1; j < bodies.size(); ++j) {
       if (!meshes[bodies[i]->getCollisionShape()] || !meshes[bodies[j]->getCollisionShape()]) continue;
-      const MeshPairResult r = collideMeshes(*meshes[bodies[i]->getCollisionShape()], bodies[i]->getWorldTransform(),
-                                             *meshes[bodies[j]->getCollisionShape()], bodies[j]->getWorldTransform());
+      const MeshPairResult r =
+          collideMeshes(*meshes[bodies[i]->getCollisionShape()], bodies[i]->getWorldTransform(),
+                        *meshes[bodies[j]->getCollisionShape()], bodies[j]->getWorldTransform());
       for (const MeshContact& c : r.contacts) {
         if (c.depth < deepest) {
           deepest = c.depth;
@@ -87,17 +90,17 @@ std::map<std::pair<int, int>, std::string> algorithmsOf(btCollisionWorld& world)
     int b = index[static_cast<btCollisionObject*>(pairs[p].m_pProxy1->m_clientObject)];
     if (a > b) std::swap(a, b);
     btCollisionAlgorithm* algorithm = pairs[p].m_algorithm;
-    out[{a, b}] = algorithm == nullptr                                            ? "none"
-                  : dynamic_cast<MeshMeshAlgorithm*>(algorithm)                   ? "gpucol"
+    out[{a, b}] = algorithm == nullptr                                    ? "none"
+                  : dynamic_cast<MeshMeshAlgorithm*>(algorithm)           ? "gpucol"
                   : dynamic_cast<btGImpactCollisionAlgorithm*>(algorithm) ? "gimpact"
-                                                                                  : "other";
+                                                                          : "other";
   }
   return out;
 }
 
 TEST(GImpactDispatch, PileOfGImpactToriAndCratesRestsWithNoBodyThroughAnother) {
-  // 16 tori and crates in a bin, all btGImpactMeshShape (1 cm margins), stepped 8 s: once as a GImpact world and
-  // once with gpucol::CollisionDispatcher in its place.
+  // 16 tori and crates in a bin, all btGImpactMeshShape (1 cm margins), stepped 8 s: once as a GImpact world
+  // and once with gpucol::CollisionDispatcher in its place.
   const scenes::SceneDescription pile = scenes::makeToriAndCratesScene(16);
   std::map<scenes::CollisionBackend, btScalar> crossing;
   for (const auto backend : {scenes::CollisionBackend::GImpact, scenes::CollisionBackend::GImpactOnGpucol}) {
@@ -126,7 +129,8 @@ TEST(GImpactDispatch, PileOfGImpactToriAndCratesRestsWithNoBodyThroughAnother) {
       // No two bodies' triangles cross by more than 5 mm: with 1 cm margins they rest about 2 cm apart.
       EXPECT_GT(crossing[backend], -0.005f) << where;
       EXPECT_TRUE(world.allAtRest());
-      // Every GImpact pair went through the batch; a stand-in per GImpact shape (bin, torus, crate), built once.
+      // Every GImpact pair went through the batch; a stand-in per GImpact shape (bin, torus, crate), built
+      // once.
       EXPECT_GT(gimpactPairs, 480u);
       EXPECT_EQ(gimpactPairs, meshPairs);
       EXPECT_EQ(standIns, 3u);
@@ -134,29 +138,31 @@ TEST(GImpactDispatch, PileOfGImpactToriAndCratesRestsWithNoBodyThroughAnother) {
   }
 }
 
-/// A GImpact world of every kind of pair: a GImpact crate on a GImpact slab, a GImpact torus on a static plane, a
-/// MeshShape torus on a GImpact crate, a GImpact crate on a MeshShape slab, a btBoxShape on the GImpact slab.
+/// A GImpact world of every kind of pair: a GImpact crate on a GImpact slab, a GImpact torus on a static
+/// plane, a MeshShape torus on a GImpact crate, a GImpact crate on a MeshShape slab, a btBoxShape on the
+/// GImpact slab.
 struct MixedWorld {
   explicit MixedWorld(test::DispatchKind kind, const Config& config = Config()) : world(kind, config) {}
 
   void build() {
-    world.add(std::make_shared<btStaticPlaneShape>(btVector3(0, 1, 0), 0), 0, test::at(0, 0, 0));   // 0
-    world.add(slab.shape, 0, test::at(-3, 0.25f, 0));                                                // 1
-    world.add(test::meshShape(scenes::makeBox(1, 0.25f, 1, 2)), 0, test::at(3, 0.25f, 0));          // 2
-    crateOnSlab = world.add(crate.shape, 1, test::at(-3, 0.9f, 0));                                  // 3
-    torusOnPlane = world.add(torus.shape, 1, btTransform(flat, btVector3(0, 0.5f, -3)));              // 4
-    lowerCrate = world.add(crate.shape, 1, test::at(0, 0.4f, 3));                                    // 5
+    world.add(std::make_shared<btStaticPlaneShape>(btVector3(0, 1, 0), 0), 0, test::at(0, 0, 0));  // 0
+    world.add(slab.shape, 0, test::at(-3, 0.25f, 0));                                              // 1
+    world.add(test::meshShape(scenes::makeBox(1, 0.25f, 1, 2)), 0, test::at(3, 0.25f, 0));         // 2
+    crateOnSlab = world.add(crate.shape, 1, test::at(-3, 0.9f, 0));                                // 3
+    torusOnPlane = world.add(torus.shape, 1, btTransform(flat, btVector3(0, 0.5f, -3)));           // 4
+    lowerCrate = world.add(crate.shape, 1, test::at(0, 0.4f, 3));                                  // 5
     meshTorus = world.add(test::meshShape(scenes::makeTorus(0.4f, 0.12f, 24, 12)), 1,
-                          btTransform(flat, btVector3(0, 1.2f, 3)));                                  // 6
-    crateOnMesh = world.add(crate.shape, 1, test::at(3, 0.9f, 0));                                   // 7
-    boxOnSlab = world.add(std::make_shared<btBoxShape>(btVector3(0.3f, 0.3f, 0.3f)), 1, test::at(-3, 1.8f, 0.2f));  // 8
+                          btTransform(flat, btVector3(0, 1.2f, 3)));  // 6
+    crateOnMesh = world.add(crate.shape, 1, test::at(3, 0.9f, 0));    // 7
+    boxOnSlab = world.add(std::make_shared<btBoxShape>(btVector3(0.3f, 0.3f, 0.3f)), 1,
+                          test::at(-3, 1.8f, 0.2f));  // 8
     for (int i = 0; i < world.world().getNumCollisionObjects(); ++i) {
       world.world().getCollisionObjectArray()[i]->setActivationState(DISABLE_DEACTIVATION);
     }
   }
 
-  /// Where each dynamic body should rest (y of its centre), within `tolerance`; the btBoxShape on the crate too
-  /// when `box`.
+  /// Where each dynamic body should rest (y of its centre), within `tolerance`; the btBoxShape on the crate
+  /// too when `box`.
   void expectResting(btScalar tolerance, bool box = true) {
     EXPECT_NEAR(crateOnSlab->getWorldTransform().getOrigin().y(), 0.5f + 0.3f, tolerance);
     EXPECT_NEAR(torusOnPlane->getWorldTransform().getOrigin().y(), 0.12f, tolerance);
@@ -178,8 +184,9 @@ struct MixedWorld {
 };
 
 TEST(GImpactDispatch, MixedWorldRestsWithOrWithoutGImpactRegistered) {
-  // gpucol::CollisionDispatcher takes the GImpact pairs whether registerAlgorithm is never called, called after it
-  // (overriding its create functions) or before a later registration: the same algorithms and the same rest.
+  // gpucol::CollisionDispatcher takes the GImpact pairs whether registerAlgorithm is never called, called
+  // after it (overriding its create functions) or before a later registration: the same algorithms and the
+  // same rest.
   for (const int registration : {0, 1}) {
     SCOPED_TRACE(registration == 0 ? "GImpact not registered" : "registerAlgorithm after the dispatcher");
     MixedWorld mixed(test::DispatchKind::Gpucol);
@@ -196,34 +203,37 @@ TEST(GImpactDispatch, MixedWorldRestsWithOrWithoutGImpactRegistered) {
     EXPECT_EQ(algorithms.at({2, 7}), "gpucol") << "GImpact crate on a MeshShape slab";
     // A convex shape against a GImpact mesh keeps Bullet's algorithm: GImpact's where registered, else the
     // convex-concave one.
-    EXPECT_EQ(algorithms.at({3, 8}), registration == 1 ? "gimpact" : "other") << "btBoxShape on a GImpact crate";
+    EXPECT_EQ(algorithms.at({3, 8}), registration == 1 ? "gimpact" : "other")
+        << "btBoxShape on a GImpact crate";
     const DispatchStats& stats = static_cast<CollisionDispatcher&>(mixed.world.dispatcher()).lastStepStats();
-    // In the batch: crate-slab, crate-crate (5, 7 are apart), torus-crate, crate-MeshShape slab... every pair of
-    // two meshes; the plane's pair is collided on its own.
+    // In the batch: crate-slab, crate-crate (5, 7 are apart), torus-crate, crate-MeshShape slab... every pair
+    // of two meshes; the plane's pair is collided on its own.
     EXPECT_GE(stats.gimpactPairs, 3u);
     EXPECT_EQ(stats.gimpactStandInsBuilt, 0u) << "stand-ins are kept from step to step";
   }
 }
 
 TEST(GImpactDispatch, MeshShapesAndGImpactMeshesRestOnEachOtherUnderEitherAlgorithm) {
-  // GImpact's registerAlgorithm, called last, takes every pair with a GImpact shape, a MeshShape's too: on a stock
-  // dispatcher with MeshMeshAlgorithm registered first, GImpact's algorithm collides them (through the MeshShape's
-  // processAllTriangles) and nothing falls through; gpucol::CollisionDispatcher takes the same pairs itself.
+  // GImpact's registerAlgorithm, called last, takes every pair with a GImpact shape, a MeshShape's too: on a
+  // stock dispatcher with MeshMeshAlgorithm registered first, GImpact's algorithm collides them (through the
+  // MeshShape's processAllTriangles) and nothing falls through; gpucol::CollisionDispatcher takes the same
+  // pairs itself.
   for (const auto kind : {test::DispatchKind::StockRegistered, test::DispatchKind::Gpucol}) {
     const bool gpucol = kind == test::DispatchKind::Gpucol;
     SCOPED_TRACE(gpucol ? "gpucol::CollisionDispatcher" : "registerWith, then GImpact's registerAlgorithm");
     test::TestWorld world(kind);
     btGImpactCollisionAlgorithm::registerAlgorithm(&world.dispatcher());
     GImpactMeshBody slab(scenes::makeBox(1, 0.25f, 1, 2)), crate(scenes::makeBox(0.3f, 0.3f, 0.3f, 2));
-    world.add(slab.shape, 0, test::at(0, 0.25f, 0));                                             // 0
-    world.add(test::meshShape(scenes::makeBox(1, 0.25f, 1, 2)), 0, test::at(3, 0.25f, 0));       // 1
+    world.add(slab.shape, 0, test::at(0, 0.25f, 0));                                        // 0
+    world.add(test::meshShape(scenes::makeBox(1, 0.25f, 1, 2)), 0, test::at(3, 0.25f, 0));  // 1
     const btQuaternion flat(btVector3(1, 0, 0), SIMD_HALF_PI);
     btRigidBody* meshCrate =
         world.add(test::meshShape(scenes::makeBox(0.3f, 0.3f, 0.3f, 2)), 1, test::at(0.5f, 0.85f, 0));  // 2
     btRigidBody* meshTorus = world.add(test::meshShape(scenes::makeTorus(0.4f, 0.12f, 24, 12)), 1,
-                                       btTransform(flat, btVector3(-0.4f, 0.7f, 0)));                   // 3
-    btRigidBody* gimpactCrate = world.add(crate.shape, 1, test::at(3, 0.85f, 0));                        // 4
-    for (btRigidBody* body : {meshCrate, meshTorus, gimpactCrate}) body->setActivationState(DISABLE_DEACTIVATION);
+                                       btTransform(flat, btVector3(-0.4f, 0.7f, 0)));  // 3
+    btRigidBody* gimpactCrate = world.add(crate.shape, 1, test::at(3, 0.85f, 0));      // 4
+    for (btRigidBody* body : {meshCrate, meshTorus, gimpactCrate})
+      body->setActivationState(DISABLE_DEACTIVATION);
     world.step(120);
     // On the slabs' tops at 0.5, 1 cm margins on the GImpact sides.
     EXPECT_NEAR(meshCrate->getWorldTransform().getOrigin().y(), 0.81f, 0.02f);
@@ -252,8 +262,8 @@ TEST(GImpactDispatch, ConfigSwitchLeavesGImpactPairsToGImpact) {
   const DispatchStats& stats = static_cast<CollisionDispatcher&>(mixed.world.dispatcher()).lastStepStats();
   EXPECT_EQ(stats.gimpactPairs, 0u);
   EXPECT_EQ(stats.gimpactStandInsBuilt, 0u);
-  // GImpact's own algorithm rests the meshes too (with its margins' gap); the btBoxShape, left to GImpact against
-  // the crate, did not stay on it (it ended at y = 0.25), so it is not checked here.
+  // GImpact's own algorithm rests the meshes too (with its margins' gap); the btBoxShape, left to GImpact
+  // against the crate, did not stay on it (it ended at y = 0.25), so it is not checked here.
   mixed.expectResting(0.05f, false);
 }
 

@@ -1,10 +1,11 @@
-// Meshes from Bullet's mesh interfaces and shapes (issue 54): TriangleMesh::fromStridingMesh reads every part of
-// btTriangleMesh and btTriangleIndexVertexArray (8/16/32-bit indices, float and double vertices), keeps each
-// triangle's part, and names the part and element of bad input; MeshShape::fromGImpact and fromBvh keep the
-// triangles, scaling and margin.
+// Meshes from Bullet's mesh interfaces and shapes (issue 54): TriangleMesh::fromStridingMesh reads every part
+// of btTriangleMesh and btTriangleIndexVertexArray (8/16/32-bit indices, float and double vertices), keeps
+// each triangle's part, and names the part and element of bad input; MeshShape::fromGImpact and fromBvh keep
+// the triangles, scaling and margin.
 #include <BulletCollision/CollisionShapes/btTriangleCallback.h>
 #include <BulletCollision/Gimpact/btGImpactShape.h>
 #include <btBulletDynamicsCommon.h>
+#include <gpucol/gpucol.h>
 #include <gtest/gtest.h>
 
 #include <cmath>
@@ -13,8 +14,6 @@
 #include <set>
 #include <string>
 #include <vector>
-
-#include <gpucol/gpucol.h>
 
 #include "scenes/procedural_meshes.h"
 
@@ -69,11 +68,12 @@ TEST(FromStridingMesh, ReadsBtTriangleMeshWith32And16BitIndices) {
       SCOPED_TRACE(std::to_string(use32) + " " + std::to_string(use4));
       btTriangleMesh bullet(use32, use4);
       for (std::size_t v = 0; v < box.vertexCount(); ++v) {
-        bullet.findOrAddVertex(btVector3(box.positions()[3 * v], box.positions()[3 * v + 1], box.positions()[3 * v + 2]),
-                               false);
+        bullet.findOrAddVertex(
+            btVector3(box.positions()[3 * v], box.positions()[3 * v + 1], box.positions()[3 * v + 2]), false);
       }
       for (std::size_t t = 0; t < box.triangleCount(); ++t) {
-        bullet.addTriangleIndices(int(box.indices()[3 * t]), int(box.indices()[3 * t + 1]), int(box.indices()[3 * t + 2]));
+        bullet.addTriangleIndices(int(box.indices()[3 * t]), int(box.indices()[3 * t + 1]),
+                                  int(box.indices()[3 * t + 2]));
       }
       const TriangleMesh mesh = TriangleMesh::fromStridingMesh(bullet);
       EXPECT_EQ(mesh.positions(), box.positions());
@@ -84,8 +84,8 @@ TEST(FromStridingMesh, ReadsBtTriangleMeshWith32And16BitIndices) {
   }
 }
 
-/// Two parts of Bullet arrays: part 0 a box with 16-bit indices and double vertices, part 1 a torus with 32-bit
-/// indices and float vertices (padded to 4 floats), part 2 a box with 8-bit indices.
+/// Two parts of Bullet arrays: part 0 a box with 16-bit indices and double vertices, part 1 a torus with
+/// 32-bit indices and float vertices (padded to 4 floats), part 2 a box with 8-bit indices.
 struct TwoKindsOfArrays {
   TwoKindsOfArrays() {
     const TriangleMesh box = scenes::makeBox(0.5f, 0.5f, 0.5f, 1), torus = scenes::makeTorus(1, 0.25f, 12, 6);
@@ -180,13 +180,15 @@ TEST(FromStridingMesh, BadInputNamesThePartAndTheElement) {
     TwoKindsOfArrays source;
     source.doubles[3 * 6 + 2] = std::numeric_limits<double>::quiet_NaN();
     const std::string message = errorOf([&] { TriangleMesh::fromStridingMesh(source.arrays); });
-    EXPECT_NE(message.find("part 0 vertex 6 has coordinate z = nan, not finite"), std::string::npos) << message;
+    EXPECT_NE(message.find("part 0 vertex 6 has coordinate z = nan, not finite"), std::string::npos)
+        << message;
   }
   {
     TwoKindsOfArrays source;
     source.doubles[3 * 4] = 1e300;
     const std::string message = errorOf([&] { TriangleMesh::fromStridingMesh(source.arrays); });
-    EXPECT_NE(message.find("part 0 vertex 4 has coordinate x = 1e+300, too large for float"), std::string::npos)
+    EXPECT_NE(message.find("part 0 vertex 4 has coordinate x = 1e+300, too large for float"),
+              std::string::npos)
         << message;
   }
   {
@@ -211,19 +213,6 @@ TEST(FromStridingMesh, BadInputNamesThePartAndTheElement) {
     btTriangleIndexVertexArray empty;
     EXPECT_NE(errorOf([&] { TriangleMesh::fromStridingMesh(empty); }).find("no parts"), std::string::npos);
   }
-}
-
-TEST(FromParts, RefusesPartsThatDoNotTileTheMesh) {
-  const TriangleMesh box = scenes::makeBox(1, 1, 1, 1);
-  MeshPart a{0, 6, 0, 8}, b{6, 6, 0, 8};
-  EXPECT_NE(errorOf([&] { TriangleMesh::fromParts(box.positions(), box.indices(), {a, b}); }).find("part 1 starts"),
-            std::string::npos);
-  // Triangle 6 (part 1's first) uses vertices of part 0.
-  std::vector<float> xyz = box.positions();
-  xyz.insert(xyz.end(), box.positions().begin(), box.positions().end());
-  MeshPart c{0, 6, 0, 8}, d{6, 6, 8, 8};
-  const std::string message = errorOf([&] { TriangleMesh::fromParts(xyz, box.indices(), {c, d}); });
-  EXPECT_NE(message.find("part 1 triangle 0 corner 0"), std::string::npos) << message;
 }
 
 TEST(MeshShapeFromBullet, GImpactKeepsTrianglesScalingAndTheTrianglesMargin) {
@@ -259,7 +248,8 @@ TEST(MeshShapeFromBullet, GImpactKeepsTrianglesScalingAndTheTrianglesMargin) {
     const bool mirrored = s.x() * s.y() * s.z() < 0;
     for (int k = 0; k < 3; ++k) {
       const int from = mirrored && k > 0 ? 3 - k : k;
-      for (int axis = 0; axis < 3; ++axis) EXPECT_FLOAT_EQ(got[3 * k + axis], corners[3 * from + axis] * s[axis]);
+      for (int axis = 0; axis < 3; ++axis)
+        EXPECT_FLOAT_EQ(got[3 * k + axis], corners[3 * from + axis] * s[axis]);
     }
   }
 }

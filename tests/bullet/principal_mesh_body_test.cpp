@@ -1,11 +1,11 @@
-// principalMeshBody (issue 54): a mesh not in its principal frame (an L turned and off centre, scaled) gets the
-// principal frame, centre of mass and moments that Bullet's own btCompoundShape::calculatePrincipalAxisTransform
-// gives the same solid built of two boxes; its triangles stay where they were; and it tumbles in space as that
-// compound does, where the tensor's diagonal (MeshShape::calculateLocalInertia) does not.
+// principalMeshBody (issue 54): a mesh not in its principal frame (an L turned and off centre, scaled) gets
+// the principal frame, centre of mass and moments that Bullet's own
+// btCompoundShape::calculatePrincipalAxisTransform gives the same solid built of two boxes; its triangles
+// stay where they were; and it tumbles in space as that compound does, where the tensor's diagonal
+// (MeshShape::calculateLocalInertia) does not.
 #include <btBulletDynamicsCommon.h>
-#include <gtest/gtest.h>
-
 #include <gpucol/gpucol.h>
+#include <gtest/gtest.h>
 
 #include <algorithm>
 #include <array>
@@ -19,7 +19,9 @@ namespace {
 constexpr float kSize = 0.9f, kDepth = 0.3f, kScale = 1.5f;
 
 /// The turn and shift the L is given inside its mesh frame.
-btTransform lFrame() { return btTransform(btQuaternion(btVector3(1, 2, 0.5f).normalized(), 0.7f), btVector3(0.3f, -0.2f, 0.5f)); }
+btTransform lFrame() {
+  return btTransform(btQuaternion(btVector3(1, 2, 0.5f).normalized(), 0.7f), btVector3(0.3f, -0.2f, 0.5f));
+}
 
 /// The L of makeLShape(kSize, kDepth), turned and shifted by lFrame(), as a MeshShape scaled by kScale.
 std::unique_ptr<MeshShape> lShape() {
@@ -28,8 +30,9 @@ std::unique_ptr<MeshShape> lShape() {
   for (int r = 0; r < 3; ++r) {
     for (int c = 0; c < 3; ++c) rotation[3 * r + c] = f.getBasis()[r][c];
   }
-  const TriangleMesh moved = scenes::makeLShape(kSize, kDepth).transformed(
-      rotation, {f.getOrigin().x(), f.getOrigin().y(), f.getOrigin().z()});
+  const TriangleMesh moved =
+      scenes::makeLShape(kSize, kDepth)
+          .transformed(rotation, {f.getOrigin().x(), f.getOrigin().y(), f.getOrigin().z()});
   auto shape = std::make_unique<MeshShape>(std::make_shared<const TriangleMesh>(moved));
   shape->setLocalScaling(btVector3(kScale, kScale, kScale));
   shape->setMargin(0.004f);
@@ -44,7 +47,8 @@ struct LCompound {
     const btTransform f(lFrame().getBasis(), lFrame().getOrigin() * kScale);
     boxes[0] = std::make_unique<btBoxShape>(btVector3(s / 2, w / 2, d / 2));
     boxes[1] = std::make_unique<btBoxShape>(btVector3(w / 2, (s - w) / 2, d / 2));
-    compound.addChildShape(f * btTransform(btQuaternion::getIdentity(), btVector3(0, w / 2 - s / 2, 0)), boxes[0].get());
+    compound.addChildShape(f * btTransform(btQuaternion::getIdentity(), btVector3(0, w / 2 - s / 2, 0)),
+                           boxes[0].get());
     compound.addChildShape(f * btTransform(btQuaternion::getIdentity(), btVector3(w / 2 - s / 2, w / 2, 0)),
                            boxes[1].get());
     masses = {s * w, w * (s - w)};
@@ -73,18 +77,21 @@ TEST(PrincipalMeshBody, MatchesBulletsPrincipalAxisTransformOfTheSameSolid) {
   std::sort(ours.begin(), ours.end());
   std::sort(bullets.begin(), bullets.end());
   for (int i = 0; i < 3; ++i) EXPECT_NEAR(ours[i], bullets[i], 1e-4f * bullets[2]) << i;
-  // Each of our principal axes is one of Bullet's (up to sign): the frames agree where the moments are distinct.
+  // Each of our principal axes is one of Bullet's (up to sign): the frames agree where the moments are
+  // distinct.
   for (int axis = 0; axis < 3; ++axis) {
     const btVector3 a = body.principal.getBasis().getColumn(axis);
     btScalar best = 0;
-    for (int other = 0; other < 3; ++other) best = std::max(best, btFabs(a.dot(principal.getBasis().getColumn(other))));
+    for (int other = 0; other < 3; ++other)
+      best = std::max(best, btFabs(a.dot(principal.getBasis().getColumn(other))));
     EXPECT_GT(best, 0.9999f) << "axis " << axis;
   }
   EXPECT_FLOAT_EQ(body.mass, mass);
   EXPECT_FLOAT_EQ(body.shape->getMargin(), 0.004f);
   EXPECT_EQ(body.shape->getLocalScaling(), btVector3(1, 1, 1));
 
-  // Every triangle stays where it was: the principal shape placed by bodyTransform covers the original's vertices.
+  // Every triangle stays where it was: the principal shape placed by bodyTransform covers the original's
+  // vertices.
   const btTransform meshWorld(btQuaternion(btVector3(0, 1, 0), 0.4f), btVector3(5, 1, -2));
   const btTransform bodyWorld = body.bodyTransform(meshWorld);
   const TriangleMesh& original = shape->mesh();
@@ -103,8 +110,9 @@ TEST(PrincipalMeshBody, MatchesBulletsPrincipalAxisTransformOfTheSameSolid) {
 
 /// Orientation of the L's mesh frame after `steps` steps in a world without gravity, the body started at the
 /// identity turning at `spin`; the inertia the body gets is the caller's.
-btQuaternion tumble(btCollisionShape* shape, btScalar mass, const btVector3& inertia, const btTransform& start,
-                    const btTransform& frameInBody, const btVector3& spin, int steps) {
+btQuaternion tumble(btCollisionShape* shape, btScalar mass, const btVector3& inertia,
+                    const btTransform& start, const btTransform& frameInBody, const btVector3& spin,
+                    int steps) {
   btDefaultCollisionConfiguration configuration;
   btCollisionDispatcher dispatcher(&configuration);
   btDbvtBroadphase broadphase;
@@ -144,14 +152,14 @@ TEST(PrincipalMeshBody, TumblesAsBulletsCompoundOfTheSameSolidDoes) {
   const btVector3 spin(2, 5, 1);
   const int steps = 240;
   const btQuaternion expected = tumble(&centred, mass, inertia, principal, principal.inverse(), spin, steps);
-  const btQuaternion ours = tumble(body.shape.get(), mass, body.inertia, body.principal, body.principal.inverse(),
-                                   spin, steps);
+  const btQuaternion ours =
+      tumble(body.shape.get(), mass, body.inertia, body.principal, body.principal.inverse(), spin, steps);
   EXPECT_GT(btFabs(ours.dot(expected)), 0.9995f) << "the two bodies turned apart";
   // The shape as it is, with the diagonal of its tensor in its own frame, tumbles elsewhere.
   btVector3 diagonal;
   shape->calculateLocalInertia(mass, diagonal);
-  const btQuaternion approximate =
-      tumble(shape.get(), mass, diagonal, btTransform::getIdentity(), btTransform::getIdentity(), spin, steps);
+  const btQuaternion approximate = tumble(shape.get(), mass, diagonal, btTransform::getIdentity(),
+                                          btTransform::getIdentity(), spin, steps);
   EXPECT_LT(btFabs(approximate.dot(expected)), 0.999f) << "the diagonal alone should not match";
 }
 

@@ -1,8 +1,8 @@
-// Worlds with meshes save and load (issue 54): world->serialize writes each MeshShape in a form Debian's stock
-// btBulletWorldImporter brings back with its triangles, scaling, margin, mass and transform (compound children
-// too); gpucol::WorldImporter brings them back as MeshShapes with the saved inertia, and the loaded world steps as
-// the saved one; a file of GImpact bodies written by stock Bullet loads through gpucol::WorldImporter as MeshShape
-// bodies.
+// Worlds with meshes save and load (issue 54): world->serialize writes each MeshShape in a form Debian's
+// stock btBulletWorldImporter brings back with its triangles, scaling, margin, mass and transform (compound
+// children too); gpucol::WorldImporter brings them back as MeshShapes with the saved inertia, and the loaded
+// world steps as the saved one; a file of GImpact bodies written by stock Bullet loads through
+// gpucol::WorldImporter as MeshShape bodies.
 #include <BulletCollision/Gimpact/btGImpactCollisionAlgorithm.h>
 #include <BulletCollision/Gimpact/btGImpactShape.h>
 #include <BulletWorldImporter/btBulletWorldImporter.h>
@@ -42,14 +42,16 @@ Triangles trianglesOf(const btConcaveShape& shape) {
 
 /// True when both give the same triangles under the same ids, corners within `tolerance`.
 ::testing::AssertionResult sameTriangles(const Triangles& a, const Triangles& b, btScalar tolerance) {
-  if (a.size() != b.size()) return ::testing::AssertionFailure() << a.size() << " triangles against " << b.size();
+  if (a.size() != b.size())
+    return ::testing::AssertionFailure() << a.size() << " triangles against " << b.size();
   for (const auto& [id, corners] : a) {
     const auto other = b.find(id);
-    if (other == b.end()) return ::testing::AssertionFailure() << "no triangle " << id.first << "/" << id.second;
+    if (other == b.end())
+      return ::testing::AssertionFailure() << "no triangle " << id.first << "/" << id.second;
     for (std::size_t i = 0; i < corners.size(); ++i) {
       if (btFabs(corners[i] - other->second[i]) > tolerance) {
-        return ::testing::AssertionFailure() << "triangle " << id.first << "/" << id.second << " coordinate " << i
-                                             << ": " << corners[i] << " against " << other->second[i];
+        return ::testing::AssertionFailure() << "triangle " << id.first << "/" << id.second << " coordinate "
+                                             << i << ": " << corners[i] << " against " << other->second[i];
       }
     }
   }
@@ -57,7 +59,8 @@ Triangles trianglesOf(const btConcaveShape& shape) {
 }
 
 /// The world as a .bullet file in memory.
-std::vector<char> save(btDynamicsWorld& world, const std::function<void(btDefaultSerializer&)>& names = nullptr) {
+std::vector<char> save(btDynamicsWorld& world,
+                       const std::function<void(btDefaultSerializer&)>& names = nullptr) {
   btDefaultSerializer serializer;
   if (names) names(serializer);
   world.serialize(&serializer);
@@ -69,7 +72,8 @@ std::vector<char> save(btDynamicsWorld& world, const std::function<void(btDefaul
 TriangleMesh twoPartMesh() {
   const TriangleMesh a = scenes::makeBox(0.3f, 0.2f, 0.25f, 2), b = scenes::makeTorus(0.3f, 0.1f, 16, 8);
   std::vector<float> xyz = a.positions();
-  for (std::size_t i = 0; i < b.positions().size(); ++i) xyz.push_back(b.positions()[i] + (i % 3 == 0 ? 0.8f : 0.0f));
+  for (std::size_t i = 0; i < b.positions().size(); ++i)
+    xyz.push_back(b.positions()[i] + (i % 3 == 0 ? 0.8f : 0.0f));
   std::vector<std::uint32_t> indices = a.indices();
   for (std::uint32_t i : b.indices()) indices.push_back(i + std::uint32_t(a.vertexCount()));
   return TriangleMesh::fromParts(std::move(xyz), std::move(indices),
@@ -79,9 +83,9 @@ TriangleMesh twoPartMesh() {
                                  "two parts");
 }
 
-/// A world of MeshShape bodies of every kind: a static scaled slab with a margin, a scaled dynamic torus with a
-/// margin (named "torus"), a mesh of two parts, one shape shared by two bodies, a compound holding a MeshShape
-/// and a box whose inertia the user chose, and that MeshShape as a body of its own.
+/// A world of MeshShape bodies of every kind: a static scaled slab with a margin, a scaled dynamic torus with
+/// a margin (named "torus"), a mesh of two parts, one shape shared by two bodies, a compound holding a
+/// MeshShape and a box whose inertia the user chose, and that MeshShape as a body of its own.
 struct MeshWorld {
   MeshWorld() : world(test::DispatchKind::Gpucol) {
     slab = test::meshShape(scenes::makeBox(2, 0.25f, 2, 2));
@@ -91,7 +95,8 @@ struct MeshWorld {
     torus = test::meshShape(scenes::makeTorus(0.4f, 0.12f, 24, 12));
     torus->setLocalScaling(btVector3(1, 1.5f, 1));
     torus->setMargin(0.02f);
-    world.add(torus, 2, btTransform(btQuaternion(btVector3(1, 0, 0), SIMD_HALF_PI), btVector3(-1.5f, 0.4f, 0.5f)));
+    world.add(torus, 2,
+              btTransform(btQuaternion(btVector3(1, 0, 0), SIMD_HALF_PI), btVector3(-1.5f, 0.4f, 0.5f)));
     parts = test::meshShape(twoPartMesh());
     world.add(parts, 1.5f, btTransform(btQuaternion(btVector3(0, 1, 0), 0.3f), btVector3(1, 0.6f, -1)));
     shared = test::meshShape(scenes::makeBox(0.25f, 0.25f, 0.25f, 1));
@@ -138,7 +143,9 @@ struct LoadWorld {
   std::unique_ptr<btDiscreteDynamicsWorld> world;
 };
 
-btRigidBody* bodyOf(btDynamicsWorld& world, int i) { return btRigidBody::upcast(world.getCollisionObjectArray()[i]); }
+btRigidBody* bodyOf(btDynamicsWorld& world, int i) {
+  return btRigidBody::upcast(world.getCollisionObjectArray()[i]);
+}
 
 void expectSameBody(const btRigidBody& saved, const btRigidBody& loaded) {
   EXPECT_EQ(saved.getWorldTransform().getOrigin(), loaded.getWorldTransform().getOrigin());
@@ -160,8 +167,8 @@ TEST(WorldSerialization, StockImporterBringsBackEveryMeshBody) {
     const btRigidBody& before = *bodyOf(original, i);
     const btRigidBody& after = *bodyOf(*load.world, i);
     expectSameBody(before, after);
-    // Each MeshShape comes back as a compound holding one BVH mesh at the identity, with its triangles (the same
-    // parts and indices), its scaling (the BVH mesh's) and its margin.
+    // Each MeshShape comes back as a compound holding one BVH mesh at the identity, with its triangles (the
+    // same parts and indices), its scaling (the BVH mesh's) and its margin.
     const auto check = [](const btCollisionShape& mesh, const btCollisionShape& loaded) {
       ASSERT_EQ(loaded.getShapeType(), COMPOUND_SHAPE_PROXYTYPE);
       const auto& compound = static_cast<const btCompoundShape&>(loaded);
@@ -171,7 +178,8 @@ TEST(WorldSerialization, StockImporterBringsBackEveryMeshBody) {
       const auto& bvh = *static_cast<const btBvhTriangleMeshShape*>(compound.getChildShape(0));
       EXPECT_EQ(bvh.getLocalScaling(), mesh.getLocalScaling());
       EXPECT_FLOAT_EQ(bvh.getMargin(), mesh.getMargin());
-      EXPECT_TRUE(sameTriangles(trianglesOf(static_cast<const btConcaveShape&>(mesh)), trianglesOf(bvh), 1e-6f));
+      EXPECT_TRUE(
+          sameTriangles(trianglesOf(static_cast<const btConcaveShape&>(mesh)), trianglesOf(bvh), 1e-6f));
     };
     if (MeshShape::isMeshShape(before.getCollisionShape())) {
       check(*before.getCollisionShape(), *after.getCollisionShape());
@@ -190,14 +198,16 @@ TEST(WorldSerialization, StockImporterBringsBackEveryMeshBody) {
 
 TEST(WorldSerialization, GpucolImporterBringsBackMeshShapesThatStepAsTheSavedOnes) {
   MeshWorld saved;
-  std::vector<char> file =
-      save(saved.world.world(), [&](btDefaultSerializer& s) { s.registerNameForPointer(saved.torus.get(), "torus"); });
+  std::vector<char> file = save(saved.world.world(), [&](btDefaultSerializer& s) {
+    s.registerNameForPointer(saved.torus.get(), "torus");
+  });
   LoadWorld load(true);
   WorldImporter importer(load.world.get());
   ASSERT_TRUE(importer.loadFileFromMemory(file.data(), int(file.size())));
   EXPECT_EQ(importer.meshShapesImported(), 5);
-  EXPECT_EQ(static_cast<const btCompoundShape*>(bodyOf(*load.world, 5)->getCollisionShape())->getChildShape(0),
-            bodyOf(*load.world, 6)->getCollisionShape())
+  EXPECT_EQ(
+      static_cast<const btCompoundShape*>(bodyOf(*load.world, 5)->getCollisionShape())->getChildShape(0),
+      bodyOf(*load.world, 6)->getCollisionShape())
       << "the compound's child and the body's shape are one MeshShape";
   btDiscreteDynamicsWorld& original = saved.world.world();
   ASSERT_EQ(load.world->getNumCollisionObjects(), original.getNumCollisionObjects());
@@ -228,7 +238,8 @@ TEST(WorldSerialization, GpucolImporterBringsBackMeshShapesThatStepAsTheSavedOne
       EXPECT_EQ(compound.getChildShape(1)->getShapeType(), BOX_SHAPE_PROXYTYPE);
     }
   }
-  // One shape shared by two bodies comes back shared; the name given to the torus's shape names its MeshShape.
+  // One shape shared by two bodies comes back shared; the name given to the torus's shape names its
+  // MeshShape.
   EXPECT_EQ(bodyOf(*load.world, 3)->getCollisionShape(), bodyOf(*load.world, 4)->getCollisionShape());
   EXPECT_EQ(importer.getCollisionShapeByName("torus"), bodyOf(*load.world, 1)->getCollisionShape());
 
@@ -248,10 +259,11 @@ TEST(WorldSerialization, GpucolImporterBringsBackMeshShapesThatStepAsTheSavedOne
   importer.deleteAllData();
 }
 
-/// A GImpact world as stock Bullet users build it: a static GImpact slab, a scaled GImpact torus with a margin, a
-/// GImpact mesh of two parts, under btCollisionDispatcher with GImpact registered.
+/// A GImpact world as stock Bullet users build it: a static GImpact slab, a scaled GImpact torus with a
+/// margin, a GImpact mesh of two parts, under btCollisionDispatcher with GImpact registered.
 TEST(WorldSerialization, GImpactFileLoadsAsMeshShapeBodies) {
-  const TriangleMesh slabMesh = scenes::makeBox(2, 0.25f, 2, 2), torusMesh = scenes::makeTorus(0.4f, 0.12f, 24, 12);
+  const TriangleMesh slabMesh = scenes::makeBox(2, 0.25f, 2, 2),
+                     torusMesh = scenes::makeTorus(0.4f, 0.12f, 24, 12);
   const TriangleMesh partsMesh = twoPartMesh();
   struct Arrays {
     explicit Arrays(const TriangleMesh& mesh) {
@@ -303,7 +315,8 @@ TEST(WorldSerialization, GImpactFileLoadsAsMeshShapeBodies) {
     btBulletWorldImporter stock(load.world.get());
     std::vector<char> copy = file;
     ASSERT_TRUE(stock.loadFileFromMemory(copy.data(), int(copy.size())));
-    std::cout << "btBulletWorldImporter brought back " << load.world->getNumCollisionObjects() << " of 4 bodies\n";
+    std::cout << "btBulletWorldImporter brought back " << load.world->getNumCollisionObjects()
+              << " of 4 bodies\n";
     stock.deleteAllData();
   }
 
@@ -317,7 +330,8 @@ TEST(WorldSerialization, GImpactFileLoadsAsMeshShapeBodies) {
     const btRigidBody& before = *bodyOf(world.world(), i);
     const btRigidBody& after = *bodyOf(*load.world, i);
     expectSameBody(before, after);
-    EXPECT_EQ(before.getInvInertiaDiagLocal(), after.getInvInertiaDiagLocal()) << "GImpact's inertia, as saved";
+    EXPECT_EQ(before.getInvInertiaDiagLocal(), after.getInvInertiaDiagLocal())
+        << "GImpact's inertia, as saved";
     if (i == 3) {
       EXPECT_EQ(after.getCollisionShape()->getShapeType(), BOX_SHAPE_PROXYTYPE);
       continue;
@@ -333,7 +347,8 @@ TEST(WorldSerialization, GImpactFileLoadsAsMeshShapeBodies) {
   // The loaded bodies rest on the slab under gpucol.
   load.world->setGravity(btVector3(0, -10, 0));
   for (int step = 0; step < 120; ++step) load.world->stepSimulation(btScalar(1) / 60, 1, btScalar(1) / 60);
-  for (int i = 1; i < 4; ++i) EXPECT_GT(bodyOf(*load.world, i)->getWorldTransform().getOrigin().y(), 0.05f) << i;
+  for (int i = 1; i < 4; ++i)
+    EXPECT_GT(bodyOf(*load.world, i)->getWorldTransform().getOrigin().y(), 0.05f) << i;
   importer.deleteAllData();
 }
 

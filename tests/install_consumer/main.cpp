@@ -45,7 +45,8 @@ int main() {
   // Saved and loaded back as MeshShape bodies (gpucol::WorldImporter links Bullet's world importer).
   btDefaultSerializer serializer;
   world.serialize(&serializer);
-  std::vector<char> file(serializer.getBufferPointer(), serializer.getBufferPointer() + serializer.getCurrentBufferSize());
+  std::vector<char> file(serializer.getBufferPointer(),
+                         serializer.getBufferPointer() + serializer.getCurrentBufferSize());
   gpucol::WorldImporter importer(nullptr, config);
   const bool loaded = importer.loadFileFromMemory(file.data(), int(file.size()));
   const int meshes = importer.meshShapesImported(), bodies = importer.getNumRigidBodies();
@@ -68,9 +69,11 @@ int main() {
     std::cerr << "install check: overlapping boxes gave no intersecting triangle pair\n";
     return 1;
   }
-  std::cout << "install check: find_package(gpucol) works; a mesh box rests at y = " << y << " in a world with "
+  std::cout << "install check: find_package(gpucol) works; a mesh box rests at y = " << y
+            << " in a world with "
             << "gpucol::CollisionDispatcher and gpucol::GridBroadphase; the direct query finds "
-            << result.intersectingPairs.size() << " intersecting triangle pairs; a saved world loads back through "
+            << result.intersectingPairs.size()
+            << " intersecting triangle pairs; a saved world loads back through "
             << "gpucol::WorldImporter\n";
   return 0;
 }

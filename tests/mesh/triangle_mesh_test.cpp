@@ -1,5 +1,6 @@
-// Validation of TriangleMesh::fromArrays (thesis §5.3.1): every bad input gives a MeshError whose
-// message names the source, the element and the value; valid but poor input is kept and reported.
+// Validation of TriangleMesh::fromArrays and fromParts (thesis §5.3.1): every bad input gives a MeshError
+// whose message names the source, the element (and its part) and the value; valid but poor input is kept and
+// reported.
 #include "gpucol/triangle_mesh.h"
 
 #include <gtest/gtest.h>
@@ -138,6 +139,88 @@ TEST(TriangleMeshTransform, MapsEveryVertex) {
           << "vertex " << v;  // float rounding at |x| ~ 30
     }
   }
+}
+
+/// The message of the MeshError that fromParts throws ("" when it throws none).
+std::string partsErrorOf(std::vector<float> xyz, std::vector<std::uint32_t> indices,
+                         std::vector<MeshPart> parts) {
+  try {
+    TriangleMesh::fromParts(std::move(xyz), std::move(indices), std::move(parts), "parts");
+  } catch (const MeshError& e) {
+    return e.what();
+  }
+  return {};
+}
+
+/// Two quads, each a part with its own four vertices.
+struct TwoQuads {
+  TwoQuads() {
+    xyz = kQuad;
+    for (std::size_t i = 0; i < kQuad.size(); ++i) xyz.push_back(kQuad[i] + (i % 3 == 2 ? 1.0f : 0.0f));
+    indices = {0, 1, 2, 0, 2, 3, 4, 5, 6, 4, 6, 7};
+  }
+  std::vector<float> xyz;
+  std::vector<std::uint32_t> indices;
+  std::vector<MeshPart> parts = {{0, 2, 0, 4}, {2, 2, 4, 4}};
+};
+
+TEST(TriangleMeshParts, NameEachTriangleByItsPartAndItsIndexInThePart) {
+  TwoQuads q;
+  const TriangleMesh mesh = TriangleMesh::fromParts(q.xyz, q.indices, q.parts);
+  ASSERT_EQ(mesh.parts().size(), 2u);
+  const int expected[4][2] = {{0, 0}, {0, 1}, {1, 0}, {1, 1}};
+  for (std::uint32_t t = 0; t < 4; ++t) {
+    EXPECT_EQ(mesh.partTriangle(t).part, expected[t][0]) << t;
+    EXPECT_EQ(mesh.partTriangle(t).index, expected[t][1]) << t;
+  }
+  // A mesh from arrays is one part; moving a mesh keeps its parts.
+  const TriangleMesh single = TriangleMesh::fromArrays(q.xyz, q.indices);
+  ASSERT_EQ(single.parts().size(), 1u);
+  EXPECT_EQ(single.partTriangle(3).part, 0);
+  EXPECT_EQ(single.partTriangle(3).index, 3);
+  const TriangleMesh moved = mesh.transformed({0, -1, 0, 1, 0, 0, 0, 0, 1}, {1, 2, 3});
+  ASSERT_EQ(moved.parts().size(), 2u);
+  EXPECT_EQ(moved.parts()[1].firstTriangle, 2u);
+  EXPECT_EQ(moved.parts()[1].firstVertex, 4u);
+}
+
+TEST(TriangleMeshParts, RefuseWhatDoesNotTileTheMeshAndNameThePart) {
+  {
+    TwoQuads q;
+    q.parts[1].firstTriangle = 1;
+    EXPECT_NE(partsErrorOf(q.xyz, q.indices, q.parts).find("part 1 starts at triangle 1"), std::string::npos);
+  }
+  {
+    TwoQuads q;
+    q.parts[1].vertexCount = 3;
+    EXPECT_NE(
+        partsErrorOf(q.xyz, q.indices, q.parts).find("the parts cover 4 triangles and 7 vertices of 4 and 8"),
+        std::string::npos);
+  }
+  {
+    // Triangle 0 of part 1 uses a vertex of part 0.
+    TwoQuads q;
+    q.indices[6] = 0;
+    const std::string message = partsErrorOf(q.xyz, q.indices, q.parts);
+    EXPECT_NE(
+        message.find(
+            "part 1 triangle 0 corner 0 has vertex index 0, out of range for the part's vertices 4 to 7"),
+        std::string::npos)
+        << message;
+  }
+  {
+    TwoQuads q;
+    q.xyz[3 * 5 + 1] = std::numeric_limits<float>::quiet_NaN();
+    const std::string message = partsErrorOf(q.xyz, q.indices, q.parts);
+    EXPECT_NE(message.find("part 1 vertex 1 has a non-finite coordinate y"), std::string::npos) << message;
+  }
+  {
+    TwoQuads q;
+    q.indices[10] = q.indices[11];
+    const std::string message = partsErrorOf(q.xyz, q.indices, q.parts);
+    EXPECT_NE(message.find("part 1 triangle 1 repeats vertex index 7"), std::string::npos) << message;
+  }
+  EXPECT_NE(partsErrorOf(kQuad, {0, 1, 2}, {}).find("no parts given"), std::string::npos);
 }
 
 }  // namespace

@@ -27,10 +27,10 @@ struct Config {
   int bruteForceBelow = 128;
   /// Substring of the OpenCL device name to use; the environment variable GPUCOL_OPENCL_DEVICE overrides it.
   std::string openclDevice;
-  /// Under gpucol::CollisionDispatcher, pairs of btGImpactMeshShapes, and a GImpact mesh against a plane or another
-  /// concave shape, go through gpucol's mesh pipeline (a MeshShape stands in for each GImpact mesh); false leaves
-  /// them to the algorithm Bullet's configuration gives (GImpact's where registered). A MeshShape against a GImpact
-  /// mesh is gpucol's either way.
+  /// Under gpucol::CollisionDispatcher, pairs of btGImpactMeshShapes, and a GImpact mesh against a plane or
+  /// another concave shape, go through gpucol's mesh pipeline (a MeshShape stands in for each GImpact mesh);
+  /// false leaves them to the algorithm Bullet's configuration gives (GImpact's where registered). A
+  /// MeshShape against a GImpact mesh is gpucol's either way.
   bool collideGImpactShapes = true;
 };
 

@@ -16,16 +16,16 @@ class ContactManifoldSet;
 class GImpactStandIns;
 class TriangleMeshPatch;
 
-/// Bullet's collision algorithm for a MeshShape against another MeshShape or any other concave shape (a plane, a
-/// BVH mesh, a heightfield, a GImpact mesh...), either order; under gpucol::CollisionDispatcher also for a
-/// btGImpactMeshShape, which a MeshShape stands in for. Contacts go into persistent manifolds that live as long as
-/// the pair (refreshed every step, so the solver warm starts), one manifold per direction of contact normal, and
-/// name their triangles by part and index.
+/// Bullet's collision algorithm for a MeshShape against another MeshShape or any other concave shape (a
+/// plane, a BVH mesh, a heightfield, a GImpact mesh...), either order; under gpucol::CollisionDispatcher also
+/// for a btGImpactMeshShape, which a MeshShape stands in for. Contacts go into persistent manifolds that live
+/// as long as the pair (refreshed every step, so the solver warm starts), one manifold per direction of
+/// contact normal, and name their triangles by part and index.
 class MeshMeshAlgorithm : public btActivatingCollisionAlgorithm {
  public:
   /// Made by the create function registered through registerWith(), or by gpucol::CollisionDispatcher with
-  /// `standIns`, through which btGImpactMeshShapes are collided as MeshShapes (not owned; null: GImpact meshes are
-  /// only ever the other concave shape of a MeshShape's pair).
+  /// `standIns`, through which btGImpactMeshShapes are collided as MeshShapes (not owned; null: GImpact
+  /// meshes are only ever the other concave shape of a MeshShape's pair).
   MeshMeshAlgorithm(const btCollisionAlgorithmConstructionInfo& info, const btCollisionObjectWrapper* body0,
                     const btCollisionObjectWrapper* body1, const Config& config,
                     GImpactStandIns* standIns = nullptr);
@@ -50,8 +50,8 @@ class MeshMeshAlgorithm : public btActivatingCollisionAlgorithm {
   /// other mesh pairs. processCollision uses it when the shapes and transforms are the ones given here.
   void setPrecomputedResult(const MeshPairQuery& query, MeshPairResult result);
 
-  /// The query this pair would run between two mesh shapes (a GImpact mesh through its stand-in); std::nullopt
-  /// when it is not a mesh-mesh pair.
+  /// The query this pair would run between two mesh shapes (a GImpact mesh through its stand-in);
+  /// std::nullopt when it is not a mesh-mesh pair.
   std::optional<MeshPairQuery> meshPairQuery(const btCollisionObjectWrapper* body0,
                                              const btCollisionObjectWrapper* body1) const;
 

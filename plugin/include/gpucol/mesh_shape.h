@@ -31,12 +31,15 @@ ATTRIBUTE_ALIGNED16(class) MeshShape : public btConcaveShape {
   explicit MeshShape(std::shared_ptr<const TriangleMesh> mesh, const Config& config = Config());
   ~MeshShape() override;
 
-  /// A MeshShape with the triangles of a GImpact mesh (every part, TriangleMesh::fromStridingMesh), its local scaling
-  /// and its triangles' margin (the parts', which GImpact collides with, not getMargin()'s). Parts scaled
-  /// differently get their scaling in the vertices and the shape (1,1,1). Throws MeshError as fromStridingMesh.
-  static std::unique_ptr<MeshShape> fromGImpact(const btGImpactMeshShape& shape, const Config& config = Config());
+  /// A MeshShape with the triangles of a GImpact mesh (every part, TriangleMesh::fromStridingMesh), its local
+  /// scaling and its triangles' margin (the parts', which GImpact collides with, not getMargin()'s). Parts
+  /// scaled differently get their scaling in the vertices and the shape (1,1,1). Throws MeshError as
+  /// fromStridingMesh.
+  static std::unique_ptr<MeshShape> fromGImpact(const btGImpactMeshShape& shape,
+                                                const Config& config = Config());
   /// A MeshShape with the triangles of a BVH mesh, its local scaling (its mesh interface's) and its margin.
-  static std::unique_ptr<MeshShape> fromBvh(const btBvhTriangleMeshShape& shape, const Config& config = Config());
+  static std::unique_ptr<MeshShape> fromBvh(const btBvhTriangleMeshShape& shape,
+                                            const Config& config = Config());
 
   /// The mesh this shape collides with.
   const TriangleMesh& mesh() const { return *m_mesh; }
@@ -65,8 +68,8 @@ ATTRIBUTE_ALIGNED16(class) MeshShape : public btConcaveShape {
 
   /// World box of the scaled mesh under `t`: the tree's root box carried by |R|, widened by the margin.
   void getAabb(const btTransform& t, btVector3& aabbMin, btVector3& aabbMax) const override;
-  /// Calls `callback` with every triangle (in the shape's scaled local frame) whose box overlaps the given box
-  /// (also in that frame), found through the tree, with its part and index within the part
+  /// Calls `callback` with every triangle (in the shape's scaled local frame) whose box overlaps the given
+  /// box (also in that frame), found through the tree, with its part and index within the part
   /// (TriangleMesh::partTriangle); triangles come in ascending tree order.
   void processAllTriangles(btTriangleCallback* callback, const btVector3& aabbMin,
                            const btVector3& aabbMax) const override;
@@ -84,15 +87,17 @@ ATTRIBUTE_ALIGNED16(class) MeshShape : public btConcaveShape {
 
   /// The size of the record serialize() writes: a btCompoundShapeData.
   int calculateSerializeBufferSize() const override;
-  /// Writes the shape in a form stock Bullet reads back (btBulletWorldImporter): a compound shape whose one child,
-  /// at the identity, is a BVH triangle mesh with the same triangles (one mesh part per part), the local scaling
-  /// as its mesh interface's scaling and the margin. A compound, because the importer makes every body whose
-  /// shape is concave static; the scaling in the mesh interface, because the importer rewrites a scaled BVH's
-  /// record as it reads it. The child's name, "gpucol::MeshShape", lets WorldImporter bring back a MeshShape.
+  /// Writes the shape in a form stock Bullet reads back (btBulletWorldImporter): a compound shape whose one
+  /// child, at the identity, is a BVH triangle mesh with the same triangles (one mesh part per part), the
+  /// local scaling as its mesh interface's scaling and the margin. A compound, because the importer makes
+  /// every body whose shape is concave static; the scaling in the mesh interface, because the importer
+  /// rewrites a scaled BVH's record as it reads it. The child's name, "gpucol::MeshShape", lets WorldImporter
+  /// bring back a MeshShape.
   const char* serialize(void* dataBuffer, btSerializer* serializer) const override;
-  /// Writes the shape's record unless the serializer holds it already: btCollisionWorld writes every body's shape
-  /// even when a compound wrote it as a child, and a second record under the same address breaks the file.
-  void serializeSingleShape(btSerializer* serializer) const override;
+  /// Writes the shape's record unless the serializer holds it already: btCollisionWorld writes every body's
+  /// shape even when a compound wrote it as a child, and a second record under the same address breaks the
+  /// file.
+  void serializeSingleShape(btSerializer * serializer) const override;
   /// The name serialize() gives the compound's child; WorldImporter recognises a saved MeshShape by it.
   static constexpr const char* kSerializedName = "gpucol::MeshShape";
 

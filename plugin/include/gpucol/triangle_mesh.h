@@ -12,8 +12,8 @@ class btStridingMeshInterface;
 
 namespace gpucol {
 
-/// One part of a mesh made of several, as a btStridingMeshInterface's subparts: its triangles and its vertices are
-/// contiguous ranges of the mesh's, and its triangles use only its own vertices.
+/// One part of a mesh made of several, as a btStridingMeshInterface's subparts: its triangles and its
+/// vertices are contiguous ranges of the mesh's, and its triangles use only its own vertices.
 struct MeshPart {
   std::uint32_t firstTriangle = 0;  ///< Index of the part's first triangle in the mesh.
   std::uint32_t triangleCount = 0;  ///< Number of triangles of the part.
@@ -42,18 +42,19 @@ class TriangleMesh {
   static TriangleMesh fromArrays(std::vector<float> xyz, std::vector<std::uint32_t> indices,
                                  std::string name = "arrays");
 
-  /// Builds a mesh of several parts: `parts` must cover the triangles and the vertices in order, and each part's
-  /// triangles index the mesh's vertex array within the part's own range. Errors name the part and the
+  /// Builds a mesh of several parts: `parts` must cover the triangles and the vertices in order, and each
+  /// part's triangles index the mesh's vertex array within the part's own range. Errors name the part and the
   /// element's index within it.
-  static TriangleMesh fromParts(std::vector<float> xyz, std::vector<std::uint32_t> indices, std::vector<MeshPart> parts,
-                                std::string name = "arrays");
+  static TriangleMesh fromParts(std::vector<float> xyz, std::vector<std::uint32_t> indices,
+                                std::vector<MeshPart> parts, std::string name = "arrays");
 
   /// The triangles of a Bullet mesh interface (btTriangleMesh, btTriangleIndexVertexArray...): every subpart
-  /// becomes a part, so that a contact can name a triangle as Bullet does (part, index within the part). Indices
-  /// may be 8-, 16- or 32-bit, vertices float or double (converted to float); the vertices are the arrays' own,
-  /// without the interface's scaling (a shape's local scaling, MeshShape::setLocalScaling, carries it). Throws
-  /// MeshError naming the part and the triangle or vertex for an index out of the part's range, a repeated index,
-  /// a non-finite coordinate (or one too large for float), and for an index or vertex type it cannot read.
+  /// becomes a part, so that a contact can name a triangle as Bullet does (part, index within the part).
+  /// Indices may be 8-, 16- or 32-bit, vertices float or double (converted to float); the vertices are the
+  /// arrays' own, without the interface's scaling (a shape's local scaling, MeshShape::setLocalScaling,
+  /// carries it). Throws MeshError naming the part and the triangle or vertex for an index out of the part's
+  /// range, a repeated index, a non-finite coordinate (or one too large for float), and for an index or
+  /// vertex type it cannot read.
   static TriangleMesh fromStridingMesh(const btStridingMeshInterface& meshInterface,
                                        std::string name = "btStridingMeshInterface");
 
@@ -81,9 +82,9 @@ class TriangleMesh {
   /// computes in float: an overflow would reach a body as inf, an underflow as NaN after a step).
   MassProperties massProperties(double density = 1.0) const;
 
-  /// The same mesh (triangles and parts) with every vertex mapped by p' = rotation * p + translation (rotation
-  /// row-major, computed in double, stored as float). Throws MeshError unless rotation is a proper rotation
-  /// (orthonormal to 1e-6, det +1) and the results are finite.
+  /// The same mesh (triangles and parts) with every vertex mapped by p' = rotation * p + translation
+  /// (rotation row-major, computed in double, stored as float). Throws MeshError unless rotation is a proper
+  /// rotation (orthonormal to 1e-6, det +1) and the results are finite.
   TriangleMesh transformed(const std::array<double, 9>& rotation,
                            const std::array<double, 3>& translation) const;
 

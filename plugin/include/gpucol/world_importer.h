@@ -13,11 +13,12 @@ struct btCollisionShapeData;
 namespace gpucol {
 
 /// Bullet's .bullet file importer (btBulletWorldImporter, libbullet-extras) that brings mesh bodies back as
-/// MeshShapes: the form MeshShape::serialize writes (a compound holding a BVH mesh named "gpucol::MeshShape"), and
-/// btGImpactMeshShape records (which Debian's importer, built without GImpact, drops). Compounds that hold either
-/// get MeshShape children. Each such body keeps the mass and the inertia saved in the file (the stock importer
-/// makes a body with a concave shape static and computes a compound's inertia from its box). Everything else is
-/// btBulletWorldImporter's, and every object it creates, MeshShapes included, is deleted by deleteAllData().
+/// MeshShapes: the form MeshShape::serialize writes (a compound holding a BVH mesh named
+/// "gpucol::MeshShape"), and btGImpactMeshShape records (which Debian's importer, built without GImpact,
+/// drops). Compounds that hold either get MeshShape children. Each such body keeps the mass and the inertia
+/// saved in the file (the stock importer makes a body with a concave shape static and computes a compound's
+/// inertia from its box). Everything else is btBulletWorldImporter's, and every object it creates, MeshShapes
+/// included, is deleted by deleteAllData().
 class WorldImporter : public btBulletWorldImporter {
  public:
   /// Objects go into `world` when it is not null, in the file's order; `config` builds the MeshShapes' trees.
@@ -26,8 +27,8 @@ class WorldImporter : public btBulletWorldImporter {
 
   /// Converts the file's shapes (mesh shapes as MeshShapes), bodies and constraints.
   bool convertAllObjects(bParse::btBulletFile* file) override;
-  /// As btBulletWorldImporter's, except that during convertAllObjects the body joins the world only at the end,
-  /// once its mass and inertia are the file's.
+  /// As btBulletWorldImporter's, except that during convertAllObjects the body joins the world only at the
+  /// end, once its mass and inertia are the file's.
   btRigidBody* createRigidBody(bool isDynamic, btScalar mass, const btTransform& startTransform,
                                btCollisionShape* shape, const char* bodyName) override;
   /// As btBulletWorldImporter's, joining the world at the end of convertAllObjects, in order with the bodies.

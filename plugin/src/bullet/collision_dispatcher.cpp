@@ -70,7 +70,8 @@ bool isConcavePartner(const btCollisionShape* shape) {
 
 }  // namespace
 
-CollisionDispatcher::CollisionDispatcher(btCollisionConfiguration* collisionConfiguration, const Config& config)
+CollisionDispatcher::CollisionDispatcher(btCollisionConfiguration* collisionConfiguration,
+                                         const Config& config)
     : btCollisionDispatcher(collisionConfiguration),
       m_config(config),
       m_standIns(std::make_unique<GImpactStandIns>(config)) {
@@ -87,8 +88,8 @@ btCollisionAlgorithm* CollisionDispatcher::findAlgorithm(const btCollisionObject
   const btCollisionShape* s1 = body1->getCollisionShape();
   const bool gimpact0 = GImpactStandIns::isGImpactMesh(s0), gimpact1 = GImpactStandIns::isGImpactMesh(s1);
   if (gimpact0 || gimpact1) {
-    // Checked here, not left to registered create functions: registerAlgorithm, called after this dispatcher was
-    // made, registers GImpact's algorithm for every pair with a GImpact shape, a MeshShape's included.
+    // Checked here, not left to registered create functions: registerAlgorithm, called after this dispatcher
+    // was made, registers GImpact's algorithm for every pair with a GImpact shape, a MeshShape's included.
     const btCollisionShape* other = gimpact0 ? s1 : s0;
     const auto readable = [&](const btCollisionShape* s) {
       return m_standIns->get(*static_cast<const btGImpactMeshShape*>(s)) != nullptr;
@@ -112,8 +113,10 @@ btCollisionAlgorithm* CollisionDispatcher::findAlgorithm(const btCollisionObject
       // come back here.
       btCollisionAlgorithmCreateFunc* create =
           queryType == BT_CONTACT_POINT_ALGORITHMS
-              ? m_collisionConfiguration->getCollisionAlgorithmCreateFunc(s0->getShapeType(), s1->getShapeType())
-              : m_collisionConfiguration->getClosestPointsAlgorithmCreateFunc(s0->getShapeType(), s1->getShapeType());
+              ? m_collisionConfiguration->getCollisionAlgorithmCreateFunc(s0->getShapeType(),
+                                                                          s1->getShapeType())
+              : m_collisionConfiguration->getClosestPointsAlgorithmCreateFunc(s0->getShapeType(),
+                                                                              s1->getShapeType());
       return create->CreateCollisionAlgorithm(info, body0, body1);
     }
   }

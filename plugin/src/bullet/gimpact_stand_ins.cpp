@@ -51,12 +51,13 @@ std::vector<std::uint64_t> fingerprint(const btGImpactMeshShape& shape) {
     const unsigned char *vertices, *indices;
     int vertexCount, vertexStride, indexStride, triangleCount;
     PHY_ScalarType vertexType, indexType;
-    mesh.getLockedReadOnlyVertexIndexBase(&vertices, vertexCount, vertexType, vertexStride, &indices, indexStride,
-                                          triangleCount, indexType, part);
-    out.insert(out.end(), {std::uint64_t(reinterpret_cast<std::uintptr_t>(vertices)),
-                           std::uint64_t(reinterpret_cast<std::uintptr_t>(indices)), std::uint64_t(vertexCount),
-                           std::uint64_t(vertexStride), std::uint64_t(indexStride), std::uint64_t(triangleCount),
-                           std::uint64_t(vertexType), std::uint64_t(indexType)});
+    mesh.getLockedReadOnlyVertexIndexBase(&vertices, vertexCount, vertexType, vertexStride, &indices,
+                                          indexStride, triangleCount, indexType, part);
+    out.insert(out.end(),
+               {std::uint64_t(reinterpret_cast<std::uintptr_t>(vertices)),
+                std::uint64_t(reinterpret_cast<std::uintptr_t>(indices)), std::uint64_t(vertexCount),
+                std::uint64_t(vertexStride), std::uint64_t(indexStride), std::uint64_t(triangleCount),
+                std::uint64_t(vertexType), std::uint64_t(indexType)});
     const std::size_t words = vertexType == PHY_DOUBLE ? 6 : vertexType == PHY_FLOAT ? 3 : 0;
     WordHash hash;
     for (int v = 0; vertices != nullptr && v < vertexCount; ++v) {
@@ -67,7 +68,8 @@ std::vector<std::uint64_t> fingerprint(const btGImpactMeshShape& shape) {
   }
   for (int part = 0; part < shape.getMeshPartCount(); ++part) {
     const btVector3& s = shape.getMeshPart(part)->getLocalScaling();
-    out.insert(out.end(), {bits(s.x()), bits(s.y()), bits(s.z()), bits(shape.getMeshPart(part)->getMargin())});
+    out.insert(out.end(),
+               {bits(s.x()), bits(s.y()), bits(s.z()), bits(shape.getMeshPart(part)->getMargin())});
   }
   return out;
 }
@@ -76,7 +78,8 @@ std::vector<std::uint64_t> fingerprint(const btGImpactMeshShape& shape) {
 
 bool GImpactStandIns::isGImpactMesh(const btCollisionShape* shape) {
   return shape != nullptr && shape->getShapeType() == GIMPACT_SHAPE_PROXYTYPE &&
-         static_cast<const btGImpactShapeInterface*>(shape)->getGImpactShapeType() == CONST_GIMPACT_TRIMESH_SHAPE;
+         static_cast<const btGImpactShapeInterface*>(shape)->getGImpactShapeType() ==
+             CONST_GIMPACT_TRIMESH_SHAPE;
 }
 
 const MeshShape* GImpactStandIns::get(const btGImpactMeshShape& shape) {

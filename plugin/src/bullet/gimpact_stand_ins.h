@@ -15,10 +15,10 @@ namespace gpucol {
 
 /// The MeshShape that stands in for each btGImpactMeshShape a gpucol::CollisionDispatcher collides: built the
 /// first time a pair needs the shape (its tree once, not per pair), kept, and built again when the shape's
-/// triangles change. A change is found by a fingerprint taken at most once per step: each part's arrays (address,
-/// counts, types, strides), a hash of its vertex coordinates, its scaling and its margin. Users who move a
-/// GImpact mesh's vertices call postUpdate()/updateBound() for GImpact's sake; the fingerprint sees the new
-/// vertices whether they do or not.
+/// triangles change. A change is found by a fingerprint taken at most once per step: each part's arrays
+/// (address, counts, types, strides), a hash of its vertex coordinates, its scaling and its margin. Users who
+/// move a GImpact mesh's vertices call postUpdate()/updateBound() for GImpact's sake; the fingerprint sees
+/// the new vertices whether they do or not.
 class GImpactStandIns {
  public:
   explicit GImpactStandIns(const Config& config) : m_config(config) {}
@@ -26,8 +26,8 @@ class GImpactStandIns {
   /// True when `shape` is a btGImpactMeshShape (a GImpact trimesh, not a compound or a single part).
   static bool isGImpactMesh(const btCollisionShape* shape);
 
-  /// The stand-in for `shape` in this step; null when its triangles cannot be read (bad indices, NaN vertices:
-  /// said once), so that its pairs are not collided by gpucol.
+  /// The stand-in for `shape` in this step; null when its triangles cannot be read (bad indices, NaN
+  /// vertices: said once), so that its pairs are not collided by gpucol.
   const MeshShape* get(const btGImpactMeshShape& shape);
 
   /// Starts a new step: each shape's fingerprint is taken again at its first get(). Shapes that no pair asked

@@ -108,8 +108,9 @@ class MeshMeshCreateFunc : public btCollisionAlgorithmCreateFunc {
 }  // namespace
 
 MeshMeshAlgorithm::MeshMeshAlgorithm(const btCollisionAlgorithmConstructionInfo& info,
-                                     const btCollisionObjectWrapper* body0, const btCollisionObjectWrapper* body1,
-                                     const Config& config, GImpactStandIns* standIns)
+                                     const btCollisionObjectWrapper* body0,
+                                     const btCollisionObjectWrapper* body1, const Config& config,
+                                     GImpactStandIns* standIns)
     : btActivatingCollisionAlgorithm(info, body0, body1),
       m_config(config),
       m_standIns(standIns),
@@ -179,14 +180,16 @@ void MeshMeshAlgorithm::processCollision(const btCollisionObjectWrapper* body0, 
         contacts = meshPlaneContacts(mesh, meshBody->getWorldTransform(), *static_cast<const btStaticPlaneShape*>(other),
                                      otherBody->getWorldTransform(), m_config.reductionResolution);
       } else if (isOtherConcave(other)) {
-        if (const MeshShape* patch = m_patch->update(*static_cast<const btConcaveShape*>(other),
-                                                     otherBody->getWorldTransform(), mesh,
-                                                     meshBody->getWorldTransform())) {
-          const MeshPairResult result =
-              collideMeshes(mesh, meshBody->getWorldTransform(), *patch, otherBody->getWorldTransform(), m_config);
+        if (const MeshShape* patch =
+                m_patch->update(*static_cast<const btConcaveShape*>(other), otherBody->getWorldTransform(),
+                                mesh, meshBody->getWorldTransform())) {
+          const MeshPairResult result = collideMeshes(mesh, meshBody->getWorldTransform(), *patch,
+                                                      otherBody->getWorldTransform(), m_config);
           contacts = toPairContacts(result.reducedContacts, mesh, *patch);
-          // The patch's triangles are the other shape's: their part and index as its processAllTriangles gave.
-          for (PairContact& c : contacts) m_patch->sourceTriangle(std::uint32_t(c.index1), c.partId1, c.index1);
+          // The patch's triangles are the other shape's: their part and index as its processAllTriangles
+          // gave.
+          for (PairContact& c : contacts)
+            m_patch->sourceTriangle(std::uint32_t(c.index1), c.partId1, c.index1);
         }
       }
       if (!meshFirst) contacts = swapSides(std::move(contacts));

@@ -1,5 +1,5 @@
-// MeshShape::fromGImpact and MeshShape::fromBvh: a MeshShape with the triangles, scaling and margin of a Bullet
-// mesh shape.
+// MeshShape::fromGImpact and MeshShape::fromBvh: a MeshShape with the triangles, scaling and margin of a
+// Bullet mesh shape.
 #include <BulletCollision/CollisionShapes/btBvhTriangleMeshShape.h>
 #include <BulletCollision/Gimpact/btGImpactShape.h>
 
@@ -18,7 +18,8 @@ std::unique_ptr<MeshShape> MeshShape::fromGImpact(const btGImpactMeshShape& shap
   // triangles with each part's margin.
   btScalar margin = 0;
   bool sameScaling = true;
-  const btVector3 scaling = shape.getMeshPartCount() > 0 ? shape.getMeshPart(0)->getLocalScaling() : btVector3(1, 1, 1);
+  const btVector3 scaling =
+      shape.getMeshPartCount() > 0 ? shape.getMeshPart(0)->getLocalScaling() : btVector3(1, 1, 1);
   for (int p = 0; p < shape.getMeshPartCount(); ++p) {
     margin = std::max(margin, shape.getMeshPart(p)->getMargin());
     sameScaling = sameScaling && shape.getMeshPart(p)->getLocalScaling() == scaling;
@@ -39,7 +40,8 @@ std::unique_ptr<MeshShape> MeshShape::fromGImpact(const btGImpactMeshShape& shap
       }
       // A mirroring scale turns the winding inward: two corners swap to keep it outward.
       if (s.x() * s.y() * s.z() < 0) {
-        for (std::size_t t = part.firstTriangle; t < std::size_t(part.firstTriangle) + part.triangleCount; ++t) {
+        for (std::size_t t = part.firstTriangle; t < std::size_t(part.firstTriangle) + part.triangleCount;
+             ++t) {
           std::swap(indices[3 * t + 1], indices[3 * t + 2]);
         }
       }
@@ -54,10 +56,9 @@ std::unique_ptr<MeshShape> MeshShape::fromGImpact(const btGImpactMeshShape& shap
 }
 
 std::unique_ptr<MeshShape> MeshShape::fromBvh(const btBvhTriangleMeshShape& shape, const Config& config) {
-  auto out = std::make_unique<MeshShape>(
-      std::make_shared<const TriangleMesh>(
-          TriangleMesh::fromStridingMesh(*shape.getMeshInterface(), "btBvhTriangleMeshShape")),
-      config);
+  auto out = std::make_unique<MeshShape>(std::make_shared<const TriangleMesh>(TriangleMesh::fromStridingMesh(
+                                             *shape.getMeshInterface(), "btBvhTriangleMeshShape")),
+                                         config);
   // A BVH mesh's local scaling is its mesh interface's.
   out->setLocalScaling(shape.getLocalScaling());
   out->setMargin(shape.getMargin());

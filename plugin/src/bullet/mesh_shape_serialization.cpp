@@ -12,7 +12,9 @@
 
 namespace gpucol {
 
-int MeshShape::calculateSerializeBufferSize() const { return int(sizeof(btCompoundShapeData)); }
+int MeshShape::calculateSerializeBufferSize() const {
+  return int(sizeof(btCompoundShapeData));
+}
 
 void MeshShape::serializeSingleShape(btSerializer* serializer) const {
   if (serializer->findPointer(const_cast<MeshShape*>(this)) != nullptr) return;
@@ -33,10 +35,12 @@ const char* MeshShape::serialize(void* dataBuffer, btSerializer* serializer) con
   auto* child = static_cast<btCompoundShapeChildData*>(childrenChunk->m_oldPtr);
   compound->m_childShapePtr = static_cast<btCompoundShapeChildData*>(serializer->getUniquePointer(child));
   btTransform::getIdentity().serializeFloat(child->m_transform);
-  child->m_childShape = static_cast<btCollisionShapeData*>(serializer->getUniquePointer(const_cast<void*>(childKey)));
+  child->m_childShape =
+      static_cast<btCollisionShapeData*>(serializer->getUniquePointer(const_cast<void*>(childKey)));
   child->m_childShapeType = TRIANGLE_MESH_SHAPE_PROXYTYPE;
   child->m_childMargin = float(getMargin());
-  serializer->finalizeChunk(childrenChunk, "btCompoundShapeChildData", BT_ARRAY_CODE, childrenChunk->m_oldPtr);
+  serializer->finalizeChunk(childrenChunk, "btCompoundShapeChildData", BT_ARRAY_CODE,
+                            childrenChunk->m_oldPtr);
 
   // The mesh as Bullet's own interface writes it, one mesh part per part, indices local to the part.
   const TriangleMesh& mesh = *m_mesh;
@@ -54,7 +58,8 @@ const char* MeshShape::serialize(void* dataBuffer, btSerializer* serializer) con
     indexed.m_triangleIndexBase = reinterpret_cast<const unsigned char*>(local.data());
     indexed.m_triangleIndexStride = 3 * int(sizeof(int));
     indexed.m_numVertices = int(part.vertexCount);
-    indexed.m_vertexBase = reinterpret_cast<const unsigned char*>(mesh.positions().data() + 3 * std::size_t(part.firstVertex));
+    indexed.m_vertexBase =
+        reinterpret_cast<const unsigned char*>(mesh.positions().data() + 3 * std::size_t(part.firstVertex));
     indexed.m_vertexStride = 3 * int(sizeof(float));
     indexed.m_indexType = PHY_INTEGER;
     indexed.m_vertexType = PHY_FLOAT;

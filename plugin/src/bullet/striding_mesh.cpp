@@ -17,12 +17,18 @@ namespace {
 
 const char* typeName(PHY_ScalarType type) {
   switch (type) {
-    case PHY_FLOAT: return "PHY_FLOAT";
-    case PHY_DOUBLE: return "PHY_DOUBLE";
-    case PHY_INTEGER: return "PHY_INTEGER";
-    case PHY_SHORT: return "PHY_SHORT";
-    case PHY_FIXEDPOINT88: return "PHY_FIXEDPOINT88";
-    case PHY_UCHAR: return "PHY_UCHAR";
+    case PHY_FLOAT:
+      return "PHY_FLOAT";
+    case PHY_DOUBLE:
+      return "PHY_DOUBLE";
+    case PHY_INTEGER:
+      return "PHY_INTEGER";
+    case PHY_SHORT:
+      return "PHY_SHORT";
+    case PHY_FIXEDPOINT88:
+      return "PHY_FIXEDPOINT88";
+    case PHY_UCHAR:
+      return "PHY_UCHAR";
   }
   return "an unknown type";
 }
@@ -31,8 +37,8 @@ const char* typeName(PHY_ScalarType type) {
 class LockedPart {
  public:
   LockedPart(const btStridingMeshInterface& mesh, int part) : m_mesh(mesh), m_part(part) {
-    mesh.getLockedReadOnlyVertexIndexBase(&vertices, vertexCount, vertexType, vertexStride, &indices, indexStride,
-                                          triangleCount, indexType, part);
+    mesh.getLockedReadOnlyVertexIndexBase(&vertices, vertexCount, vertexType, vertexStride, &indices,
+                                          indexStride, triangleCount, indexType, part);
   }
   ~LockedPart() { m_mesh.unLockReadOnlyVertexBase(m_part); }
   LockedPart(const LockedPart&) = delete;
@@ -93,17 +99,20 @@ TriangleMesh TriangleMesh::fromStridingMesh(const btStridingMeshInterface& meshI
   for (int partIndex = 0; partIndex < meshInterface.getNumSubParts(); ++partIndex) {
     const LockedPart p(meshInterface, partIndex);
     if (p.vertexType != PHY_FLOAT && p.vertexType != PHY_DOUBLE) {
-      fail(name, partIndex, std::string("has vertices of ") + typeName(p.vertexType) +
-                                "; only PHY_FLOAT and PHY_DOUBLE are read");
+      fail(name, partIndex,
+           std::string("has vertices of ") + typeName(p.vertexType) +
+               "; only PHY_FLOAT and PHY_DOUBLE are read");
     }
     if (p.indexType != PHY_INTEGER && p.indexType != PHY_SHORT && p.indexType != PHY_UCHAR) {
-      fail(name, partIndex, std::string("has indices of ") + typeName(p.indexType) +
-                                "; only PHY_INTEGER, PHY_SHORT and PHY_UCHAR are read");
+      fail(name, partIndex,
+           std::string("has indices of ") + typeName(p.indexType) +
+               "; only PHY_INTEGER, PHY_SHORT and PHY_UCHAR are read");
     }
     if (p.vertexCount < 0 || p.triangleCount < 0 || (p.vertexCount > 0 && p.vertices == nullptr) ||
         (p.triangleCount > 0 && p.indices == nullptr)) {
-      fail(name, partIndex, "has " + std::to_string(p.vertexCount) + " vertices and " +
-                                std::to_string(p.triangleCount) + " triangles with arrays missing");
+      fail(name, partIndex,
+           "has " + std::to_string(p.vertexCount) + " vertices and " + std::to_string(p.triangleCount) +
+               " triangles with arrays missing");
     }
     MeshPart part;
     part.firstTriangle = std::uint32_t(indices.size() / 3);
@@ -137,8 +146,8 @@ TriangleMesh TriangleMesh::fromStridingMesh(const btStridingMeshInterface& meshI
       for (int k = 0; k < 3; ++k) {
         if (corner[k] == corner[(k + 1) % 3]) {
           std::ostringstream what;
-          what << "triangle " << t << " repeats vertex index " << corner[k] << " (corners " << std::min(k, (k + 1) % 3)
-               << " and " << std::max(k, (k + 1) % 3) << ")";
+          what << "triangle " << t << " repeats vertex index " << corner[k] << " (corners "
+               << std::min(k, (k + 1) % 3) << " and " << std::max(k, (k + 1) % 3) << ")";
           fail(name, partIndex, what.str());
         }
       }

@@ -24,8 +24,8 @@ namespace {
 // builds what gpucol has built (a BVH, for nothing) nor overwrites gpucol's shape in its map.
 constexpr int kHiddenShapeType = MeshShape::kMeshShapeType;
 
-// The BVH mesh MeshShape::serialize wrote, when `data` is that form: a compound with one child at the identity,
-// a triangle mesh named "gpucol::MeshShape".
+// The BVH mesh MeshShape::serialize wrote, when `data` is that form: a compound with one child at the
+// identity, a triangle mesh named "gpucol::MeshShape".
 btTriangleMeshShapeData* savedMeshShape(btCollisionShapeData* data) {
   if (data == nullptr || data->m_shapeType != COMPOUND_SHAPE_PROXYTYPE) return nullptr;
   const auto* compound = reinterpret_cast<btCompoundShapeData*>(data);
@@ -34,7 +34,8 @@ btTriangleMeshShapeData* savedMeshShape(btCollisionShapeData* data) {
   btTransform transform;
   transform.deSerializeFloat(child.m_transform);
   btCollisionShapeData* childData = child.m_childShape;
-  if (childData == nullptr || childData->m_name == nullptr || !(transform == btTransform::getIdentity())) return nullptr;
+  if (childData == nullptr || childData->m_name == nullptr || !(transform == btTransform::getIdentity()))
+    return nullptr;
   const bool hidden = childData->m_shapeType == kHiddenShapeType;
   if ((childData->m_shapeType != TRIANGLE_MESH_SHAPE_PROXYTYPE && !hidden) ||
       std::strcmp(childData->m_name, MeshShape::kSerializedName) != 0) {
@@ -48,7 +49,9 @@ bool isGImpactMesh(btCollisionShapeData* data) {
          reinterpret_cast<btGImpactMeshShapeData*>(data)->m_gimpactSubType == CONST_GIMPACT_TRIMESH_SHAPE;
 }
 
-btScalar inverseOf(btScalar x) { return x != 0 ? btScalar(1) / x : btScalar(0); }
+btScalar inverseOf(btScalar x) {
+  return x != 0 ? btScalar(1) / x : btScalar(0);
+}
 
 }  // namespace
 
@@ -88,8 +91,8 @@ btCollisionShape* WorldImporter::gpucolShape(btCollisionShapeData* data) {
       m_allocatedCollisionShapes.push_back(shape);
       ++m_meshShapesImported;
     } else if (data != nullptr && data->m_shapeType == COMPOUND_SHAPE_PROXYTYPE) {
-      // A compound is rebuilt only when a child (at any depth) is a mesh gpucol brings back; the other children
-      // are the stock importer's.
+      // A compound is rebuilt only when a child (at any depth) is a mesh gpucol brings back; the other
+      // children are the stock importer's.
       auto* compoundData = reinterpret_cast<btCompoundShapeData*>(data);
       std::vector<btCollisionShape*> children(std::size_t(compoundData->m_numChildShapes), nullptr);
       bool any = false;
@@ -123,8 +126,8 @@ btCollisionShape* WorldImporter::gpucolShape(btCollisionShapeData* data) {
 bool WorldImporter::convertAllObjects(bParse::btBulletFile* file) {
   m_converted.clear();
   m_meshShapesImported = 0;
-  // gpucol's shapes first. Their records are hidden from the stock conversion (given a type it does not convert)
-  // and given back after it.
+  // gpucol's shapes first. Their records are hidden from the stock conversion (given a type it does not
+  // convert) and given back after it.
   for (int i = 0; i < file->m_collisionShapes.size(); ++i) {
     gpucolShape(reinterpret_cast<btCollisionShapeData*>(file->m_collisionShapes[i]));
   }
@@ -148,9 +151,9 @@ bool WorldImporter::convertAllObjects(bParse::btBulletFile* file) {
       m_nameShapeMap.insert(name, shape);
     }
   }
-  // The stock conversion empties its shape map before it converts the shapes, then looks the bodies' shapes up in
-  // it: gpucol's go in during the shape loop, at its first compound. An empty compound record at the end of the
-  // list makes sure there is one.
+  // The stock conversion empties its shape map before it converts the shapes, then looks the bodies' shapes
+  // up in it: gpucol's go in during the shape loop, at its first compound. An empty compound record at the
+  // end of the list makes sure there is one.
   btCompoundShapeData placeholder;
   std::memset(&placeholder, 0, sizeof(placeholder));
   placeholder.m_collisionShapeData.m_shapeType = COMPOUND_SHAPE_PROXYTYPE;
@@ -177,8 +180,8 @@ bool WorldImporter::convertAllObjects(bParse::btBulletFile* file) {
     m_shapeMap.remove(&placeholder);
   }
 
-  // Bodies of gpucol's shapes get the file's mass and inertia: the stock conversion made a concave one static and
-  // gave a compound its box's inertia.
+  // Bodies of gpucol's shapes get the file's mass and inertia: the stock conversion made a concave one static
+  // and gave a compound its box's inertia.
   const bool doubles = (file->getFlags() & bParse::FD_DOUBLE_PRECISION) != 0;
   for (int i = 0; i < m_bodyMap.size(); ++i) {
     btRigidBody* body = btRigidBody::upcast(*m_bodyMap.getAtIndex(i));
@@ -195,7 +198,8 @@ bool WorldImporter::convertAllObjects(bParse::btBulletFile* file) {
       inverseMass = btScalar(f->m_inverseMass);
       inverseInertia.deSerializeFloat(f->m_invInertiaLocal);
     }
-    const btVector3 inertia(inverseOf(inverseInertia.x()), inverseOf(inverseInertia.y()), inverseOf(inverseInertia.z()));
+    const btVector3 inertia(inverseOf(inverseInertia.x()), inverseOf(inverseInertia.y()),
+                            inverseOf(inverseInertia.z()));
     body->setMassProps(inverseOf(inverseMass), inertia);
     body->updateInertiaTensor();
   }
@@ -225,16 +229,18 @@ btCompoundShape* WorldImporter::createCompoundShape() {
 
 btRigidBody* WorldImporter::createRigidBody(bool isDynamic, btScalar mass, const btTransform& startTransform,
                                             btCollisionShape* shape, const char* bodyName) {
-  if (!m_deferring) return btBulletWorldImporter::createRigidBody(isDynamic, mass, startTransform, shape, bodyName);
+  if (!m_deferring)
+    return btBulletWorldImporter::createRigidBody(isDynamic, mass, startTransform, shape, bodyName);
   btDynamicsWorld* world = std::exchange(m_dynamicsWorld, nullptr);
-  btRigidBody* body = btBulletWorldImporter::createRigidBody(isDynamic, mass, startTransform, shape, bodyName);
+  btRigidBody* body =
+      btBulletWorldImporter::createRigidBody(isDynamic, mass, startTransform, shape, bodyName);
   m_dynamicsWorld = world;
   m_deferred.push_back(body);
   return body;
 }
 
-btCollisionObject* WorldImporter::createCollisionObject(const btTransform& startTransform, btCollisionShape* shape,
-                                                        const char* bodyName) {
+btCollisionObject* WorldImporter::createCollisionObject(const btTransform& startTransform,
+                                                        btCollisionShape* shape, const char* bodyName) {
   if (!m_deferring) return btBulletWorldImporter::createCollisionObject(startTransform, shape, bodyName);
   btDynamicsWorld* world = std::exchange(m_dynamicsWorld, nullptr);
   btCollisionObject* object = btBulletWorldImporter::createCollisionObject(startTransform, shape, bodyName);

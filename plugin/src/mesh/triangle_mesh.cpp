@@ -16,10 +16,10 @@ namespace {
 
 const char* const kAxisNames[3] = {"x", "y", "z"};
 
-/// How an error names element `i` of `part`: by its index alone in a mesh of one part, else by its part and its
-/// index within the part (as Bullet's mesh interfaces number them).
-std::string elementName(const char* element, std::size_t i, const std::vector<MeshPart>& parts, std::size_t part,
-                        std::uint32_t first) {
+/// How an error names element `i` of `part`: by its index alone in a mesh of one part, else by its part and
+/// its index within the part (as Bullet's mesh interfaces number them).
+std::string elementName(const char* element, std::size_t i, const std::vector<MeshPart>& parts,
+                        std::size_t part, std::uint32_t first) {
   std::ostringstream out;
   if (parts.size() > 1) out << "part " << part << " ";
   out << element << " " << (parts.size() > 1 ? i - first : i);

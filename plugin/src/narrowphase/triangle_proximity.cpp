@@ -46,15 +46,16 @@ bool projectsOntoFace(const Face& f, const Vec& p) {
   return true;
 }
 
-// True when one triangle lies wholly on one side of the other's plane such that no contact below can come: beyond
-// `reach` in front of it or behind it (every contact is closer than reach), or behind it at all (a contact needs a
-// point on the other's outer side; `behind` exceeds what the outer-side test's 1e-6 and the touching-edge case's
-// 1e-7 of the size let through). Most candidates of two meshes with margins end here, before the vertex and edge
-// tests.
+// True when one triangle lies wholly on one side of the other's plane such that no contact below can come:
+// beyond `reach` in front of it or behind it (every contact is closer than reach), or behind it at all (a
+// contact needs a point on the other's outer side; `behind` exceeds what the outer-side test's 1e-6 and the
+// touching-edge case's 1e-7 of the size let through). Most candidates of two meshes with margins end here,
+// before the vertex and edge tests.
 bool separatedByAPlane(const Face& fa, const Face& fb, double reach) {
   double size2 = 0;
   for (int i = 0; i < 3; ++i) {
-    size2 = std::max({size2, (fa.v[(i + 1) % 3] - fa.v[i]).squaredNorm(), (fb.v[(i + 1) % 3] - fb.v[i]).squaredNorm()});
+    size2 = std::max(
+        {size2, (fa.v[(i + 1) % 3] - fa.v[i]).squaredNorm(), (fb.v[(i + 1) % 3] - fb.v[i]).squaredNorm()});
   }
   const double size = std::sqrt(size2), behind = 2e-6 * reach + 1e-6 * size;
   const auto apart = [&](const Face& of, const Face& plane) {
