@@ -82,7 +82,7 @@ constexpr std::uint64_t kPrefilterLanes = 8;
 /// batch's triangles (the smaller mesh of each pair, summed) / kTrianglesPerItem, within kDepthFirstMinItems
 /// .. kDepthFirstItems. Every work-item walks again from the roots to the start front, which on a small pair
 /// costs more than the balance it buys. Measured on PoCL (thesis scene, 2 cores at load 8-9, 4 interleaved
-/// rounds, README "Mesh pairs on OpenCL"): armadillo-2766 alone was fastest at 256 (0.57-0.60 ms end to end
+/// rounds, docs/measured-results.md "Mesh pairs on OpenCL"): armadillo-2766 alone was fastest at 256 (0.57-0.60 ms end to end
 /// against 0.65-0.90 at 4096), a batch of 100 of its pairs at 4096 (1.3-1.5x over single calls, 1.0-1.2x at
 /// 256). One item per 128 triangles instead of 16: the walk to a start front d levels down costs
 /// sum over levels l of (overlapping node pairs at l) x 4^(d - l) box tests, about 14,700 at d = 6 on
@@ -204,7 +204,7 @@ class OpenClMeshPipeline final : public MeshBatchDevice {
   cl::Kernel& nearKernel() { return m_context.gpuShaped() ? m_nearEach : m_nearFilterTest; }
   /// Whether the candidates are sorted on the device (CandidateSort::Auto: in a GPU's shape; on a CPU device
   /// the host's radix sort was faster at every size measured, up to a batch of 431,257 candidates, and on the
-  /// H200 the device's from about 10,000 candidates up: README, "On a GPU").
+  /// H200 the device's from about 10,000 candidates up: docs/measured-results.md, "On a GPU").
   bool sortsOnDevice(const MeshBatchDeviceOptions& options) const {
     return options.candidateSort == CandidateSort::Device ||
            (options.candidateSort == CandidateSort::Auto && m_context.gpuShaped());

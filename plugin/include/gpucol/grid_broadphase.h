@@ -17,7 +17,7 @@ struct GridBroadphaseTuning {
   bool densityCellSize = false;
   /// Write candidate results to the §3.4 bit mask instead of compacted per-chunk lists. CPU path only (the
   /// OpenCL finder always compacts); the grid is then searched whole, not in slabs. Slower in 7 of the 9
-  /// cases measured (README, "Broad phase").
+  /// cases measured (docs/measured-results.md, "Broad phase").
   bool bitMaskOutput = false;
   /// Use the Newton/"magic constant" square root (§3.3) for the mapping function's first guess.
   bool newtonSqrt = false;
@@ -38,7 +38,7 @@ struct GridBroadphaseTuning {
   /// CPU path: where the boxes are of about one size, search the slabs by home cell (each box in the cell of
   /// its min corner, tested against the neighbouring cells); false: each box in every cell it overlaps. The
   /// pairs are the same. Steps at 100K moving boxes took 0.94-1.00 times as long in a uniform cloud and
-  /// 0.85-0.95 in a falling column (README, "Broad phase"); boxes of mixed sizes are searched the other way.
+  /// 0.85-0.95 in a falling column (docs/measured-results.md, "Broad phase"); boxes of mixed sizes are searched the other way.
   bool homeCells = true;
 };
 

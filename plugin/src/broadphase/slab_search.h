@@ -9,7 +9,7 @@
 //
 // Why slabs: a slab's box copies, cells and entries fit in a core's cache, and they are the only
 // per-box working memory besides the slab lists. The whole-grid search holds about 100 bytes per box of
-// such memory for the whole scene, more than the boxes themselves (README, "Broad phase").
+// such memory for the whole scene, more than the boxes themselves (docs/measured-results.md, "Broad phase").
 //
 // The whole-grid search numbers every candidate and finds its pair through the mapping function (paper
 // §3.2), which is what spreads cells over GPU threads. A slab's thread walks its cells' candidates in

@@ -195,7 +195,7 @@ struct GridBroadphase::Impl {
   bool openClTried = false;
   // Backend::Auto's choice by the number of live proxies, from this broad phase's own search times. Auto
   // measures only when the chosen OpenCL device is a GPU: on PoCL's CPU device the CPU path was faster at
-  // every size measured, 1K to 1M boxes (README, "Broad phase"), and Auto never starts OpenCL for it.
+  // every size measured, 1K to 1M boxes (docs/measured-results.md, "Broad phase"), and Auto never starts OpenCL for it.
   MeasuredBackendChoice autoChoice;
   bool autoMeasuring = false;  // the last search was one of autoChoice's measured calls
   // The finder's result of the last search (sorted keys, coded: a pile holds several per proxy) and, of

@@ -31,7 +31,7 @@ class MeasuredBackendChoice {
   /// Work that the CPU path does in less than this stays there untried on the device. Not measured: a call
   /// this short cannot save more than its own time, while starting OpenCL for it (context, kernel builds)
   /// costs hundreds of milliseconds once, and a device round trip costs tens of microseconds every time
-  /// (about 50 on PoCL here, README "Mesh pairs on OpenCL").
+  /// (about 50 on PoCL here, docs/measured-results.md "Mesh pairs on OpenCL").
   static constexpr double kDeviceWorthMs = 0.5;
 
   /// The path for the next call with work of `size`.

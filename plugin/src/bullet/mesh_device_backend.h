@@ -19,7 +19,7 @@ MeshBatchDeviceStats lastMeshDeviceStats();
 /// Backend::Auto's measured choice for mesh batches (one for the process: the device is chosen once), by the
 /// batch's size: its triangles, A's plus B's, summed over the pairs whose root boxes overlap. Auto measures
 /// only when the chosen OpenCL device is a GPU; on a CPU device (PoCL) the CPU path was measured faster at
-/// every size (README, "Mesh pairs on OpenCL") and Auto never starts OpenCL for it.
+/// every size (docs/measured-results.md, "Mesh pairs on OpenCL") and Auto never starts OpenCL for it.
 MeasuredBackendChoice& meshAutoChoice();
 
 }  // namespace gpucol::detail

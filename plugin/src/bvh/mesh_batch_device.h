@@ -73,7 +73,7 @@ enum class CandidateSort {
 
 /// How the device runs a batch (the measured options of the OpenCL pipeline; defaults are the chosen ones).
 struct MeshBatchDeviceOptions {
-  /// Middle phase walk (README, "Mesh pairs on OpenCL": depth-first was faster on PoCL at every size).
+  /// Middle phase walk (docs/measured-results.md, "Mesh pairs on OpenCL": depth-first was faster on PoCL at every size).
   MeshTraversal traversal = MeshTraversal::DepthFirst;
   /// Depth at which the breadth-first traversal starts (thesis §5.4.2 used 6): the first front is every node
   /// pair that many expansions below the roots whose boxes (and ancestors' boxes) overlap.
