@@ -190,7 +190,10 @@ void runMoving(const Options& o) {
         }
         std::printf("%-8s %9zu %6.2f %6d %12.3f %12.3f %12.3f %12.3f %9.1f%s\n", sceneName.c_str(), n, speed,
                     o.queries, median(rayMs[0]), median(rayMs[1]), median(frameMs[0]), median(frameMs[1]),
-                    double(hits[0]) / o.queries, hits[0] == hits[1] ? "" : "  (hits differ!)");
+                    double(hits[0]) / o.queries, hits[0] == hits[1] ? "" : "  (btDbvt's fattened boxes)");
+        const gpucol::GridBroadphaseQueryStats q = grid.queryStats();
+        std::printf("  index builds %llu, indexed queries %llu, scans %llu\n",
+                    (unsigned long long)q.indexBuilds, (unsigned long long)q.indexed, (unsigned long long)q.scans);
         std::fflush(stdout);
       }
 }

@@ -222,13 +222,22 @@ TEST(GridBroadphaseQueries, IndexedQueriesReportWhatTheScanReports) {
     hits += checkQueries(grid, boxes, rng, 100, "slots reused");
     EXPECT_EQ(grid.queryStats().indexBuilds, 1u) << "few changes should keep the index";
 
-    // Most boxes move: the index is dropped, queries scan, then it is built again.
+    // Half the boxes move: the index refiles those it can, keeps the others aside or is dropped and built
+    // again; the answers stay exact either way.
     for (std::size_t i = 0; i < boxes.size(); i += 2) move(i);
     grid.calculateOverlappingPairs(nullptr);
-    hits += checkQueries(grid, boxes, rng, 150, "most moved");
+    hits += checkQueries(grid, boxes, rng, 150, "half moved");
+    // Every box moves three times: more moves than the index has room to refile, so it is dropped, queries
+    // scan, then it is built again.
+    const gpucol::GridBroadphaseQueryStats beforeMoves = grid.queryStats();
+    for (int round = 0; round < 3; ++round) {
+      for (std::size_t i = 0; i < boxes.size(); ++i) move(i);
+      grid.calculateOverlappingPairs(nullptr);
+    }
+    hits += checkQueries(grid, boxes, rng, 150, "all moved thrice");
     const gpucol::GridBroadphaseQueryStats last = grid.queryStats();
-    EXPECT_EQ(last.indexBuilds, 2u);
-    EXPECT_GE(last.scans, first.scans + 6) << "queries after many moves should scan before the rebuild";
+    EXPECT_GT(last.indexBuilds, beforeMoves.indexBuilds) << "so many moves should drop the index";
+    EXPECT_GE(last.scans, beforeMoves.scans + 6) << "queries after many moves should scan before the rebuild";
     EXPECT_GT(hits, 2000u) << "queries should hit something";
   }
 }
@@ -296,6 +305,35 @@ TEST(GridBroadphaseQueries, DriftingWorldsKeepTheirIndexAndItsAnswers) {
   const gpucol::GridBroadphaseQueryStats stats = grid.queryStats();
   EXPECT_LE(stats.indexBuilds, 8u) << "drifting boxes should not cost an index per frame";
   EXPECT_GT(stats.indexed, stats.scans * 4) << "the index should answer most queries";
+}
+
+TEST(GridBroadphaseQueries, MovedBoxesAreRefiledWhereverTheyGo) {
+  // Boxes of one size, indexed once; then a third of them jump, some far beyond the grid's cells (filed in
+  // its edge cells, found by queries out there), and the index follows them without a rebuild.
+  for (float jump : {3.0f, 200.0f}) {
+    SCOPED_TRACE(jump);
+    gpucol::GridBroadphase grid;
+    std::mt19937 rng(12);
+    std::uniform_real_distribution<float> unit(0.0f, 1.0f);
+    std::vector<QueryBox> boxes(2000);
+    for (std::size_t i = 0; i < boxes.size(); ++i) {
+      const btVector3 c(60 * unit(rng), 60 * unit(rng), 60 * unit(rng));
+      boxes[i].lo = c - btVector3(0.5f, 0.5f, 0.5f), boxes[i].hi = c + btVector3(0.5f, 0.5f, 0.5f);
+      boxes[i].proxy = grid.createProxy(boxes[i].lo, boxes[i].hi, BOX_SHAPE_PROXYTYPE,
+                                        reinterpret_cast<void*>(std::intptr_t(i)), 1, -1, nullptr);
+    }
+    grid.calculateOverlappingPairs(nullptr);
+    checkQueries(grid, boxes, rng, 100, "fresh");
+    for (std::size_t i = 0; i < boxes.size(); i += 3) {
+      const btVector3 by(jump * (unit(rng) - 0.5f), jump * (unit(rng) - 0.5f), jump * (unit(rng) - 0.5f));
+      boxes[i].lo += by, boxes[i].hi += by;
+      grid.setAabb(boxes[i].proxy, boxes[i].lo, boxes[i].hi, nullptr);
+    }
+    checkQueries(grid, boxes, rng, 200, "jumped");
+    grid.calculateOverlappingPairs(nullptr);
+    checkQueries(grid, boxes, rng, 100, "jumped, after a step");
+    EXPECT_EQ(grid.queryStats().indexBuilds, 1u) << "boxes of the filed size should be refiled";
+  }
 }
 
 }  // namespace

@@ -17,6 +17,10 @@ constexpr std::uint64_t kCellsSlack = 1024;
 /// times what they can add up to.
 constexpr double kSweepSlack = 2e-6;
 
+/// Share of the largest corner-filed box that the reach adds, so that boxes that move and turn (their
+/// bounds grow and shrink, and round differently) can still be refiled.
+constexpr double kReachSlack = 0.125;
+
 /// x as a float no greater (Down) or no less (Up) than x, clamped to the finite floats; cellOf clamps too.
 float floatDown(double x) {
   x = std::clamp(x, -double(std::numeric_limits<float>::max()), double(std::numeric_limits<float>::max()));
@@ -54,7 +58,7 @@ void QueryGrid::build(const ProxyArrays& p, const std::vector<std::uint32_t>& sl
     return;
   }
   const BoxCorners first = p.box(binned[0]);
-  for (int a = 0; a < 3; ++a) m_hi[a] = first.hi[a];
+  for (int a = 0; a < 3; ++a) m_hi[a] = first.hi[a], m_lo[a] = m_grid.origin[a];
   for (std::uint32_t s : binned) {
     const BoxCorners b = p.box(s);
     for (int a = 0; a < 3; ++a) m_hi[a] = std::max(m_hi[a], b.hi[a]);
@@ -77,6 +81,56 @@ void QueryGrid::build(const ProxyArrays& p, const std::vector<std::uint32_t>& sl
     }
     return r;
   };
+  // A box no larger than `reach` on every axis is filed once, in the cell of its min corner, and queries
+  // reach back by the largest such box (m_homeReach): a box overlapping the region has its min corner
+  // within that much below it. Larger boxes are filed in every cell they overlap. `reach` (at most a cell)
+  // is chosen for the fewest entries a query reads, counted for a region two cells wide on each axis: a box
+  // of extent e cells filed in every cell is read about (2 (1 + e))^3 times, one filed by its corner
+  // (2 + reach)^3 times, so a reach far above most boxes' extents costs the small ones more than it saves.
+  constexpr int kReachBins = 32;
+  double homeCost[kReachBins + 1] = {};  // per bin of extent (in 1/kReachBins of a cell): boxes in it
+  double spanCost[kReachBins + 1] = {};  // and what filing them in every cell costs
+  std::vector<std::uint8_t> extentBin(binned.size(), kReachBins + 1);
+  for (std::size_t i = 0; i < binned.size(); ++i) {
+    const BoxCorners b = p.box(binned[i]);
+    double e = 0, span = 1;
+    for (int a = 0; a < 3; ++a) {
+      const double cells = (double(b.hi[a]) - double(b.lo[a])) / double(m_grid.cell);
+      e = std::max(e, cells);
+      span *= 2.0 * (1.0 + cells);
+    }
+    if (!(e <= 1.0)) continue;
+    const int bin = std::min(kReachBins, int(std::ceil(e * kReachBins)));
+    extentBin[i] = std::uint8_t(bin);
+    homeCost[bin] += 1;
+    spanCost[bin] += span;
+  }
+  double all = 0;
+  for (double c : spanCost) all += c;
+  int reachBin = -1;  // -1: every box filed in every cell it overlaps
+  double best = all, homes = 0, spans = 0;
+  for (int bin = 0; bin <= kReachBins; ++bin) {
+    homes += homeCost[bin], spans += spanCost[bin];
+    const double reach = 2.0 + double(bin) / kReachBins;
+    const double cost = all - spans + homes * reach * reach * reach;
+    if (cost < best) best = cost, reachBin = bin;
+  }
+  std::vector<std::uint8_t> homeFiled(binned.size(), 0);
+  m_homeCell.assign(p.count, kNone);
+  for (std::size_t i = 0; i < binned.size(); ++i) {
+    if (int(extentBin[i]) > reachBin) continue;
+    const BoxCorners b = p.box(binned[i]);
+    homeFiled[i] = 1;
+    m_homeCell[binned[i]] = 0;  // the cell is set once the grid's size is final
+    for (int a = 0; a < 3; ++a) m_homeReach[a] = std::max(m_homeReach[a], double(b.hi[a]) - double(b.lo[a]));
+  }
+  for (double& r : m_homeReach) r *= 1.0 + kReachSlack;
+  auto filedRange = [&](std::size_t i) {
+    CellBox r = rangeOf(binned[i]);
+    if (homeFiled[i])
+      for (int a = 0; a < 3; ++a) r.hi[a] = r.lo[a];
+    return r;
+  };
   auto forCells = [&](const CellBox& r, auto&& f) {
     for (std::uint32_t z = r.lo[2]; z <= r.hi[2]; ++z)
       for (std::uint32_t y = r.lo[1]; y <= r.hi[1]; ++y) {
@@ -90,7 +144,8 @@ void QueryGrid::build(const ProxyArrays& p, const std::vector<std::uint32_t>& sl
   const std::uint64_t cells = m_grid.cells();
   m_cellStart.assign(cells + 1, 0);
   std::uint64_t entries = 0;
-  for (std::uint32_t s : binned) forCells(rangeOf(s), [&](std::uint64_t c) { ++m_cellStart[c], ++entries; });
+  for (std::size_t i = 0; i < binned.size(); ++i)
+    forCells(filedRange(i), [&](std::uint64_t c) { ++m_cellStart[c], ++entries; });
   if (entries > std::numeric_limits<std::uint32_t>::max()) {
     // More entries than 32-bit starts can number: no index (built() is false), so every query scans.
     clear();
@@ -103,22 +158,52 @@ void QueryGrid::build(const ProxyArrays& p, const std::vector<std::uint32_t>& sl
     sum += count;
   }
   m_entries.resize(entries);
-  for (std::uint32_t s : binned)
-    forCells(rangeOf(s), [&](std::uint64_t c) { m_entries[m_cellStart[c]++] = s; });
+  for (std::size_t i = 0; i < binned.size(); ++i)
+    forCells(filedRange(i), [&](std::uint64_t c) {
+      m_entries[m_cellStart[c]++] = binned[i];
+      if (homeFiled[i]) m_homeCell[binned[i]] = std::uint32_t(c);
+    });
   for (std::uint64_t c = cells; c > 0; --c) m_cellStart[c] = m_cellStart[c - 1];
   m_cellStart[0] = 0;
+}
+
+bool QueryGrid::refile(std::uint32_t id, const float lo[3], const float hi[3]) {
+  if (!m_built || id >= m_homeCell.size() || m_homeCell[id] == kNone) return false;
+  for (int a = 0; a < 3; ++a)
+    if (!(lo[a] <= hi[a]) || !(double(hi[a]) - double(lo[a]) <= m_homeReach[a])) return false;
+  if (m_refiled.size() >= std::max<std::size_t>(m_entries.size(), kCellsSlack)) return false;
+  for (int a = 0; a < 3; ++a) m_lo[a] = std::min(m_lo[a], lo[a]), m_hi[a] = std::max(m_hi[a], hi[a]);
+  const std::uint64_t cell = cellAt(lo);
+  if (cell == m_homeCell[id]) return true;
+  if (m_refiledHead.empty()) m_refiledHead.assign(m_grid.cells(), kNone);
+  m_refiled.push_back(Refiled{id, m_refiledHead[cell]});
+  m_refiledHead[cell] = std::uint32_t(m_refiled.size() - 1);
+  m_homeCell[id] = std::uint32_t(cell);
+  return true;
+}
+
+std::uint64_t QueryGrid::cellAt(const float x[3]) const {
+  std::uint32_t c[3];
+  for (int a = 0; a < 3; ++a) c[a] = cellOf(x[a], m_grid.origin[a], m_grid.invCell, m_grid.dims[a]);
+  return rowStart(c[1], c[2]) + c[0];
 }
 
 void QueryGrid::clear() {
   m_built = false;
   m_grid = Grid{};
+  for (double& r : m_homeReach) r = 0;
+  std::vector<std::uint32_t>().swap(m_homeCell);
+  std::vector<std::uint32_t>().swap(m_refiledHead);
+  std::vector<Refiled>().swap(m_refiled);
   std::vector<std::uint32_t>().swap(m_cellStart);
   std::vector<std::uint32_t>().swap(m_entries);
   std::vector<std::uint32_t>().swap(m_huge);
 }
 
 std::size_t QueryGrid::memoryBytes() const {
-  return (m_cellStart.capacity() + m_entries.capacity() + m_huge.capacity()) * sizeof(std::uint32_t);
+  return (m_cellStart.capacity() + m_entries.capacity() + m_huge.capacity() + m_homeCell.capacity() +
+          m_refiledHead.capacity()) * sizeof(std::uint32_t) +
+         m_refiled.capacity() * sizeof(Refiled);
 }
 
 std::uint64_t QueryGrid::rowStart(std::uint32_t y, std::uint32_t z) const {
@@ -137,7 +222,12 @@ std::size_t QueryGrid::appendRow(std::uint32_t x0, std::uint32_t x1, std::uint32
   const std::uint32_t begin = m_cellStart[row + x0], end = m_cellStart[row + x1 + 1];
   for (std::uint32_t e = begin; e < end; ++e)
     if (keep(m_entries[e])) out.push_back(m_entries[e]);
-  return end - begin;
+  std::size_t read = end - begin;
+  if (!m_refiledHead.empty())
+    for (std::uint64_t c = row + x0; c <= row + x1; ++c)
+      for (std::uint32_t e = m_refiledHead[c]; e != kNone; e = m_refiled[e].next, ++read)
+        if (keep(m_refiled[e].id)) out.push_back(m_refiled[e].id);
+  return read;
 }
 
 namespace {
@@ -155,16 +245,18 @@ bool QueryGrid::boxCandidates(const float lo[3], const float hi[3], std::size_t 
                               std::vector<std::uint32_t>& out, const CandidateTest& keep) const {
   if (!m_built) return false;
   // A box that overlaps the region contains the point max(its min, the region's min) on each axis, which
-  // lies in the region too; cellOf is monotone, so that point's cell is visited and the box is filed there.
-  // (An inverted region, min > max, is overlapped only by boxes spanning [max, min]: the same cells.)
+  // lies in the region too; cellOf is monotone, so that point's cell is visited and a box filed in every
+  // cell it overlaps is filed there; a box filed by its min corner has that corner at most m_homeReach below
+  // the region, and the visited cells start that far down. (An inverted region, min > max, is overlapped
+  // only by boxes spanning [max, min]: the same cells.)
   CellBox r;
   for (int a = 0; a < 3; ++a) {
     const float rlo = std::min(lo[a], hi[a]), rhi = std::max(lo[a], hi[a]);
     if (!(rlo <= rhi)) return false;  // NaN
-    r.lo[a] = cellOf(rlo, m_grid.origin[a], m_grid.invCell, m_grid.dims[a]);
+    r.lo[a] = cellOf(floatDown(double(rlo) - m_homeReach[a]), m_grid.origin[a], m_grid.invCell, m_grid.dims[a]);
     r.hi[a] = cellOf(rhi, m_grid.origin[a], m_grid.invCell, m_grid.dims[a]);
-    if (rhi < m_grid.origin[a] || rlo > m_hi[a])
-      r.lo[a] = 1, r.hi[a] = 0;  // every filed box lies in [origin, m_hi]
+    if (rhi < m_lo[a] || rlo > m_hi[a])
+      r.lo[a] = 1, r.hi[a] = 0;  // every filed box lies in [m_lo, m_hi]
   }
   double cells = 1;
   for (int a = 0; a < 3; ++a) cells *= r.hi[a] >= r.lo[a] ? double(r.hi[a] - r.lo[a] + 1) : 0.0;
@@ -196,20 +288,21 @@ bool QueryGrid::sweepCandidates(const QuerySweep& sweep, std::size_t maxCandidat
     if (!std::isfinite(from) || !std::isfinite(dir) || !std::isfinite(sweep.castLo[a]) ||
         !std::isfinite(sweep.castHi[a]))
       return false;
-    const double gridMagnitude = std::max(std::fabs(double(m_grid.origin[a])), std::fabs(double(m_hi[a])));
+    const double gridMagnitude =
+        std::max({std::fabs(double(m_grid.origin[a])), std::fabs(double(m_lo[a])), std::fabs(double(m_hi[a]))});
     const double pad =
         kSweepSlack * (std::fabs(from) + std::fabs(dir) * std::max(-t0, t1) + std::fabs(sweep.castLo[a]) +
                        std::fabs(sweep.castHi[a]) + gridMagnitude) +
         std::numeric_limits<float>::min();
-    lowOff[a] = std::min(sweep.castLo[a], sweep.castHi[a]) - pad;
+    lowOff[a] = std::min(sweep.castLo[a], sweep.castHi[a]) - pad - m_homeReach[a];
     highOff[a] = std::max(sweep.castLo[a], sweep.castHi[a]) + pad;
   }
   std::size_t read = m_huge.size();  // entries read: what maxCandidates bounds
   appendHuge(m_huge, out, keep);
   if (m_entries.empty()) return true;
-  // Clip t to where the region can meet a filed box, all of which lie in [origin, m_hi].
+  // Clip t to where the region can meet a filed box, all of which lie in [m_lo, m_hi].
   for (int a = 0; a < 3; ++a) {
-    const double enter = double(m_grid.origin[a]) - highOff[a] - sweep.from[a];  // q - from must reach this
+    const double enter = double(m_lo[a]) - highOff[a] - sweep.from[a];  // q - from must reach this
     const double leave = double(m_hi[a]) - lowOff[a] - sweep.from[a];
     const double dir = sweep.dir[a];
     if (dir == 0.0) {

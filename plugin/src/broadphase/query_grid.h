@@ -1,6 +1,7 @@
 #pragma once
 // The index behind the broad phase's queries (rayTest and aabbTest): the boxes filed in a dense uniform grid,
-// each in every cell it overlaps, as the pair search bins them (grid_pair_finder.h, stage 4; cell size and
+// a box no larger than a cell in the cell of its min corner (queries reach back by the largest such box),
+// a larger one in every cell it overlaps, as the pair search bins them (grid_pair_finder.h, stage 4; cell size and
 // huge boxes by the same choice, grid_choice.h, paper §4.1). A query then visits the cells its region
 // reaches instead of every proxy. The index only names candidates, a superset of the answer (with
 // repeats): the caller runs its exact test on each, so the answer is exactly what testing every box gives.
@@ -40,6 +41,12 @@ class QueryGrid {
   /// Files the boxes of `slots` of `p` (not empty); boxes covering more than `hugeCellLimit` cells go to a
   /// list every query names.
   void build(const ProxyArrays& p, const std::vector<std::uint32_t>& slots, std::uint32_t hugeCellLimit);
+  /// Files `id` (a box of the last build, filed by its min corner) in the cell of its new box [lo, hi] too,
+  /// so that the index follows a box that moved without a rebuild. Returns false, changing nothing, when it
+  /// cannot: `id` was filed in every cell it overlapped, the new box is larger than the reach queries look
+  /// back by, inverted or not finite, or the index already holds as many refiled entries as boxes. The entry
+  /// in the old cell stays: a candidate is tested on its filed box (CandidateTest) before it is named.
+  bool refile(std::uint32_t id, const float lo[3], const float hi[3]);
   /// Drops the index and its memory.
   void clear();
   /// True from build until clear (false after a build whose entries would not fit 32-bit starts: then
@@ -67,12 +74,26 @@ class QueryGrid {
   /// how many entries it read.
   std::size_t appendRow(std::uint32_t x0, std::uint32_t x1, std::uint32_t y, std::uint32_t z,
                         std::vector<std::uint32_t>& out, const CandidateTest& keep) const;
+  /// The cell holding point x (clamped to the grid).
+  std::uint64_t cellAt(const float x[3]) const;
+
+  static constexpr std::uint32_t kNone = 0xffffffffu;
+  /// An entry added by refile: the id and the next such entry of its cell (kNone ends the list).
+  struct Refiled {
+    std::uint32_t id;
+    std::uint32_t next;
+  };
 
   Grid m_grid;
-  float m_hi[3] = {0, 0, 0};               // max corner of the filed boxes (the grid spans [origin, m_hi])
+  float m_lo[3] = {0, 0, 0};               // min corner of the filed boxes (refiled ones may lie beyond the
+  float m_hi[3] = {0, 0, 0};               // grid's cells: cellOf clamps them into its edge cells), max corner
+  double m_homeReach[3] = {0, 0, 0};       // largest extent of the boxes filed only in their min corner's cell
   std::vector<std::uint32_t> m_cellStart;  // first entry per cell, plus the total at the end
   std::vector<std::uint32_t> m_entries;    // slots by cell
   std::vector<std::uint32_t> m_huge;       // slots named by every query
+  std::vector<std::uint32_t> m_homeCell;   // per id: the cell it was last filed in by its min corner, or kNone
+  std::vector<std::uint32_t> m_refiledHead;  // per cell (once a box was refiled): first Refiled entry, or kNone
+  std::vector<Refiled> m_refiled;
   bool m_built = false;
 };
 

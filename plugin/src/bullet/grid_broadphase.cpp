@@ -115,13 +115,6 @@ BoxCorners floatBoxHolding(const btBroadphaseProxy& p) {
   return b;
 }
 
-/// True when the float box `filed` holds the proxy's box.
-bool holds(const BoxCorners& filed, const btBroadphaseProxy& p) {
-  for (int a = 0; a < 3; ++a)
-    if (!(btScalar(filed.lo[a]) <= p.m_aabbMin[a] && p.m_aabbMax[a] <= btScalar(filed.hi[a]))) return false;
-  return true;
-}
-
 /// GridBroadphaseTuning::boxesInPlace reads the proxies' boxes as floats (BoxRecords), so it needs Bullet
 /// built in single precision; otherwise every finder gets float copies.
 constexpr bool kProxyBoxesAreFloats = std::is_same<btScalar, float>::value;
@@ -219,17 +212,10 @@ struct GridBroadphase::Impl {
   QueryGrid queryGrid;
   std::vector<std::uint32_t> offIndex;
   std::uint32_t indexedProxies = 0;
-  // Once an index was dropped because its boxes moved, the next ones file each box grown as the grown pairs
-  // are (grownBox): a box that stays inside is still where the index says, and the index outlives small
-  // moves. indexBoxes holds the filed boxes by slot (slots not filed hold a box that holds nothing).
-  bool indexGrows = false;
+  // A box that moves is filed again where it now is (QueryGrid::refile) when the index can; otherwise it is
+  // tested by every query (offIndex). indexBoxes holds the filed boxes by slot (slots not filed hold a box
+  // that holds nothing).
   std::vector<BoxCorners> indexBoxes;
-  // Boxes that left what the index filed for them are tested by every query (offIndex); at the next step,
-  // once there are more than kLinearOffIndex, they join movedSlots, filed (grown) in a small index of their
-  // own, so a world whose boxes drift keeps its index with a cheap refresh per step instead of a rebuild.
-  QueryGrid movedGrid;
-  std::vector<std::uint32_t> movedSlots;
-  static constexpr std::size_t kLinearOffIndex = 16;
   std::uint64_t indexedAtBuild = 0;   // queryIndexed when the index was built
   std::uint64_t lastIndexQueries = 0;  // queries the last dropped index answered
   std::atomic<bool> indexReady{false};
@@ -476,14 +462,16 @@ struct GridBroadphase::Impl {
       return;
     }
     if (state[s] & kOffIndex) return;
-    if (s < indexBoxes.size() && holds(indexBoxes[s], proxy(s)))
-      return;  // still inside the box the index filed for its slot
+    // Every filed slot's indexBoxes entry stays the float box holding its proxy's (answerFromIndex relies
+    // on it): refiled, even where it did not move, or kept aside.
+    const BoxCorners now = floatBoxHolding(proxy(s));
+    if (s < indexBoxes.size() && queryGrid.refile(s, now.lo, now.hi)) {
+      indexBoxes[s] = now;
+      return;
+    }
     state[s] |= kOffIndex;
     offIndex.push_back(s);
-    if (offIndex.size() + movedSlots.size() > indexedProxies / kOffIndexShare + 16) {
-      indexGrows = true;
-      dropQueryIndex();
-    }
+    if (offIndex.size() > indexedProxies / kOffIndexShare + 16) dropQueryIndex();
   }
 
   void dropQueryIndex() {
@@ -491,8 +479,6 @@ struct GridBroadphase::Impl {
       if (s < slotCount) state[s] = std::uint8_t(state[s] & ~kOffIndex);
     std::vector<std::uint32_t>().swap(offIndex);
     std::vector<BoxCorners>().swap(indexBoxes);
-    std::vector<std::uint32_t>().swap(movedSlots);
-    movedGrid.clear();
     if (indexReady.load(std::memory_order_relaxed))
       lastIndexQueries = queryIndexed.load(std::memory_order_relaxed) - indexedAtBuild;
     queryGrid.clear();
@@ -513,8 +499,8 @@ struct GridBroadphase::Impl {
   }
 
   void buildQueryIndex() {
-    // The visible proxies as the index's input, from float copies of their boxes (grown once the boxes
-    // have moved an index away), kept by slot while the index lives.
+    // The visible proxies as the index's input, from float copies of their boxes, kept by slot while the
+    // index lives.
     std::vector<std::uint32_t> slots;
     slots.reserve(liveCount);
     for (std::uint32_t s = 0; s < slotCount; ++s)
@@ -529,8 +515,7 @@ struct GridBroadphase::Impl {
                             &copies[std::size_t(slotCount) * 4],
                             &copies[std::size_t(slotCount) * 5]};
     for (std::uint32_t s : slots) {
-      BoxCorners b = floatBoxHolding(proxy(s));
-      if (indexGrows) b = grownBox(b);
+      const BoxCorners b = floatBoxHolding(proxy(s));
       indexBoxes[s] = b;
       for (int a = 0; a < 3; ++a) axis[a][s] = b.lo[a], axis[3 + a][s] = b.hi[a];
     }
@@ -547,47 +532,11 @@ struct GridBroadphase::Impl {
     indexReady.store(true, std::memory_order_release);
   }
 
-  /// Files the boxes that left the index since the last step in the index of moved boxes (see movedGrid).
-  void fileMovedBoxes() {
-    if (!indexReady.load(std::memory_order_relaxed) || offIndex.size() <= kLinearOffIndex) return;
-    constexpr float kMax = std::numeric_limits<float>::max();
-    if (indexBoxes.size() < slotCount)
-      indexBoxes.resize(slotCount, BoxCorners{{kMax, kMax, kMax}, {-kMax, -kMax, -kMax}});
-    for (std::uint32_t s : offIndex) {
-      state[s] = std::uint8_t(state[s] & ~kOffIndex);
-      if (!visible(s)) {
-        // Filed nowhere: any change to it puts it back in offIndex.
-        indexBoxes[s] = BoxCorners{{kMax, kMax, kMax}, {-kMax, -kMax, -kMax}};
-        continue;
-      }
-      indexBoxes[s] = grownBox(floatBoxHolding(proxy(s)));
-      movedSlots.push_back(s);
-    }
-    offIndex.clear();
-    std::sort(movedSlots.begin(), movedSlots.end());
-    movedSlots.erase(std::unique(movedSlots.begin(), movedSlots.end()), movedSlots.end());
-    std::vector<float> copies(movedSlots.size() * 6);
-    std::vector<std::uint32_t> dense(movedSlots.size());
-    const std::size_t m = movedSlots.size();
-    for (std::size_t i = 0; i < m; ++i) {
-      const BoxCorners& b = indexBoxes[movedSlots[i]];
-      for (int a = 0; a < 3; ++a) copies[a * m + i] = b.lo[a], copies[(3 + a) * m + i] = b.hi[a];
-      dense[i] = std::uint32_t(i);
-    }
-    // Filed by their rank in movedSlots (the grid's arrays are indexed by what it files), named by slot below.
-    ProxyArrays v;
-    v.count = std::uint32_t(m);
-    v.minX = &copies[0], v.minY = &copies[m], v.minZ = &copies[2 * m];
-    v.maxX = &copies[3 * m], v.maxY = &copies[4 * m], v.maxZ = &copies[5 * m];
-    movedGrid.build(v, dense, tuning.hugeCellLimit);
-  }
-
   /// Candidates beyond which a query tests every proxy instead: sorting a candidate costs about as much as
   /// testing kScanPerCandidate proxies in a scan.
   std::size_t maxCandidates() const { return slotCount / kScanPerCandidate; }
 
-  /// A query's test run on the boxes the index filed (indexBoxes, which hold the proxies' boxes), for the main
-  /// index (ids are slots) and the moved boxes' (ids are ranks in movedSlots).
+  /// A query's test run on the boxes the index filed (indexBoxes, which hold the proxies' boxes).
   template <class Test>
   struct FiledTests {
     FiledTests(const Impl& impl, const Test& test) : d(impl), t(test) {}
@@ -598,30 +547,9 @@ struct GridBroadphase::Impl {
               },
               this};
     }
-    CandidateTest byMovedRank() const {
-      return {[](const void* c, std::uint32_t rank) {
-                const FiledTests& f = *static_cast<const FiledTests*>(c);
-                return f.t(f.d.indexBoxes[f.d.movedSlots[rank]]);
-              },
-              this};
-    }
     const Impl& d;
     const Test& t;
   };
-
-  /// The moved boxes' candidates for a query, by slot, appended to `out`: `gather(grid, out)` asks a grid;
-  /// where the moved boxes' own index declines (a region reaching more cells than it has boxes), all of them.
-  template <class Gather>
-  void appendMovedCandidates(Gather&& gather, std::vector<std::uint32_t>& out) const {
-    if (movedSlots.empty()) return;
-    std::vector<std::uint32_t> ranks;
-    ranks.reserve(kQueryCandidatesReserved);
-    if (movedGrid.built() && gather(movedGrid, ranks)) {
-      for (std::uint32_t r : ranks) out.push_back(movedSlots[r]);
-    } else {
-      out.insert(out.end(), movedSlots.begin(), movedSlots.end());
-    }
-  }
 
   /// A query through the index: `candidates` (any order, repeats allowed) and the proxies kept aside are
   /// tested with `test`, and the visible ones that pass go to `process`, in slot order, once each.
@@ -631,8 +559,10 @@ struct GridBroadphase::Impl {
     candidates.insert(candidates.end(), offIndex.begin(), offIndex.end());
     std::sort(candidates.begin(), candidates.end());
     candidates.erase(std::unique(candidates.begin(), candidates.end()), candidates.end());
+    // The index's candidates passed the test on their filed box; with float scalars that box is the
+    // proxy's own (boxChanged keeps it so), so only the slots kept aside are tested again.
     for (std::uint32_t s : candidates)
-      if (visible(s) && test(s)) process(&proxy(s));
+      if (visible(s) && ((kProxyBoxesAreFloats && !(state[s] & kOffIndex)) || test(s))) process(&proxy(s));
   }
 
   /// A query without the index: every visible proxy is tested, in slot order.
@@ -1004,12 +934,8 @@ void GridBroadphase::rayTest(const btVector3& rayFrom, const btVector3& /*rayTo*
                         lambdaMax);
     };
     const Impl::FiledTests<decltype(rayHitsFiled)> keep(d, rayHitsFiled);
-    if (usable && index->sweepCandidates(sweep, d.maxCandidates(), candidates, keep.bySlot())) {
-      d.appendMovedCandidates([&](const QueryGrid& g, std::vector<std::uint32_t>& out) {
-        return g.sweepCandidates(sweep, d.maxCandidates(), out, keep.byMovedRank());
-      }, candidates);
+    if (usable && index->sweepCandidates(sweep, d.maxCandidates(), candidates, keep.bySlot()))
       return d.answerFromIndex(candidates, hits, process);
-    }
   }
   d.answerByScan(hits, process);
 }
@@ -1038,12 +964,8 @@ void GridBroadphase::aabbTest(const btVector3& aabbMin, const btVector3& aabbMax
              btScalar(b.lo[2]) <= aabbMax.z() && btScalar(b.hi[2]) >= aabbMin.z();
     };
     const Impl::FiledTests<decltype(overlapsFiled)> keep(d, overlapsFiled);
-    if (index->boxCandidates(lo, hi, d.maxCandidates(), candidates, keep.bySlot())) {
-      d.appendMovedCandidates([&](const QueryGrid& g, std::vector<std::uint32_t>& out) {
-        return g.boxCandidates(lo, hi, d.maxCandidates(), out, keep.byMovedRank());
-      }, candidates);
+    if (index->boxCandidates(lo, hi, d.maxCandidates(), candidates, keep.bySlot()))
       return d.answerFromIndex(candidates, overlaps, process);
-    }
   }
   d.answerByScan(overlaps, process);
 }
@@ -1053,7 +975,6 @@ void GridBroadphase::calculateOverlappingPairs(btDispatcher* dispatcher) {
   GridBroadphaseStats st;
   st.proxies = d.liveCount;
   st.staticProxies = d.staticCount;
-  d.fileMovedBoxes();
   if (d.dirty && d.grown.kept() && d.answerFromGrownPairs(dispatcher, st)) return;
   // When a box already changed, the scan fills the finder's view as it goes (a filter it finds changed is
   // marked moved there); otherwise it only looks for filter changes, and the view is filled when it found
@@ -1371,8 +1292,7 @@ GridBroadphaseQueryStats GridBroadphase::queryStats() const {
   q.indexBuilds = d.indexBuilds;
   q.indexBytes = d.indexReady.load(std::memory_order_acquire)
                      ? d.queryGrid.memoryBytes() + d.offIndex.capacity() * sizeof(std::uint32_t) +
-                           d.indexBoxes.capacity() * sizeof(BoxCorners) + d.movedGrid.memoryBytes() +
-                           d.movedSlots.capacity() * sizeof(std::uint32_t)
+                           d.indexBoxes.capacity() * sizeof(BoxCorners)
                      : 0;
   return q;
 }
