@@ -22,6 +22,7 @@
 #include <limits>
 #include <memory>
 #include <mutex>
+#include <optional>
 #include <new>
 #include <stdexcept>
 #include <string>
@@ -300,13 +301,15 @@ struct GridBroadphase::Impl {
       float lo[3] = {kFloatMax, kFloatMax, kFloatMax};
       float hi[3] = {-kFloatMax, -kFloatMax, -kFloatMax};
     };
-    tbb::enumerable_thread_specific<SurveyPart> parts;
     const bool surveyed = fill && surveying;
+    // Made only for a survey: a small scene's step scans for filter changes alone, and its cost shows.
+    std::optional<tbb::enumerable_thread_specific<SurveyPart>> parts;
+    if (surveyed) parts.emplace();
     std::uint32_t* const extentLo = surveyed ? survey.extents.lo.data() : nullptr;
     std::uint32_t* const extentHi = surveyed ? survey.extents.hi.data() : nullptr;
     const int extentAxis = survey.extents.axis;
     const auto scanRange = [&](const tbb::blocked_range<std::uint32_t>& r, bool changed) {
-          SurveyPart* const part = surveyed ? &parts.local() : nullptr;
+          SurveyPart* const part = surveyed ? &parts->local() : nullptr;
           for (std::uint32_t s = r.begin(); s != r.end(); ++s) {
             std::uint8_t st = state[s];
             if (st & kLive) {
@@ -360,7 +363,7 @@ struct GridBroadphase::Impl {
     if (surveyed) {
       survey.huge.clear();
       for (int a = 0; a < 3; ++a) survey.lo[a] = kFloatMax, survey.hi[a] = -kFloatMax;
-      for (const SurveyPart& part : parts) {
+      for (const SurveyPart& part : *parts) {
         survey.huge.insert(survey.huge.end(), part.huge.begin(), part.huge.end());
         for (int a = 0; a < 3; ++a)
           survey.lo[a] = std::min(survey.lo[a], part.lo[a]),
