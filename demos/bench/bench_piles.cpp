@@ -33,6 +33,7 @@ struct Options {
 struct Trace {
   std::vector<double> energy;      // kinetic energy after each step (J)
   std::vector<float> penetration;  // deepest contact after each step (m)
+  std::vector<float> overlap;      // deepest overlap of two bodies in contact after each step (m, BodyOverlap)
   int restStep = -1;               // first step after which every body slept; -1: not within the steps
   double stepsPerSecond = 0;
 };
@@ -52,6 +53,7 @@ Trace runPile(int bodies, unsigned seed, scenes::CollisionBackend backend, int s
       [&](const scenes::StepSample& s) {
         t.energy.push_back(s.kineticEnergy);
         t.penetration.push_back(s.largestPenetration);
+        t.overlap.push_back(world.deepestBodyOverlap());
         if (s.sleepingBodies == bodies && t.restStep < 0) t.restStep = s.step;
       },
       1);
@@ -72,6 +74,8 @@ struct Row {
   double referenceWorstShare = 0;
   float meshDeepest = 0, referenceDeepest = 0;
   float meshRestingDeepest = 0, referenceRestingDeepest = 0;  // from settledStep on
+  float meshOverlap = 0, referenceOverlap = 0;                // the same, measured on the bodies' solids
+  float meshRestingOverlap = 0, referenceRestingOverlap = 0;
 };
 
 Row compare(int bodies, unsigned seed, int steps, float meshMargin) {
@@ -96,20 +100,24 @@ Row compare(int bodies, unsigned seed, int steps, float meshMargin) {
       worst = std::max(worst, t.energy[i]);
     return r.peak > 0 ? worst / r.peak : 0.0;
   };
-  auto deepestFrom = [&](const Trace& t, int from) {
+  auto deepestFrom = [&](const std::vector<float>& depths, int from) {
     float deepest = 0;
-    for (std::size_t i = std::size_t(std::max(0, from)); i < t.penetration.size(); ++i)
-      deepest = std::max(deepest, t.penetration[i]);
+    for (std::size_t i = std::size_t(std::max(0, from)); i < depths.size(); ++i)
+      deepest = std::max(deepest, depths[i]);
     return deepest;
   };
   if (r.settledStep >= 0) {
     r.meshWorstShare = worstFrom(r.mesh);
     r.referenceWorstShare = worstFrom(r.reference);
-    r.meshRestingDeepest = deepestFrom(r.mesh, r.settledStep);
-    r.referenceRestingDeepest = deepestFrom(r.reference, r.settledStep);
+    r.meshRestingDeepest = deepestFrom(r.mesh.penetration, r.settledStep);
+    r.referenceRestingDeepest = deepestFrom(r.reference.penetration, r.settledStep);
+    r.meshRestingOverlap = deepestFrom(r.mesh.overlap, r.settledStep);
+    r.referenceRestingOverlap = deepestFrom(r.reference.overlap, r.settledStep);
   }
-  r.meshDeepest = deepestFrom(r.mesh, 0);
-  r.referenceDeepest = deepestFrom(r.reference, 0);
+  r.meshDeepest = deepestFrom(r.mesh.penetration, 0);
+  r.referenceDeepest = deepestFrom(r.reference.penetration, 0);
+  r.meshOverlap = deepestFrom(r.mesh.overlap, 0);
+  r.referenceOverlap = deepestFrom(r.reference.overlap, 0);
   return r;
 }
 
@@ -118,17 +126,21 @@ void runAll(const Options& o) {
       "Mesh piles (gpucol MeshShape, margin %g m) beside the same piles of Bullet's convex shapes; up to %d "
       "steps of 1/60 s.\n"
       "rest: the step every body slept (-: not within the steps). deepest: the deepest contact over the run, "
-      "and (after /) once the reference's kinetic energy first fell below 1%% of its peak. burst: the largest "
-      "kinetic energy from then on, as %% of the reference's peak.\n\n",
+      "and (after /) once the reference's kinetic energy first fell below 1%% of its peak. overlap: the same "
+      "for the deepest overlap of two bodies in contact, measured on the convex pieces of their solids (GJK "
+      "and EPA) in both piles. burst: the largest kinetic energy from then on, as %% of the reference's "
+      "peak.\n\n",
       double(o.meshMargin), o.steps);
-  std::printf("%6s %5s | %6s %6s %7s | %15s %15s | %8s %8s | %9s %9s\n", "bodies", "seed", "rest", "ref",
-              "ratio", "deepest mesh", "deepest ref", "burst", "ref", "steps/s", "ref");
+  std::printf("%6s %5s | %6s %6s %7s | %15s %15s | %15s %15s | %8s %8s | %9s %9s\n", "bodies", "seed", "rest",
+              "ref", "ratio", "deepest mesh", "deepest ref", "overlap mesh", "overlap ref", "burst", "ref",
+              "steps/s", "ref");
   std::ofstream csv, series;
   if (!o.csv.empty()) {
     csv.open(o.csv);
     csv << "bodies,seed,mesh_rest_step,reference_rest_step,mesh_deepest_m,reference_deepest_m,"
            "mesh_resting_deepest_m,reference_resting_deepest_m,reference_peak_j,reference_settled_step,"
-           "mesh_worst_share,reference_worst_share,mesh_steps_per_second,reference_steps_per_second\n";
+           "mesh_worst_share,reference_worst_share,mesh_steps_per_second,reference_steps_per_second,"
+           "mesh_overlap_m,reference_overlap_m,mesh_resting_overlap_m,reference_resting_overlap_m\n";
   }
   if (!o.series.empty()) {
     series.open(o.series);
@@ -143,18 +155,22 @@ void runAll(const Options& o) {
                                : -1;
       if (ratio > 0) ratios.push_back(ratio);
       auto rest = [](int step) { return step < 0 ? std::string("-") : std::to_string(step); };
-      std::printf("%6d %5u | %6s %6s %7.2f | %6.3f / %6.3f %6.3f / %6.3f | %7.2f%% %7.2f%% | %9.1f %9.1f\n", n,
-                  seed, rest(r.mesh.restStep).c_str(), rest(r.reference.restStep).c_str(), ratio,
-                  double(r.meshDeepest), double(r.meshRestingDeepest), double(r.referenceDeepest),
-                  double(r.referenceRestingDeepest), 100 * r.meshWorstShare, 100 * r.referenceWorstShare,
-                  r.mesh.stepsPerSecond, r.reference.stepsPerSecond);
+      std::printf(
+          "%6d %5u | %6s %6s %7.2f | %6.3f / %6.3f %6.3f / %6.3f | %6.3f / %6.3f %6.3f / %6.3f | %7.2f%% %7.2f%% | "
+          "%9.1f %9.1f\n",
+          n, seed, rest(r.mesh.restStep).c_str(), rest(r.reference.restStep).c_str(), ratio,
+          double(r.meshDeepest), double(r.meshRestingDeepest), double(r.referenceDeepest),
+          double(r.referenceRestingDeepest), double(r.meshOverlap), double(r.meshRestingOverlap),
+          double(r.referenceOverlap), double(r.referenceRestingOverlap), 100 * r.meshWorstShare,
+          100 * r.referenceWorstShare, r.mesh.stepsPerSecond, r.reference.stepsPerSecond);
       std::fflush(stdout);
       if (csv) {
         csv << n << ',' << seed << ',' << r.mesh.restStep << ',' << r.reference.restStep << ','
             << r.meshDeepest << ',' << r.referenceDeepest << ',' << r.meshRestingDeepest << ','
             << r.referenceRestingDeepest << ',' << r.peak << ',' << r.settledStep << ',' << r.meshWorstShare
             << ',' << r.referenceWorstShare << ',' << r.mesh.stepsPerSecond << ','
-            << r.reference.stepsPerSecond << '\n';
+            << r.reference.stepsPerSecond << ',' << r.meshOverlap << ',' << r.referenceOverlap << ','
+            << r.meshRestingOverlap << ',' << r.referenceRestingOverlap << '\n';
       }
       if (series) {
         for (std::size_t i = 0; i < r.mesh.energy.size(); ++i)

@@ -19,6 +19,7 @@
 #include <stdexcept>
 #include <string>
 
+#include "scenes/body_overlap.h"
 #include "scenes/gimpact_peer.h"
 
 namespace gpucol::scenes {
@@ -155,6 +156,7 @@ WorldScene::WorldScene(const SceneDescription& scene, const WorldOptions& option
       m_dynamicBodies.push_back(rigidBody.get());
     }
     m_world->addRigidBody(rigidBody.get());
+    m_bodyIndex[rigidBody.get()] = m_bodies.size();
     m_bodies.push_back(std::move(rigidBody));
   }
 }
@@ -217,6 +219,24 @@ float WorldScene::largestPenetration() const {
     for (int j = 0; j < manifold->getNumContacts(); ++j) {
       deepest = std::max(deepest, -manifold->getContactPoint(j).getDistance());
     }
+  }
+  return deepest;
+}
+
+float WorldScene::deepestBodyOverlap() const {
+  if (!m_overlap) m_overlap = std::make_unique<BodyOverlap>(m_scene);
+  if (!m_overlap->complete()) return -1;
+  float deepest = 0;
+  const int manifolds = m_dispatcher->getNumManifolds();
+  for (int i = 0; i < manifolds; ++i) {
+    const btPersistentManifold* manifold = m_dispatcher->getManifoldByIndexInternal(i);
+    if (manifold->getNumContacts() == 0) continue;
+    const auto a = m_bodyIndex.find(manifold->getBody0()), b = m_bodyIndex.find(manifold->getBody1());
+    if (a == m_bodyIndex.end() || b == m_bodyIndex.end()) continue;
+    deepest = std::max(deepest, m_overlap->deepest(m_scene.bodies[a->second].mesh,
+                                                   manifold->getBody0()->getWorldTransform(),
+                                                   m_scene.bodies[b->second].mesh,
+                                                   manifold->getBody1()->getWorldTransform()));
   }
   return deepest;
 }

@@ -6,6 +6,7 @@
 
 #include <cstddef>
 #include <memory>
+#include <unordered_map>
 #include <vector>
 
 #include "scenes/scene_description.h"
@@ -22,6 +23,8 @@ class CollisionDispatcher;
 }
 
 namespace gpucol::scenes {
+
+class BodyOverlap;
 
 /// The collision code a WorldScene runs on.
 enum class CollisionBackend {
@@ -91,6 +94,9 @@ class WorldScene {
   /// Depth of the deepest contact of the last step (metres, >= 0): minus the most negative distance over
   /// every point of every manifold; 0 when nothing penetrates.
   float largestPenetration() const;
+  /// Deepest overlap of two bodies that have contacts after the last step (metres, >= 0), measured on the
+  /// convex pieces of their solids whatever the backend (BodyOverlap); -1 when some mesh has no pieces.
+  float deepestBodyOverlap() const;
   /// Contact points in all manifolds after the last step.
   int contactCount() const;
   /// True when every dynamic body sleeps or moves slower than `linearSpeed` (m/s) and turns slower than
@@ -130,6 +136,8 @@ class WorldScene {
   std::unique_ptr<Shapes> m_shapes;
   std::vector<std::unique_ptr<btRigidBody>> m_bodies;
   std::vector<btRigidBody*> m_dynamicBodies;
+  std::unordered_map<const btCollisionObject*, std::size_t> m_bodyIndex;  // index in m_scene.bodies
+  mutable std::unique_ptr<BodyOverlap> m_overlap;  // made by the first deepestBodyOverlap()
 };
 
 }  // namespace gpucol::scenes
