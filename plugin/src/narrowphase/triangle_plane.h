@@ -66,9 +66,9 @@ inline GpucolLanes3 floatLanes(const Eigen::Vector3f& v) {
 /// gpucol_float_certainly_apart on one pair: 1 when float arithmetic proves that trianglesIntersect's double
 /// test answers "no" at one of Möller's two plane rejections, else 0 (an integer: a conversion to bool stops
 /// the vectoriser). Both plane tests always run, so loops over many pairs become vector code.
-inline unsigned floatCertainlyApartBranchFree(const Eigen::Vector3f& a0, const Eigen::Vector3f& a1,
-                                              const Eigen::Vector3f& a2, const Eigen::Vector3f& b0,
-                                              const Eigen::Vector3f& b1, const Eigen::Vector3f& b2) {
+GPUCOL_FORCE_INLINE unsigned floatCertainlyApartBranchFree(
+    const Eigen::Vector3f& a0, const Eigen::Vector3f& a1, const Eigen::Vector3f& a2,
+    const Eigen::Vector3f& b0, const Eigen::Vector3f& b1, const Eigen::Vector3f& b2) {
   return unsigned(gpucol_float_certainly_apart(floatLanes(a0), floatLanes(a1), floatLanes(a2), floatLanes(b0),
                                                floatLanes(b1), floatLanes(b2)));
 }
