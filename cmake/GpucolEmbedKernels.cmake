@@ -2,8 +2,8 @@
 # its kernels; at build time it becomes ${PROJECT_BINARY_DIR}/generated/gpucol_kernels/<name>.cpp, a C++
 # string constant gpucol::opencl::kernels::<name>. Nothing generated is committed.
 #
-# `#include "<path>"` lines in a .cl, <path> relative to the repository root (opencl/shared/*.h, and
-# plugin/src/broadphase/pair_mapping.h which is written to compile as both C++ and OpenCL C), are replaced
+# `#include "<path>"` lines in a .cl, <path> relative to the repository root (opencl/shared/*.h, and the
+# mathematics of plugin/src/shared_math/*.h, written to compile as both C++ and OpenCL C), are replaced
 # by the text of that header, the same text the host compiles: the program needs no include path at run
 # time and host and device always agree. A depfile lists the inlined headers, so editing one regenerates.
 #

@@ -16,7 +16,7 @@
 
 #include "accuracy_row.h"
 #include "bench_stats.h"
-#include "broadphase/pair_mapping.h"
+#include "shared_math/pair_mapping.h"
 #include "gpucol/grid_broadphase.h"
 
 namespace gpucol::bench {

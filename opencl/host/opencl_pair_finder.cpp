@@ -17,7 +17,7 @@
 
 #include "broadphase/grid_choice.h"
 #include "broadphase/packed_pairs.h"
-#include "broadphase/pair_mapping.h"
+#include "shared_math/pair_mapping.h"
 #include "gpucol_kernels/kernels.h"
 #include "opencl/host/device_array.h"
 #include "opencl/host/opencl_context.h"

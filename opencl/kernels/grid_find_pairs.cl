@@ -6,10 +6,7 @@
 #ifdef cl_khr_fp64
 #pragma OPENCL EXTENSION cl_khr_fp64 : enable
 #endif
-// pair_mapping.h names a local variable `half`, a reserved type name in OpenCL C: rename it while included.
-#define half gpucol_mapping_half
-#include "plugin/src/broadphase/pair_mapping.h"
-#undef half
+#include "plugin/src/shared_math/pair_mapping.h"
 
 // Binning and the dedupe rule must compute the same cell for the same float: no contraction, no fast math.
 #pragma OPENCL FP_CONTRACT OFF

@@ -5,10 +5,11 @@
 // (scan.cl, Fig. 5.8) and sizes the next front and the candidate list from the totals; the writing pass
 // repeats the tests and writes at the scanned offsets. So nothing has a fixed capacity.
 //
-// The box tests are those of plugin/src/bvh/tree_traversal.cpp (BoxCarrier::carry and overlaps, in both
-// frames: B's box carried into A's, A's into B's) with the same operations in the same order and no
-// contraction, so the device finds exactly the CPU's candidates.
+// The box tests are those of plugin/src/bvh/tree_traversal.cpp (in both frames: B's box carried into A's, A's
+// into B's), from the same source (plugin/src/shared_math/box_carry.h) and with no contraction, so the device
+// finds exactly the CPU's candidates.
 #include "opencl/shared/mesh_pipeline_types.h"
+#include "plugin/src/shared_math/box_carry.h"
 
 #pragma OPENCL FP_CONTRACT OFF
 
@@ -17,7 +18,7 @@ typedef struct CarriedBox {
   float max[3];
 } CarriedBox;
 
-// centre' = M c + t, extent' = |M| e + inflation, summed in the CPU's order (((x0 + x1) + x2) + t).
+// centre' = M c + t, extent' = |M| e + inflation (box_carry.h).
 CarriedBox mesh_carry(__global const GpucolBoxMap* m, __global const float* lo, __global const float* hi) {
   float c[3], e[3];
   for (int j = 0; j < 3; ++j) {
@@ -26,11 +27,10 @@ CarriedBox mesh_carry(__global const GpucolBoxMap* m, __global const float* lo, 
   }
   CarriedBox out;
   for (int i = 0; i < 3; ++i) {
-    const float ci = ((m->linear[3 * i] * c[0] + m->linear[3 * i + 1] * c[1]) + m->linear[3 * i + 2] * c[2]) +
-                     m->translation[i];
-    const float ei =
-        ((m->absLinear[3 * i] * e[0] + m->absLinear[3 * i + 1] * e[1]) + m->absLinear[3 * i + 2] * e[2]) +
-        m->inflation[i];
+    const float ci = GPUCOL_CARRY_ROW(m->linear[3 * i], m->linear[3 * i + 1], m->linear[3 * i + 2], c[0], c[1],
+                                      c[2], m->translation[i]);
+    const float ei = GPUCOL_CARRY_ROW(m->absLinear[3 * i], m->absLinear[3 * i + 1], m->absLinear[3 * i + 2], e[0],
+                                      e[1], e[2], m->inflation[i]);
     out.min[i] = ci - ei;
     out.max[i] = ci + ei;
   }
@@ -39,8 +39,7 @@ CarriedBox mesh_carry(__global const GpucolBoxMap* m, __global const float* lo, 
 
 // Touching counts as overlapping (tree_traversal.cpp's overlaps()).
 bool mesh_overlaps(__global const float* lo, __global const float* hi, const CarriedBox* b) {
-  return (lo[0] <= b->max[0]) & (b->min[0] <= hi[0]) & (lo[1] <= b->max[1]) & (b->min[1] <= hi[1]) &
-         (lo[2] <= b->max[2]) & (b->min[2] <= hi[2]);
+  return GPUCOL_BOXES_OVERLAP(lo, hi, b->min, b->max);
 }
 
 // A's box [loA, hiA] and B's [loB, hiB] overlap in A's frame (B's carried in) and in B's (A's carried in).
@@ -303,9 +302,9 @@ typedef struct Box4 {
 Box4 mesh_carry4(const Carrier4* k, float4 lo, float4 hi) {
   const float4 c = (lo + hi) * 0.5f;
   const float4 e = (hi - lo) * 0.5f;
-  const float4 centre = ((k->column[0] * c.x + k->column[1] * c.y) + k->column[2] * c.z) + k->translation;
+  const float4 centre = GPUCOL_CARRY_ROW(k->column[0], k->column[1], k->column[2], c.x, c.y, c.z, k->translation);
   const float4 extent =
-      ((k->absColumn[0] * e.x + k->absColumn[1] * e.y) + k->absColumn[2] * e.z) + k->inflation;
+      GPUCOL_CARRY_ROW(k->absColumn[0], k->absColumn[1], k->absColumn[2], e.x, e.y, e.z, k->inflation);
   Box4 out;
   out.lo = centre - extent;
   out.hi = centre + extent;
@@ -359,12 +358,10 @@ Box8 mesh_carry8(const Carrier8* k, float4 lo0, float4 hi0, float4 lo1, float4 h
   const float8 lo = (float8)(lo0, lo1), hi = (float8)(hi0, hi1);
   const float8 c = (lo + hi) * 0.5f;
   const float8 e = (hi - lo) * 0.5f;
-  const float8 centre =
-      ((k->column[0] * c.s00004444 + k->column[1] * c.s11115555) + k->column[2] * c.s22226666) +
-      k->translation;
-  const float8 extent =
-      ((k->absColumn[0] * e.s00004444 + k->absColumn[1] * e.s11115555) + k->absColumn[2] * e.s22226666) +
-      k->inflation;
+  const float8 centre = GPUCOL_CARRY_ROW(k->column[0], k->column[1], k->column[2], c.s00004444, c.s11115555,
+                                         c.s22226666, k->translation);
+  const float8 extent = GPUCOL_CARRY_ROW(k->absColumn[0], k->absColumn[1], k->absColumn[2], e.s00004444,
+                                         e.s11115555, e.s22226666, k->inflation);
   Box8 out;
   out.lo = centre - extent;
   out.hi = centre + extent;

@@ -8,7 +8,7 @@
 #include <cstdint>
 #include <random>
 
-#include "broadphase/pair_mapping.h"
+#include "shared_math/pair_mapping.h"
 
 namespace {
 

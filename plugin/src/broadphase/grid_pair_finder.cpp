@@ -20,7 +20,7 @@
 #include "broadphase/grid_choice.h"
 #include "broadphase/local_box.h"
 #include "broadphase/pair_buckets.h"
-#include "broadphase/pair_mapping.h"
+#include "shared_math/pair_mapping.h"
 #include "broadphase/slab_search.h"
 #include "memory/large_array_allocator.h"
 

@@ -31,6 +31,7 @@
 #include "narrowphase/triangle_plane.h"
 #include "narrowphase/triangle_proximity.h"
 #include "opencl/host/opencl_started.h"
+#include "shared_math/box_carry.h"
 
 namespace gpucol {
 namespace {
@@ -182,9 +183,8 @@ struct ChunkBuffers {
 };
 
 // The frame applied to a chunk's rows in place: A's vertices (values 0..8) times A's scale, B's (9..17)
-// carried into A's scaled frame (PairFrame). The same operations in the same order as Eigen's `bLinear * p +
-// bTranslation`, which this replaced (its 3x3 product sums a row as m0 x + (m1 y + m2 z), then the
-// translation is added), so the values are the same bits; written over whole rows the loops are vector code.
+// carried into A's scaled frame (PairFrame) by gpucol_carry_point (shared_math/box_carry.h, Eigen's order of
+// `bLinear * p + bTranslation`, as the device does it); written over whole rows the loops are vector code.
 GPUCOL_AVX2_CLONES void transformRows(float* rows, std::size_t count, const PairFrame& frame) {
   constexpr std::size_t n = kNearRow;
   for (int v = 0; v < 3; ++v) {
@@ -202,9 +202,9 @@ GPUCOL_AVX2_CLONES void transformRows(float* rows, std::size_t count, const Pair
     float* const z = y + n;
     for (std::size_t j = 0; j < count; ++j) {
       const float px = x[j], py = y[j], pz = z[j];
-      x[j] = m(0, 0) * px + (m(0, 1) * py + m(0, 2) * pz) + t.x();
-      y[j] = m(1, 0) * px + (m(1, 1) * py + m(1, 2) * pz) + t.y();
-      z[j] = m(2, 0) * px + (m(2, 1) * py + m(2, 2) * pz) + t.z();
+      x[j] = gpucol_carry_point(m(0, 0), m(0, 1), m(0, 2), px, py, pz, t.x());
+      y[j] = gpucol_carry_point(m(1, 0), m(1, 1), m(1, 2), px, py, pz, t.y());
+      z[j] = gpucol_carry_point(m(2, 0), m(2, 1), m(2, 2), px, py, pz, t.z());
     }
   }
 }

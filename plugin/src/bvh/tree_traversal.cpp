@@ -16,6 +16,7 @@
 
 #include "bvh/avx2_clones.h"
 #include "bvh/prefetch.h"
+#include "shared_math/box_carry.h"
 
 #if defined(__SSE2__)
 #include <emmintrin.h>
@@ -118,8 +119,8 @@ inline __m128 splat(__m128 v) {
 /// One frame's map of one call (BoxMap), prepared once (thesis §3.3.3: with non-updated AABBs the rotation is
 /// set up once for the two hierarchies and reused by every box test), with |M| and the inflation.
 ///
-/// With SSE (every x86-64 CPU) a box is carried as three column products of 4 lanes, the same operations in
-/// the same order as the scalar code (((M_i0 c_0 + M_i1 c_1) + M_i2 c_2) + t_i), so both give the same bits.
+/// With SSE (every x86-64 CPU) a box is carried as three column products of 4 lanes, in the scalar code's
+/// order (GPUCOL_CARRY_ROW of shared_math/box_carry.h, as the device does it), so both give the same bits.
 class BoxCarrier {
  public:
   explicit BoxCarrier(const BoxMap& boxMap) {
@@ -166,14 +167,15 @@ class BoxCarrier {
                                  keepXyz);
     const Float8 c = (l + h) * 0.5f;
     const Float8 e = (h - l) * 0.5f;
-    const Float8 centre = ((m_column2[0] * __builtin_shufflevector(c, c, 0, 0, 0, 0, 4, 4, 4, 4) +
-                            m_column2[1] * __builtin_shufflevector(c, c, 1, 1, 1, 1, 5, 5, 5, 5)) +
-                           m_column2[2] * __builtin_shufflevector(c, c, 2, 2, 2, 2, 6, 6, 6, 6)) +
-                          m_translation2;
-    const Float8 extent = ((m_absColumn2[0] * __builtin_shufflevector(e, e, 0, 0, 0, 0, 4, 4, 4, 4) +
-                            m_absColumn2[1] * __builtin_shufflevector(e, e, 1, 1, 1, 1, 5, 5, 5, 5)) +
-                           m_absColumn2[2] * __builtin_shufflevector(e, e, 2, 2, 2, 2, 6, 6, 6, 6)) +
-                          m_inflation2;
+    const Float8 centre = GPUCOL_CARRY_ROW(
+        m_column2[0], m_column2[1], m_column2[2], __builtin_shufflevector(c, c, 0, 0, 0, 0, 4, 4, 4, 4),
+        __builtin_shufflevector(c, c, 1, 1, 1, 1, 5, 5, 5, 5),
+        __builtin_shufflevector(c, c, 2, 2, 2, 2, 6, 6, 6, 6), m_translation2);
+    const Float8 extent =
+        GPUCOL_CARRY_ROW(m_absColumn2[0], m_absColumn2[1], m_absColumn2[2],
+                         __builtin_shufflevector(e, e, 0, 0, 0, 0, 4, 4, 4, 4),
+                         __builtin_shufflevector(e, e, 1, 1, 1, 1, 5, 5, 5, 5),
+                         __builtin_shufflevector(e, e, 2, 2, 2, 2, 6, 6, 6, 6), m_inflation2);
     return {centre - extent, centre + extent};
   }
 #endif
@@ -191,14 +193,11 @@ class BoxCarrier {
     const __m128 half = _mm_set1_ps(0.5f);
     const __m128 c = _mm_mul_ps(_mm_add_ps(l, h), half);
     const __m128 e = _mm_mul_ps(_mm_sub_ps(h, l), half);
-    const __m128 centre = _mm_add_ps(
-        _mm_add_ps(_mm_add_ps(_mm_mul_ps(m_column[0], splat<0>(c)), _mm_mul_ps(m_column[1], splat<1>(c))),
-                   _mm_mul_ps(m_column[2], splat<2>(c))),
-        m_translation);
-    const __m128 extent = _mm_add_ps(_mm_add_ps(_mm_add_ps(_mm_mul_ps(m_absColumn[0], splat<0>(e)),
-                                                           _mm_mul_ps(m_absColumn[1], splat<1>(e))),
-                                                _mm_mul_ps(m_absColumn[2], splat<2>(e))),
-                                     m_inflationLanes);
+    // GCC's and Clang's __m128 take arithmetic operators (the same mulps and addps as the intrinsics).
+    const __m128 centre = GPUCOL_CARRY_ROW(m_column[0], m_column[1], m_column[2], splat<0>(c), splat<1>(c),
+                                           splat<2>(c), m_translation);
+    const __m128 extent = GPUCOL_CARRY_ROW(m_absColumn[0], m_absColumn[1], m_absColumn[2], splat<0>(e),
+                                           splat<1>(e), splat<2>(e), m_inflationLanes);
     _mm_storeu_ps(out.min, _mm_sub_ps(centre, extent));
     _mm_storeu_ps(out.max, _mm_add_ps(centre, extent));
 #else
@@ -208,8 +207,9 @@ class BoxCarrier {
       e[j] = (hi[j] - lo[j]) * 0.5f;
     }
     for (int i = 0; i < 3; ++i) {
-      const float ci = m_m[i][0] * c[0] + m_m[i][1] * c[1] + m_m[i][2] * c[2] + m_t[i];
-      const float ei = m_abs[i][0] * e[0] + m_abs[i][1] * e[1] + m_abs[i][2] * e[2] + m_inflation[i];
+      const float ci = GPUCOL_CARRY_ROW(m_m[i][0], m_m[i][1], m_m[i][2], c[0], c[1], c[2], m_t[i]);
+      const float ei =
+          GPUCOL_CARRY_ROW(m_abs[i][0], m_abs[i][1], m_abs[i][2], e[0], e[1], e[2], m_inflation[i]);
       out.min[i] = ci - ei;
       out.max[i] = ci + ei;
     }
@@ -248,8 +248,7 @@ inline bool overlaps(const float* lo, const float* hi, const CarriedBox& b) {
                                _mm_cmple_ps(_mm_loadu_ps(b.min), _mm_loadu_ps(hi)));
   return (_mm_movemask_ps(ok) & 7) == 7;
 #else
-  return (lo[0] <= b.max[0]) & (b.min[0] <= hi[0]) & (lo[1] <= b.max[1]) & (b.min[1] <= hi[1]) &
-         (lo[2] <= b.max[2]) & (b.min[2] <= hi[2]);
+  return GPUCOL_BOXES_OVERLAP(lo, hi, b.min, b.max);
 #endif
 }
 

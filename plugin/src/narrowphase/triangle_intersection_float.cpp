@@ -4,7 +4,7 @@
 #include <algorithm>
 #include <cmath>
 
-#include "narrowphase/coplanar_triangles.h"
+#include "shared_math/triangle_test.h"
 
 namespace gpucol {
 namespace {
@@ -40,11 +40,14 @@ int dominantAxis(const Eigen::Vector3f& v) {
 bool coplanarOverlap(const Eigen::Vector3f* const af[3], const Eigen::Vector3f* const bf[3], int dropAxis) {
   // The 2-D overlap test of the exact path, on the same float coordinates: the sweep measures the float
   // plane decisions, not a second copy of the 2-D test.
-  const Eigen::Vector3d a[3] = {af[0]->cast<double>(), af[1]->cast<double>(), af[2]->cast<double>()};
-  const Eigen::Vector3d b[3] = {bf[0]->cast<double>(), bf[1]->cast<double>(), bf[2]->cast<double>()};
-  const Eigen::Vector3d* const ap[3] = {&a[0], &a[1], &a[2]};
-  const Eigen::Vector3d* const bp[3] = {&b[0], &b[1], &b[2]};
-  return detail::coplanarTrianglesOverlap(ap, bp, dropAxis, nullptr);
+  double a[3][3], b[3][3];
+  for (int v = 0; v < 3; ++v) {
+    for (int k = 0; k < 3; ++k) {
+      a[v][k] = (*af[v])[k];
+      b[v][k] = (*bf[v])[k];
+    }
+  }
+  return gpucol_coplanar_overlap(a, b, dropAxis, nullptr) != 0;
 }
 
 }  // namespace

@@ -15,8 +15,8 @@
 // correction moves a by at most a few steps (tests count it: tests/broadphase/pair_mapping_test.cpp).
 //
 // Limits: S(a) is computed in 64 bits as a*(2n-a-1)/2, exact while n < 2^31 (a*(2n) < 2^63).
-#ifndef GPUCOL_BROADPHASE_PAIR_MAPPING_H
-#define GPUCOL_BROADPHASE_PAIR_MAPPING_H
+#ifndef GPUCOL_SHARED_MATH_PAIR_MAPPING_H
+#define GPUCOL_SHARED_MATH_PAIR_MAPPING_H
 
 #ifdef __OPENCL_VERSION__
 typedef ulong gpucol_u64;
@@ -24,9 +24,9 @@ typedef uint gpucol_u32;
 /* OpenCL C >= 1.2 allows static helper functions; static avoids C99 inline's external-definition rule. */
 #define GPUCOL_MAPPING_INLINE static inline
 #else
+#include <math.h>
 #include <stdint.h>
 #include <string.h>
-#include <math.h>
 typedef uint64_t gpucol_u64;
 typedef uint32_t gpucol_u32;
 #define GPUCOL_MAPPING_INLINE static inline
@@ -64,8 +64,8 @@ GPUCOL_MAPPING_INLINE gpucol_u64 gpucol_pair_row_guess_double(gpucol_u64 n, gpuc
 }
 #endif
 
-/* Row guess from a single-precision "magic constant" inverse square root with `steps` Newton steps (paper §3.3,
-   Lomont's constant 0x5f375a86). Cheaper on some GPUs, less accurate: the integer fix-up above absorbs
+/* Row guess from a single-precision "magic constant" inverse square root with `steps` Newton steps (paper
+   §3.3, Lomont's constant 0x5f375a86). Cheaper on some GPUs, less accurate: the integer fix-up above absorbs
    the error. The discriminant is rounded to float first, which is where most of the error comes from.
    `gpucol-bench accuracy` measures how often each number of steps guesses the wrong row. */
 GPUCOL_MAPPING_INLINE gpucol_u64 gpucol_pair_row_guess_newton_steps(gpucol_u64 n, gpucol_u64 k, int steps) {
@@ -82,8 +82,8 @@ GPUCOL_MAPPING_INLINE gpucol_u64 gpucol_pair_row_guess_newton_steps(gpucol_u64 n
   float y;
   memcpy(&y, &bits, sizeof y);
 #endif
-  float half = 0.5f * d;
-  for (int i = 0; i < steps; ++i) y = y * (1.5f - half * y * y);
+  float halfD = 0.5f * d;
+  for (int i = 0; i < steps; ++i) y = y * (1.5f - halfD * y * y);
   float r = d * y; /* sqrt(d) = d / sqrt(d) */
   float a = ((float)m - r) * 0.5f;
   return a <= 0.0f ? 0u : (gpucol_u64)a;
@@ -117,4 +117,4 @@ GPUCOL_MAPPING_INLINE gpucol_u64 gpucol_pair_index(gpucol_u64 n, gpucol_u64 a, g
   return gpucol_pair_row_start(n, a) + (b - a - 1u);
 }
 
-#endif /* GPUCOL_BROADPHASE_PAIR_MAPPING_H */
+#endif /* GPUCOL_SHARED_MATH_PAIR_MAPPING_H */
