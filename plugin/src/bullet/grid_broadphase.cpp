@@ -667,18 +667,27 @@ struct GridBroadphase::Impl {
   /// the boxes as they are, and the cache is told the difference. Returns false, having done nothing but
   /// drop the list, when a filter changed since (a full search follows).
   bool answerFromGrownPairs(btDispatcher* dispatcher, GridBroadphaseStats& st) {
-    if (scan(false) || cacheFiltersByGroupAndMask(*pairCache) != finderFilters) {
+    if (cacheFiltersByGroupAndMask(*pairCache) != finderFilters) {
       dropGrownPairs();
       return false;
     }
     const auto start = std::chrono::steady_clock::now();
+    // The list holds every visible proxy (it is kept only while none is inverted, and a proxy that comes,
+    // goes or turns finite drops it), so a filter edited on a proxy is seen here, as the scan would see it;
+    // the full search that follows then scans.
+    bool filterEdited = false;
     const bool changed = grown.retest(
         [&](std::uint32_t s) {
           const GridProxy& p = proxy(s);
+          filterEdited |= group[s] != p.m_collisionFilterGroup || mask[s] != p.m_collisionFilterMask;
           return BoxCorners{{float(p.m_aabbMin[0]), float(p.m_aabbMin[1]), float(p.m_aabbMin[2])},
                             {float(p.m_aabbMax[0]), float(p.m_aabbMax[1]), float(p.m_aabbMax[2])}};
         },
         grownFound);
+    if (filterEdited) {
+      dropGrownPairs();
+      return false;
+    }
     const auto cacheStart = std::chrono::steady_clock::now();
     ++grownReuses;
     st.searched = true;
