@@ -1,7 +1,7 @@
 // loadMesh's heap against the file's size and the mesh it yields (counting_heap.h): a torus of 40,000
 // triangles written in every format gpucol reads, triangles and quads, text and binary. What a load holds at
 // its peak above what it keeps (the file's bytes, the reader's arrays, welding, triangulation, the mesh
-// report) must stay within a small multiple of the file plus the mesh; README "Mesh files" quotes the bound.
+// report) must stay within a small multiple of the file plus the mesh; docs/using-gpucol.md, "Mesh files", quotes the bound.
 #include <gtest/gtest.h>
 
 #include <array>

@@ -1,5 +1,5 @@
 // GridBroadphaseStats::memoryBytes and peakBytes against the heap itself (counting_heap.h), so the figures
-// the README's memory targets rest on are checked against what was really allocated (through operator new:
+// the memory targets (docs/measured-results.md, "Broad phase") rest on are checked against what was really allocated (through operator new:
 // the broad phase's vectors; Bullet's own arrays use malloc and are not counted, as the stats leave Bullet's
 // pair cache out).
 #include <btBulletCollisionCommon.h>

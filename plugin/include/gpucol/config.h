@@ -7,10 +7,10 @@ namespace gpucol {
 /// Where a stage runs: Cpu and OpenCL force one. Auto chooses per batch (broad phase: per step) from its
 /// size, with a crossover measured on the device in use: while the chosen OpenCL device is a GPU, the first
 /// calls of each size class run on both paths in turn and the faster keeps the class; with a CPU OpenCL
-/// device or none, Auto runs on the CPU and never starts OpenCL (README, "Options").
+/// device or none, Auto runs on the CPU and never starts OpenCL (docs/options.md, "Backend::Auto").
 enum class Backend { Auto, Cpu, OpenCL };
 
-/// The knobs of the plugin, each with a measured default (see README, "Options").
+/// The knobs of the plugin, each with a measured default (docs/options.md).
 struct Config {
   /// Backend of the mesh pipeline (middle phase, near phase, reduction).
   Backend meshBackend = Backend::Auto;

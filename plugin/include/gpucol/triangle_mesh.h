@@ -109,7 +109,7 @@ class TriangleMesh {
 /// binary) or OFF (.off), chosen by the extension in any case; other files are refused. Each format is read
 /// by gpucol's own strict reader: counts checked against the file's size before anything is allocated, every
 /// number read exactly for its type, every index in range, structure the format does not allow refused (see
-/// README, "Mesh files"). PLY and OFF files of triangles keep their vertices and triangles exactly; PLY and
+/// docs/using-gpucol.md, "Mesh files"). PLY and OFF files of triangles keep their vertices and triangles exactly; PLY and
 /// OFF files with polygons, and every OBJ and STL file, have vertices at exactly equal positions joined
 /// (first one kept). Polygons are split into triangles (fan when convex, ear clipping otherwise); points and
 /// lines are refused. Throws MeshError naming the file, the line or record, and the value; special files

@@ -1,8 +1,8 @@
 #pragma once
 // A sorted pair-key list held delta-coded: what the broad phase keeps of the last step for its diff with
 // the pair cache and for the pairs stage 11 carries over. Raw, a key takes 8 bytes; a pile holds several per
-// proxy, and the step that holds the last list beside this step's went over the memory target (README,
-// "At most 100 bytes per proxy plus 8 per pair"). Coded, a key takes about 2 bytes in a pile and 3-4 in a
+// proxy, and the step that holds the last list beside this step's went over the memory target (docs/measured-results.md,
+// "Broad phase": at most 100 bytes per proxy plus 8 per pair). Coded, a key takes about 2 bytes in a pile and 3-4 in a
 // sparse cloud.
 //
 // Coding: the keys (a << 32 | b) are cut into segments of at most kSegmentKeys, each coded on its own (so

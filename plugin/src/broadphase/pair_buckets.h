@@ -4,8 +4,8 @@
 // lower slot's high bits, each key kept as a 32-bit entry (the rest of the lower slot and the higher slot);
 // then each bucket is gathered from every slab, sorted and coded as one segment. A step held the pairs
 // gathered (8 B each) beside the per-slab lists or the sort's second buffer (8 B more) and the last step's
-// list; now it holds 4 B per pair in the buckets and the coded lists (README, "At most 100 bytes per proxy
-// plus 8 per pair").
+// list; now it holds 4 B per pair in the buckets and the coded lists (docs/measured-results.md, "Broad
+// phase": at most 100 bytes per proxy plus 8 per pair).
 #include <tbb/enumerable_thread_specific.h>
 
 #include <cstddef>
