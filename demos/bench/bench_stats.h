@@ -32,9 +32,8 @@ struct TurnTimes {
 };
 
 /// Calls per block of takeTurns, and how many of a block's first calls are not counted: after a switch each
-/// way ran slow for several calls (armadillo-27674, OpenCL on PoCL after CPU calls: 1.9-2.7 ms on the first
-/// call, falling to 1.0-1.4 by the sixth; the CPU path 1.0 ms on its first call against 0.6-0.7), and calls
-/// alternating one by one measure only that.
+/// way ran slow for several calls (caches and threads warming up; measurement history, "Figures moved from
+/// code comments"), and calls alternating one by one measure only that.
 constexpr int kTurnCalls = 14;
 constexpr int kTurnWarmCalls = 6;
 

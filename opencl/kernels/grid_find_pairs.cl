@@ -336,7 +336,7 @@ __kernel void grid_test_candidates(PROXY_PARAMS, __global const GpucolGridParams
 // the lower slot. `huge` ascends. Each item takes slots (stepping by the global size), skips those not active
 // and tests each active box against every huge box: the few huge boxes stay in cache and every box is read
 // once. Walking huge box by huge box instead read all active boxes once per huge box (1.6 GB for 50 huge
-// boxes among 1M) and took about 375 ms a step on PoCL against 60 this way. Whether a box is huge itself is
+// boxes among 1M). Whether a box is huge itself is
 // a binary search of the short list, so no list of the active slots or per-slot mark is made for this.
 __kernel void grid_test_huge(PROXY_PARAMS, __global const uint* huge, const uint hugeCount,
                              const uint slotCount, const uint slotBits, __global ulong* pairs,

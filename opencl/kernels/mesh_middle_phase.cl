@@ -327,9 +327,7 @@ uint mesh_boxes_overlap4(const Carrier4* intoA, const Carrier4* intoB, float4 lo
 
 // Where both nodes descend, two children are carried together, one per half of a float8 (lanes 0-3 and
 // 4-7), as tree_traversal.cpp's carryPair does: lane for lane mesh_carry4's operations in its order, so the
-// same bits, in half the carrying instructions. PoCL, armadillo-399904 thesis scene, 3 alternating rounds of
-// 150 calls, end to end: median 2.98-3.24 ms against 3.10-3.53 carrying one child at a time (CPU time
-// 5.09-5.59 against 5.44-5.70 ms per call).
+// same bits, in half the carrying instructions (measurement history, "Figures moved from code comments").
 typedef struct Carrier8 {
   float8 column[3];
   float8 absColumn[3];
@@ -438,9 +436,8 @@ void mesh_count_tests(__global uint* counters, uint tests) {
 
 // GPUCOL_FUSED_NEAR (a CPU device's default path; the host builds mesh_near_phase.cl's source and this one
 // as one program): each batch of candidates takes the near test (mesh_test_lanes) as soon as it is written,
-// so the traversal and the near phase are one launch. On PoCL,
-// 6 alternating rounds, end to end: armadillo-27674 0.92 ms against 1.00 as two kernels, -99976 1.72 against
-// 1.87; -2766 0.41 either way (PoCL ran its kernels on one thread, as long with one PoCL thread as with two).
+// so the traversal and the near phase are one launch (faster on PoCL than two kernels: measurement history,
+// "Figures moved from code comments").
 #ifdef GPUCOL_FUSED_NEAR
 #define GPUCOL_NEAR_PARAMS , __global const float *restrict soup, __global GpucolNearHit *restrict hits
 #define GPUCOL_NEAR_ARGS , soup, hits
@@ -452,9 +449,7 @@ void mesh_count_tests(__global uint* counters, uint tests) {
 // The fused near test reads a candidate's two triangles from the soup when its batch is flushed, up to
 // GPUCOL_DFS_BATCH candidates later: asking for them when the candidate is found overlaps those cache misses
 // (the soup of a 400K-triangle mesh is 14 MB) with the traversal, as collide_meshes.cpp's kSoupAhead does.
-// A triangle's 36 bytes may straddle two cache lines, so both are asked for. PoCL, armadillo-399904 thesis
-// scene, 3 alternating rounds of 150 calls, end to end: median 2.88-3.33 ms against 3.19-3.36 without
-// (CPU time 5.15-5.59 against 5.68-5.96 ms per call).
+// A triangle's 36 bytes may straddle two cache lines, so both are asked for.
 #if defined(GPUCOL_FUSED_NEAR) && defined(GPUCOL_CPU_PREFETCH)
 #define GPUCOL_PREFETCH_TRIANGLE(t)             \
   do {                                          \
@@ -555,9 +550,8 @@ void mesh_depth_first_path(__global const GpucolMeshPair* restrict pairs,
 #ifdef GPUCOL_SKIP_DEAD_PATHS
     // The paths of the dead block after this one would walk the same way and die at the same place (without
     // counting a test: the counting path of a block is its first): the shared counter moves past them, so
-    // nobody takes them. PoCL, armadillo-399904 thesis scene, one thread, 2 rounds of 100 calls, median end to
-    // end: start depth 6 (its default) 4.30-4.64 ms against 4.58-4.84 without, depth 8 4.48-4.61 against
-    // 8.63-8.68.
+    // nobody takes them (the deeper the start, the more it saves: measurement history, "Figures moved from
+    // code comments").
     atomic_max(&counters[5], (item | ((1u << deadBits) - 1u)) + 1u);
 #endif
     *testsOut = tests;

@@ -13,11 +13,10 @@
 //
 // A list of at most 1.5 keys per proxy is kept plain (8 bytes a key, one array cut into segments of
 // kSegmentKeys only for the walks; adopt() takes a list over without a copy): the target allows 8 bytes per
-// pair, and coding costs time. Decoding a sparse scene's keys (mostly a new row each, in 3-4 bytes) took 6 ns
-// a key, which made the diff of the sleeping scene at 100K proxies 0.12 -> 0.9 ms; coding the 1.06 keys per
-// proxy of 1M mixed boxes made the step's sort and diff 42.5-53.6 ms instead of 21.0-25.5 (measurement
-// history). Above 1.5 keys per proxy, plain lists would take the peak of a step that keeps few proxies moving
-// (stage 11) past the target: 101.5 bytes per proxy at 1.95 keys per proxy (worthCoding).
+// pair, and coding costs time: decoding a sparse scene's keys (mostly a new row each) made its diff several
+// times slower, and coding 1M mixed boxes' keys doubled the step's sort and diff (measurement history, "Figures
+// moved from code comments"). Above 1.5 keys per proxy, plain lists would take the peak of a step that keeps
+// few proxies moving (stage 11) past the target (worthCoding).
 #include <cstddef>
 #include <cstdint>
 #include <stdexcept>

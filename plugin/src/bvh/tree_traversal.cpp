@@ -91,21 +91,18 @@ static_assert(offsetof(AabbLeafEntry, max) == 12 && sizeof(AabbLeafEntry) >= 28,
 
 /// Front pairs per thread at which the breadth-first expansion stops and the parallel depth-first traversal
 /// starts. The breadth-first levels run on one thread, so the front should be no larger than the threads need
-/// to share the work out: with 2 threads, fronts of 64 (grain 2) against 1024 (grain 16), the thesis scene,
-/// fastest of 200 queries, 3 alternating rounds: armadillo-2766 0.149-0.165 against 0.169-0.170 ms, -27674
-/// 0.449-0.462 against 0.478-0.485, -99976 0.908-0.920 against 1.003-1.041, -399904 2.010-2.265 against
-/// 2.097-2.142; the breadth-first levels took 0.04-0.08 ms of armadillo-27674's 0.48 with 1024. Per thread,
-/// so a machine with more cores still gets tens of start pairs per thread to balance.
+/// to share the work out (a front of 64 beat 1024 on every armadillo of the thesis scene with 2 threads:
+/// measurement history, "Figures moved from code comments"). Per thread, so a machine with more cores still
+/// gets tens of start pairs per thread to balance.
 constexpr std::size_t kFrontPerThread = 32;
 
 /// Front pairs per parallel_for chunk: the front is small, and one start pair's subtree can be most of the
 /// work.
 constexpr std::size_t kParallelGrain = 2;
 
-/// Expansions between asking for a pair's nodes and expanding it (Traverser::run). Measured on the thesis
-/// scene, one thread, GImpact run between queries, fastest of 41: without it the middle phase took 0.96-1.02
-/// ms on armadillo-27674, with 2, 4 and 8 about 0.80-0.85, 0.79-0.83 and 0.81-0.87; with 4, armadillo-399904
-/// went from 4.09 to 3.25 ms.
+/// Expansions between asking for a pair's nodes and expanding it (Traverser::run): the prefetch hides the
+/// nodes' cache misses once it asks a few expansions ahead; 4 was fastest on the thesis scene (measurement
+/// history, "Figures moved from code comments").
 constexpr std::size_t kLookahead = 4;
 
 #if defined(__SSE2__)
@@ -532,10 +529,8 @@ int indexBits(std::size_t count) {
 /// Widest digit of the radix sort: 8192 counters per pass (32 KB). The key's bits are split into as few
 /// passes as digits of this width allow, and then into digits of even width, as narrow as those passes
 /// permit: 30-bit keys (two meshes of up to 32K triangles) take three passes of 10 bits, 38-bit keys (two of
-/// 400K) three of 13. Thesis scene, one thread, 3 alternating rounds, fastest query: with a fixed width of 11
-/// bits the 38-bit keys took four passes (armadillo-399904 2.92-2.99 ms against 2.83-2.89 with 13), while a
-/// fixed width of 13 slowed the 30-bit keys, which take three passes either way (armadillo-27674 0.734-0.736
-/// ms against 0.746-0.772).
+/// 400K) three of 13. A fixed width of 11 bits costs the 38-bit keys a fourth pass, a fixed 13 slows the 30-bit
+/// keys (measurement history, "Figures moved from code comments").
 constexpr int kMaxRadixBits = 13;
 
 /// Below this many pairs a comparison sort is cheaper than clearing the radix counters.
