@@ -22,6 +22,30 @@
 #endif
 #endif
 
+/* A vector of three lane values (one scalar per lane: several candidates at once) named Name, with its
+   constructor fn(x, y, z) and fn_sub, fn_cross and fn_dot, in the operation order both sides keep; defined
+   once for each lane type (triangle_lanes.h: double lanes, triangle_pretest.h: float lanes). */
+#define GPUCOL_LANE_VECTOR(Name, fn, T)                                                      \
+  typedef struct Name {                                                                      \
+    T x, y, z;                                                                               \
+  } Name;                                                                                    \
+  GPUCOL_SHARED_FORCE_INLINE Name fn(T x, T y, T z) {                                        \
+    Name r;                                                                                  \
+    r.x = x;                                                                                 \
+    r.y = y;                                                                                 \
+    r.z = z;                                                                                 \
+    return r;                                                                                \
+  }                                                                                          \
+  GPUCOL_SHARED_FORCE_INLINE Name fn##_sub(Name a, Name b) {                                 \
+    return fn(a.x - b.x, a.y - b.y, a.z - b.z);                                              \
+  }                                                                                          \
+  GPUCOL_SHARED_FORCE_INLINE Name fn##_cross(Name a, Name b) {                               \
+    return fn(a.y * b.z - a.z * b.y, a.z * b.x - a.x * b.z, a.x * b.y - a.y * b.x);          \
+  }                                                                                          \
+  GPUCOL_SHARED_FORCE_INLINE T fn##_dot(Name a, Name b) {                                    \
+    return (a.x * b.x + a.y * b.y) + a.z * b.z;                                              \
+  }
+
 /* std::min and std::max of C++: the first argument where the comparison fails (equal values, NaN). */
 GPUCOL_SHARED_INLINE double gpucol_min_d(double a, double b) {
   return b < a ? b : a;

@@ -59,28 +59,9 @@ GPUCOL_SHARED_FORCE_INLINE gpucol_d4 gpucol_d4_max(gpucol_d4 a, gpucol_d4 b) {
 }
 
 /* A point or vector per lane. */
-typedef struct GpucolVec4 {
-  gpucol_d4 x, y, z;
-} GpucolVec4;
-
-GPUCOL_SHARED_FORCE_INLINE GpucolVec4 gpucol_vec4(gpucol_d4 x, gpucol_d4 y, gpucol_d4 z) {
-  GpucolVec4 r;
-  r.x = x;
-  r.y = y;
-  r.z = z;
-  return r;
-}
-GPUCOL_SHARED_FORCE_INLINE GpucolVec4 gpucol_vec4_sub(GpucolVec4 a, GpucolVec4 b) {
-  return gpucol_vec4(a.x - b.x, a.y - b.y, a.z - b.z);
-}
+GPUCOL_LANE_VECTOR(GpucolVec4, gpucol_vec4, gpucol_d4)
 GPUCOL_SHARED_FORCE_INLINE GpucolVec4 gpucol_vec4_divide(GpucolVec4 v, gpucol_d4 s) {
   return gpucol_vec4(v.x / s, v.y / s, v.z / s);
-}
-GPUCOL_SHARED_FORCE_INLINE gpucol_d4 gpucol_vec4_dot(GpucolVec4 a, GpucolVec4 b) {
-  return (a.x * b.x + a.y * b.y) + a.z * b.z;
-}
-GPUCOL_SHARED_FORCE_INLINE GpucolVec4 gpucol_vec4_cross(GpucolVec4 a, GpucolVec4 b) {
-  return gpucol_vec4(a.y * b.z - a.z * b.y, a.z * b.x - a.x * b.z, a.x * b.y - a.y * b.x);
 }
 GPUCOL_SHARED_FORCE_INLINE gpucol_d4 gpucol_vec4_max_abs(GpucolVec4 v) {
   return gpucol_d4_max(gpucol_d4_max(gpucol_d4_abs(v.x), gpucol_d4_abs(v.y)), gpucol_d4_abs(v.z));

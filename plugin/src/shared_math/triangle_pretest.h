@@ -109,26 +109,7 @@ GPUCOL_SHARED_FORCE_INLINE gpucol_lanes gpucol_lanes_select(gpucol_mask c, gpuco
 #define GPUCOL_FLOAT_LINE_MINIMUM 0x1p-10f
 
 /* A point or vector per lane. */
-typedef struct GpucolLanes3 {
-  gpucol_lanes x, y, z;
-} GpucolLanes3;
-
-GPUCOL_SHARED_FORCE_INLINE GpucolLanes3 gpucol_lanes3(gpucol_lanes x, gpucol_lanes y, gpucol_lanes z) {
-  GpucolLanes3 r;
-  r.x = x;
-  r.y = y;
-  r.z = z;
-  return r;
-}
-GPUCOL_SHARED_FORCE_INLINE GpucolLanes3 gpucol_lanes3_sub(GpucolLanes3 a, GpucolLanes3 b) {
-  return gpucol_lanes3(a.x - b.x, a.y - b.y, a.z - b.z);
-}
-GPUCOL_SHARED_FORCE_INLINE GpucolLanes3 gpucol_lanes3_cross(GpucolLanes3 a, GpucolLanes3 b) {
-  return gpucol_lanes3(a.y * b.z - a.z * b.y, a.z * b.x - a.x * b.z, a.x * b.y - a.y * b.x);
-}
-GPUCOL_SHARED_FORCE_INLINE gpucol_lanes gpucol_lanes3_dot(GpucolLanes3 a, GpucolLanes3 b) {
-  return (a.x * b.x + a.y * b.y) + a.z * b.z;
-}
+GPUCOL_LANE_VECTOR(GpucolLanes3, gpucol_lanes3, gpucol_lanes)
 GPUCOL_SHARED_FORCE_INLINE gpucol_lanes gpucol_lanes3_max_abs(GpucolLanes3 v) {
   return gpucol_lanes_max(gpucol_lanes_max(gpucol_lanes_abs(v.x), gpucol_lanes_abs(v.y)),
                           gpucol_lanes_abs(v.z));
