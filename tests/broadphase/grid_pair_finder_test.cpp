@@ -1,6 +1,7 @@
 // The CPU grid pair finder against the brute-force reference on the scenes of issue 4: uniform,
 // clustered, mixed sizes with a few huge boxes, a plane, hundreds of identical boxes at one spot, far
 // from the origin, negative coordinates, holes left by removed proxies; every option combination.
+#include "broadphase/brute_force_pair_finder.h"
 #include "broadphase/grid_pair_finder.h"
 
 #include <gtest/gtest.h>
@@ -81,7 +82,8 @@ Scene uniformCloud(int n, float side, float halfSize, std::uint32_t seed) {
 /// are of about one size, and never), the boxes in arrays and in records.
 void expectMatchesBruteForce(const Scene& scene, const std::string& what, std::uint64_t minPairs = 1,
                              std::uint32_t hugeCellLimit = gpucol::PairFinderOptions{}.hugeCellLimit) {
-  const std::vector<std::uint64_t> reference = gpucol::findPairsBruteForce(scene.view());
+  std::vector<std::uint64_t> reference;
+  gpucol::BruteForcePairFinder().findPairs(scene.view(), gpucol::PairFinderOptions{}, reference);
   ASSERT_GE(reference.size(), minPairs) << what << ": the scene should have overlaps to test";
   auto finder = gpucol::makeCpuPairFinder();
   for (bool records : {false, true})
@@ -181,7 +183,7 @@ TEST(GridPairFinder, HugeBoxesTestedThroughTheirCells) {
     s.add(cx, cy, cz - hz, 0.3f, 0.3f, 0.3f);             // straddles the min z face
   }
   const gpucol::ProxyArrays view = s.view();
-  const std::vector<std::uint64_t> reference = gpucol::findPairsBruteForce(view);
+  const std::vector<std::uint64_t> reference = gpucol::BruteForcePairFinder::pairsOf(view);
   auto finder = gpucol::makeCpuPairFinder();
   gpucol::PairFinderOptions o;
   o.bruteForceBelow = 0;
@@ -208,7 +210,7 @@ TEST(GridPairFinder, BoxesSpanningMoreThan255CellsOnAnAxis) {
     s.add(0.01f * xz(rng), y(rng), xz(rng), 49.5f, 0.05f, 0.05f);
     s.add(xz(rng), y(rng), 0.01f * xz(rng), 0.05f, 0.05f, 49.5f);
   }
-  const std::vector<std::uint64_t> reference = gpucol::findPairsBruteForce(s.view());
+  const std::vector<std::uint64_t> reference = gpucol::BruteForcePairFinder::pairsOf(s.view());
   ASSERT_GE(reference.size(), 100u);
   auto finder = gpucol::makeCpuPairFinder();
   for (bool records : {false, true})
@@ -239,7 +241,7 @@ TEST(GridPairFinder, SlabsAcrossMoreThan65536Layers) {
     s.add(x, 0, 0, 0.05f, 0.05f, 0.05f);
     s.add(x + 0.08f + jitter(rng), jitter(rng), 0, 0.05f, 0.05f, 0.05f);  // overlaps the first but for a few
   }
-  const std::vector<std::uint64_t> reference = gpucol::findPairsBruteForce(s.view());
+  const std::vector<std::uint64_t> reference = gpucol::BruteForcePairFinder::pairsOf(s.view());
   ASSERT_GE(reference.size(), 1000u);
   auto finder = gpucol::makeCpuPairFinder();
   for (bool records : {false, true}) {
@@ -277,8 +279,8 @@ TEST(GridPairFinder, SlabPlanTakesTheExtentsKeptAlongItsAxis) {
   gpucol::PairFinderOptions o;
   o.bruteForceBelow = 0;
   o.slabTiling = gpucol::SlabTiling::Always;
-  const std::vector<std::uint64_t> pairsAlongZ = gpucol::findPairsBruteForce(alongZ.view()),
-                                   pairsAlongX = gpucol::findPairsBruteForce(alongX.view());
+  const std::vector<std::uint64_t> pairsAlongZ = gpucol::BruteForcePairFinder::pairsOf(alongZ.view()),
+                                   pairsAlongX = gpucol::BruteForcePairFinder::pairsOf(alongX.view());
   struct Step {
     const Scene* scene;
     const std::vector<std::uint64_t>* reference;
@@ -339,7 +341,7 @@ TEST(GridPairFinder, GridChoiceTakesTheCallersSurvey) {
     s.add(across(rng), across(rng), along(rng), size(rng), size(rng), size(rng) + huge,
           i % 97 == 3 ? std::uint8_t(0) : gpucol::kProxyActive);
   }
-  const std::vector<std::uint64_t> reference = gpucol::findPairsBruteForce(s.view());
+  const std::vector<std::uint64_t> reference = gpucol::BruteForcePairFinder::pairsOf(s.view());
   ASSERT_GE(reference.size(), 1000u);
   auto finder = gpucol::makeCpuPairFinder();
   gpucol::PairFinderOptions o;
@@ -462,7 +464,7 @@ TEST(GridPairFinder, AddAndRemoveBetweenSearches) {
     for (int i = 0; i < 50; ++i) s.add(step(rng) * 40, step(rng) * 40, step(rng) * 40, 0.5f, 0.5f, 0.5f);
     std::vector<std::uint64_t> pairs;
     finder->findPairs(s.view(), o, pairs);
-    ASSERT_EQ(pairs, gpucol::findPairsBruteForce(s.view())) << "step " << t;
+    ASSERT_EQ(pairs, gpucol::BruteForcePairFinder::pairsOf(s.view())) << "step " << t;
   }
 }
 
@@ -495,7 +497,7 @@ void restingScenario(bool callerKeepsPairs, gpucol::SlabTiling tiling) {
     if (callerKeepsPairs && t != kWithoutLastPairs) view.lastPairs = &last;
     std::vector<std::uint64_t> pairs;
     finder->findPairs(view, o, pairs);
-    ASSERT_EQ(pairs, gpucol::findPairsBruteForce(s.view())) << "step " << t;
+    ASSERT_EQ(pairs, gpucol::BruteForcePairFinder::pairsOf(s.view())) << "step " << t;
     if (callerKeepsPairs && t == kWithoutLastPairs) {
       EXPECT_FALSE(finder->stats().incremental) << "the finder kept no pairs of its own to carry over";
     }
@@ -598,7 +600,7 @@ TEST(GridPairFinder, SparseGridPath) {
 TEST(GridPairFinder, KeptGridListsEveryBoxInEveryCellItOverlaps) {
   Scene s = uniformCloud(5000, 16.0f, 0.9f, 41);
   s.add(0, 0, 0, 4, 4, 4);  // a huge box (kept aside, tested one by one)
-  const std::vector<std::uint64_t> reference = gpucol::findPairsBruteForce(s.view());
+  const std::vector<std::uint64_t> reference = gpucol::BruteForcePairFinder::pairsOf(s.view());
   ASSERT_GE(reference.size(), 3000u);
   for (auto tiling : {gpucol::SlabTiling::Auto, gpucol::SlabTiling::Off}) {
     gpucol::PairFinderOptions o;
@@ -644,7 +646,7 @@ TEST(GridPairFinder, SlabSearchAndTheGridKeptAfterIt) {
   auto search = [&](const char* what) {
     SCOPED_TRACE(what);
     finder->findPairs(view, o, pairs);
-    ASSERT_EQ(pairs, gpucol::findPairsBruteForce(view));
+    ASSERT_EQ(pairs, gpucol::BruteForcePairFinder::pairsOf(view));
   };
   search("first");
   EXPECT_GE(finder->stats().slabs, 8u);
@@ -710,7 +712,7 @@ TEST(GridPairFinder, SearchByHomeCell) {
   s.add(5, 5, 5, 7, 0.3f, 7);   // a plate over a few slabs' cells: tested through its cells
   s.add(10, 5, -8, 1, 25, 1);   // a pillar along the slab axis
   gpucol::ProxyArrays view = s.view();
-  const std::vector<std::uint64_t> reference = gpucol::findPairsBruteForce(view);
+  const std::vector<std::uint64_t> reference = gpucol::BruteForcePairFinder::pairsOf(view);
   ASSERT_GT(reference.size(), 5000u);
   gpucol::PairFinderOptions o, allCells;
   o.bruteForceBelow = allCells.bruteForceBelow = 0;
@@ -723,7 +725,7 @@ TEST(GridPairFinder, SearchByHomeCell) {
   auto search = [&](const char* what) {
     SCOPED_TRACE(what);
     finder->findPairs(view, o, pairs);
-    ASSERT_EQ(pairs, gpucol::findPairsBruteForce(view));
+    ASSERT_EQ(pairs, gpucol::BruteForcePairFinder::pairsOf(view));
   };
   search("first");
   const gpucol::PairFinderStats& st = finder->stats();
@@ -775,7 +777,7 @@ TEST(GridPairFinder, SearchByHomeCellFarAwayAndFlat) {
     auto finder = gpucol::makeCpuPairFinder();
     std::vector<std::uint64_t> pairs;
     finder->findPairs(scene->view(), o, pairs);
-    EXPECT_EQ(pairs, gpucol::findPairsBruteForce(scene->view()));
+    EXPECT_EQ(pairs, gpucol::BruteForcePairFinder::pairsOf(scene->view()));
     EXPECT_TRUE(finder->stats().homeCells);
   }
 }
@@ -811,7 +813,7 @@ TEST(GridPairFinder, SearchByHomeCellOnRandomScenes) {
       s.add(c[0], c[1], c[2], h[0], h[1], h[2], flag, rng() % 10 == 0 ? 2 : 1, rng() % 10 == 0 ? ~2 : -1);
     }
     if (rng() % 4 == 0) s.add(origin, origin, origin, side, 0.5f, side);  // a ground through the middle
-    const std::vector<std::uint64_t> reference = gpucol::findPairsBruteForce(s.view());
+    const std::vector<std::uint64_t> reference = gpucol::BruteForcePairFinder::pairsOf(s.view());
     auto finder = gpucol::makeCpuPairFinder();
     for (auto tiling : {gpucol::SlabTiling::Auto, gpucol::SlabTiling::Always}) {
       gpucol::PairFinderOptions o;
@@ -850,7 +852,7 @@ TEST(GridPairFinder, SmallScenesInAnySlabsTheirGridGives) {
       o.slabTiling = tiling;
       std::vector<std::uint64_t> pairs;
       finder->findPairs(c.scene.view(), o, pairs);
-      const std::vector<std::uint64_t> reference = gpucol::findPairsBruteForce(c.scene.view());
+      const std::vector<std::uint64_t> reference = gpucol::BruteForcePairFinder::pairsOf(c.scene.view());
       ASSERT_GE(reference.size(), 50u) << c.what;
       EXPECT_EQ(pairs, reference) << c.what;
       EXPECT_TRUE(finder->stats().usedGrid) << c.what;
@@ -924,7 +926,7 @@ TEST(GridPairFinder, SlabBoxesReadInPlaceWhereTheirCopiesWouldWeighMost) {
                         {"12,000 boxes", uniformCloud(12000, 22.0f, 0.6f, 13), false}};
   for (const Case& c : cases) {
     SCOPED_TRACE(c.what);
-    const std::vector<std::uint64_t> reference = gpucol::findPairsBruteForce(c.scene.view());
+    const std::vector<std::uint64_t> reference = gpucol::BruteForcePairFinder::pairsOf(c.scene.view());
     ASSERT_GE(reference.size(), 100u);
     for (auto reading :
          {gpucol::SlabBoxReading::Auto, gpucol::SlabBoxReading::Copy, gpucol::SlabBoxReading::InPlace}) {

@@ -328,7 +328,4 @@ inline std::uint64_t makePairKey(std::uint32_t a, std::uint32_t b) {
   return a < b ? (std::uint64_t(a) << 32) | b : (std::uint64_t(b) << 32) | a;
 }
 
-/// Brute-force reference: all active pairs tested one by one in double precision; sorted keys.
-std::vector<std::uint64_t> findPairsBruteForce(const ProxyArrays& proxies);
-
 }  // namespace gpucol
