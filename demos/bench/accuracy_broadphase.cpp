@@ -16,8 +16,9 @@
 
 #include "accuracy_row.h"
 #include "bench_stats.h"
-#include "shared_math/pair_mapping.h"
+#include "bullet/grid_broadphase_options.h"
 #include "gpucol/grid_broadphase.h"
+#include "shared_math/pair_mapping.h"
 
 namespace gpucol::bench {
 namespace {
@@ -117,9 +118,9 @@ void cellSizeStudy(const AccuracyContext& context, std::vector<AccuracyRow>& row
     const auto reference = sweepPairs(set);
     for (const bool density : {false, true}) {
       GridBroadphase grid;
-      GridBroadphaseTuning tuning;
-      tuning.densityCellSize = density;
-      grid.setTuning(tuning);
+      GridBroadphaseOptions options;
+      options.densityCellSize = density;
+      detail::GridBroadphaseAccess::setOptions(grid, options);
       btDefaultCollisionConfiguration configuration;
       btCollisionDispatcher dispatcher(&configuration);
       std::vector<btBroadphaseProxy*> proxies;

@@ -24,6 +24,7 @@
 #include "bench_commands.h"
 #include "bench_stats.h"
 #include "broadphase/grid_pair_finder.h"
+#include "bullet/grid_broadphase_options.h"
 #include "gpucol/grid_broadphase.h"
 #include "opencl/host/opencl_context.h"
 
@@ -348,7 +349,7 @@ struct Options {
   bool stages = false;
   bool interleave = false;
   int bruteForceBelow = Config{}.bruteForceBelow;
-  std::uint32_t hugeCellLimit = GridBroadphaseTuning{}.hugeCellLimit;
+  std::uint32_t hugeCellLimit = kHugeCellLimit;
   std::size_t peerMax = 1000000;
   // bt32BitAxisSweep3 inserts each new proxy by walking its edges down the three sorted axes: n proxies
   // cost O(n^2) to create (measured here: 30K take 14 s, so 100K would take minutes), so it is left out above
@@ -367,10 +368,8 @@ void runAll(const Options& o) {
   const std::vector<std::string> runs = parseNames(o.runs);
   auto wanted = [&](const char* name) { return std::find(runs.begin(), runs.end(), name) != runs.end(); };
   for (const std::string& name : runs)
-    if (name != "cpu" && name != "cpu-whole" && name != "cpu-copy" && name != "cpu-allcells" &&
-        name != "opencl" && name != "dbvt" && name != "sap" && name != "b3")
-      throw std::runtime_error("unknown broad phase " + name +
-                               " (cpu, cpu-whole, cpu-copy, cpu-allcells, opencl, dbvt, sap, b3)");
+    if (name != "cpu" && name != "opencl" && name != "dbvt" && name != "sap" && name != "b3")
+      throw std::runtime_error("unknown broad phase " + name + " (cpu, opencl, dbvt, sap, b3)");
 
   // Ours on OpenCL and Bullet3's peer run on the same device: the one gpucol's OpenCL layer chooses.
   Config base;
@@ -421,12 +420,12 @@ void runAll(const Options& o) {
         results.emplace_back();
         steppers.push_back(std::move(stepper));
       };
-      GridBroadphaseTuning tuning;
-      tuning.densityCellSize = o.cellRule == "density";
-      tuning.bitMaskOutput = o.output == "bitmask";
-      tuning.newtonSqrt = o.sqrtMode == "newton";
-      tuning.hugeCellLimit = o.hugeCellLimit;
-      for (const char* variant : {"cpu", "cpu-whole", "cpu-copy", "cpu-allcells", "opencl"}) {
+      GridBroadphaseOptions internal;
+      internal.densityCellSize = o.cellRule == "density";
+      internal.bitMaskOutput = o.output == "bitmask";
+      internal.newtonSqrt = o.sqrtMode == "newton";
+      internal.hugeCellLimit = o.hugeCellLimit;
+      for (const char* variant : {"cpu", "opencl"}) {
         const bool cpu = std::string(variant) != "opencl";
         const std::string label = std::string("gpucol-") + variant;
         if (!wanted(variant)) continue;
@@ -438,11 +437,7 @@ void runAll(const Options& o) {
         config.broadphaseBackend = cpu ? Backend::Cpu : Backend::OpenCL;
         grids.push_back(std::make_unique<GridBroadphase>(config));
         GridBroadphase* grid = grids.back().get();
-        GridBroadphaseTuning variantTuning = tuning;
-        variantTuning.slabSearch = std::string(variant) != "cpu-whole";
-        if (std::string(variant) == "cpu-copy") variantTuning.boxesInPlace = false;
-        if (std::string(variant) == "cpu-allcells") variantTuning.homeCells = false;
-        grid->setTuning(variantTuning);
+        detail::GridBroadphaseAccess::setOptions(*grid, internal);
         stepStats.emplace_back();
         std::vector<GridBroadphaseStats>* stats = &stepStats.back();
         add(std::make_unique<BulletStepper>(
@@ -549,9 +544,7 @@ const CommandRegistration kRegistration([](CLI::App& app) {
       ->capture_default_str();
   cmd->add_option(
          "--run", options->runs,
-         "comma-separated broad phases: cpu, opencl (gpucol), cpu-whole (gpucol CPU, grid never cut in "
-         "slabs), cpu-copy (gpucol CPU, boxes copied for the search, not read in the proxies), cpu-allcells "
-         "(gpucol CPU, each box in every cell it overlaps, never by home cell), dbvt (btDbvtBroadphase), sap "
+         "comma-separated broad phases: cpu, opencl (gpucol), dbvt (btDbvtBroadphase), sap "
          "(bt32BitAxisSweep3), b3 (b3GpuGridBroadphase)")
       ->capture_default_str();
   cmd->add_option("--steps", options->steps, "timed steps per case (median reported)")
@@ -571,7 +564,7 @@ const CommandRegistration kRegistration([](CLI::App& app) {
   cmd->add_option("--cell-rule", options->cellRule, "grid cell size rule: size or density")
       ->check(CLI::IsMember({"size", "density"}))
       ->capture_default_str();
-  cmd->add_option("--output", options->output, "candidate output: compacted or bitmask")
+  cmd->add_option("--output", options->output, "candidate output: compacted or bitmask (paper §3.4; CPU, whole grid)")
       ->check(CLI::IsMember({"compacted", "bitmask"}))
       ->capture_default_str();
   cmd->add_option("--sqrt", options->sqrtMode, "mapping-function square root: double or newton")
@@ -581,7 +574,7 @@ const CommandRegistration kRegistration([](CLI::App& app) {
       ->check(CLI::NonNegativeNumber)
       ->capture_default_str();
   cmd->add_option("--huge-cell-limit", options->hugeCellLimit,
-                  "GridBroadphaseTuning::hugeCellLimit: a box over this many cells is tested against all")
+                  "a box over this many cells is tested against all (GridBroadphaseOptions::hugeCellLimit)")
       ->check(CLI::PositiveNumber)
       ->capture_default_str();
   cmd->add_option("--peer-max", options->peerMax, "skip btDbvt and b3GpuGrid above this many proxies")

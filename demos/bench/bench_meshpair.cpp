@@ -192,8 +192,7 @@ struct OpenClRow {
   double clSplitTotalMs = 0;    // the same with splitTimes (a wait after the traversal)
   double startDepthMs[3] = {0, 0, 0};  // breadth-first, d0 = 0, 3, 6
   double depthFirstMs[4] = {0, 0, 0, 0};  // depth-first, start depth 6, 8, 10, 11
-  double noEarlyOutMs = 0, resendMs = 0, deviceSortMs = 0, hostSortMs = 0;
-  double resendUploadMs = 0;
+  double noEarlyOutMs = 0, deviceSortMs = 0, hostSortMs = 0;
   double ratio = 0, ratioLow = 0, ratioHigh = 0;  // OpenCL / CPU over the blocks of calls: median, range
   bool variants = false;                          // the variants' columns were measured
   std::size_t candidates = 0, intersecting = 0;
@@ -311,11 +310,6 @@ OpenClRow measureOpenCl(const std::string& name, const TriangleMesh& loaded, int
   o = MeshBatchDeviceOptions();
   o.candidateSort = CandidateSort::Host;
   row.hostSortMs = timeOpenCl(shape, pose, o, runs, nullptr, nullptr);
-  o = MeshBatchDeviceOptions();
-  o.resident = false;
-  MeshBatchDeviceStats resend;
-  row.resendMs = timeOpenCl(shape, pose, o, runs, &resend, nullptr);
-  row.resendUploadMs = resend.uploadMs;
   return row;
 }
 
@@ -364,16 +358,16 @@ void printOpenClTables(const std::vector<OpenClRow>& rows, const std::string& de
   if (rows.empty() || !rows.front().variants) return;
   out << "\nOpenCL variants, end-to-end ms: the breadth-first traversal (thesis §5.4.2) from start depth d0 "
          "(thesis used 6), the depth-first one from a fixed start depth, without the early-out test, the "
-         "candidates sorted on the device or on the host (the default takes one by the device's shape), and "
-         "meshes re-sent every call (thesis §5.4.1) instead of resident; the last column is the default\n";
+         "candidates sorted on the device or on the host (the default takes one by the device's shape); the "
+         "last column is the default\n";
   out << "| mesh | breadth-first d0=0 | d0=3 | d0=6 | depth-first d=6 | d=8 | d=10 | d=11 | no early-out | "
-         "device sort | host sort | re-sent (its upload) | default |\n";
-  out << "|---|---:|---:|---:|---:|---:|---:|---:|---:|---:|---:|---:|---:|\n";
+         "device sort | host sort | default |\n";
+  out << "|---|---:|---:|---:|---:|---:|---:|---:|---:|---:|---:|---:|\n";
   for (const OpenClRow& r : rows) {
     out << "| " << r.name << " | " << r.startDepthMs[0] << " | " << r.startDepthMs[1] << " | "
         << r.startDepthMs[2] << " | " << r.depthFirstMs[0] << " | " << r.depthFirstMs[1] << " | "
-        << r.depthFirstMs[2] << " | " << r.depthFirstMs[3] << " | " << r.noEarlyOutMs << " | " << r.deviceSortMs << " | " << r.hostSortMs << " | " << r.resendMs
-        << " (" << r.resendUploadMs << ") | " << r.clTotalMs << " |\n";
+        << r.depthFirstMs[2] << " | " << r.depthFirstMs[3] << " | " << r.noEarlyOutMs << " | " << r.deviceSortMs << " | " << r.hostSortMs << " | "
+        << r.clTotalMs << " |\n";
   }
 }
 
@@ -441,7 +435,7 @@ const CommandRegistration kRegistration([](CLI::App& app) {
       ->check(CLI::IsMember({"cpu", "opencl"}));
   command->add_flag("!--no-variants", options->variants,
                     "--backend opencl: skip the variants' table (breadth-first, start depths, no early-out, "
-                    "device and host sorts, re-sent meshes)");
+                    "device and host sorts)");
   command->callback([options] { run(*options); });
 });
 

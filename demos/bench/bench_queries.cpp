@@ -1,5 +1,5 @@
 // gpucol-bench queries: rayTest and aabbTest of gpucol::GridBroadphase through its query index, and by
-// testing every proxy (GridBroadphaseTuning::queryIndex off), beside btDbvtBroadphase on the same boxes:
+// testing every proxy (GridBroadphaseOptions::queryIndex off), beside btDbvtBroadphase on the same boxes:
 // median microseconds per query, hits per query, what building the index costs against a scan (the
 // ski-rental rule's kScansBeforeIndex) and the bytes it holds.
 #include <btBulletCollisionCommon.h>
@@ -13,6 +13,7 @@
 
 #include "bench_commands.h"
 #include "bench_stats.h"
+#include "bullet/grid_broadphase_options.h"
 #include "gpucol/grid_broadphase.h"
 
 namespace gpucol::bench {
@@ -211,9 +212,9 @@ void runAll(const Options& o) {
     for (std::size_t n : o.sizes) {
       const QueryScene scene = makeScene(sceneName, n, 7);
       gpucol::GridBroadphase indexed, scanned;
-      GridBroadphaseTuning noIndex;
+      GridBroadphaseOptions noIndex;
       noIndex.queryIndex = false;
-      scanned.setTuning(noIndex);
+      detail::GridBroadphaseAccess::setOptions(scanned, noIndex);
       btDbvtBroadphase dbvt;
       fill(indexed, scene), fill(scanned, scene), fill(dbvt, scene);
       btCollisionDispatcher* noDispatcher = nullptr;
@@ -223,7 +224,7 @@ void runAll(const Options& o) {
       const std::vector<Query> warm = makeQueries("short", scene, 16, 99);
       std::vector<double> scanMs, buildMs;
       for (int r = 0; r < o.runs; ++r) {
-        indexed.setTuning(GridBroadphaseTuning{});  // drops the index
+        detail::GridBroadphaseAccess::setOptions(indexed, GridBroadphaseOptions{});  // drops the index
         for (int i = 0; i < 10; ++i) scanMs.push_back(millisecondsOf([&] { runQueries(indexed, {warm[i]}); }));
         buildMs.push_back(millisecondsOf([&] { runQueries(indexed, {warm[10]}); }));
       }

@@ -123,11 +123,6 @@ std::size_t MeshDeviceCache::dropExpired() {
   return dropped;
 }
 
-void MeshDeviceCache::clear() {
-  m_meshes.clear();
-  for (Arena* arena : {&m_triangleArena, &m_nodeArena, &m_entryArena}) arena->used = 0;
-}
-
 void MeshDeviceCache::compact() {
   // The live ranges, in arena order, copied into fresh arenas of exactly their size; the old buffers go when
   // the queue is done with them (OpenCL keeps a buffer alive while commands use it).

@@ -47,9 +47,6 @@ class MeshDeviceCache {
   /// Drops every mesh whose owners are all gone; returns how many were dropped.
   std::size_t dropExpired();
 
-  /// Forgets every mesh (the next acquire uploads again): the "re-send every step" measurement.
-  void clear();
-
   /// Number of meshes resident.
   std::size_t size() const { return m_meshes.size(); }
 

@@ -244,7 +244,6 @@ void OpenClMeshPipeline::runBatch(const std::vector<DeviceMeshPair>& pairs,
 
   // Upload: meshes only when not resident, then the batch description (transforms, offsets).
   auto start = Clock::now();
-  if (!options.resident) m_cache.clear();
   std::uint64_t maxTrianglesA = 1, maxTrianglesB = 1;
   int treeDepths = 0;
   std::uint64_t smallerTriangles = 0;

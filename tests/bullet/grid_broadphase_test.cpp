@@ -503,80 +503,8 @@ TEST(GridBroadphase, ProxiesCreatedAfterResetPoolAreSearchedOnOpenCl) {
   expectPairsAfterResetPool(openClGridConfig());
 }
 
-/// Creates a proxy for each box (its index as client object) in `bp` and steps, then moves every box 0.001
-/// along x and steps again: every proxy moves and few pairs change, so that step's peak is the search's.
-void stepAndNudge(gpucol::GridBroadphase& bp, const std::vector<Box>& boxes, btDispatcher* dispatcher) {
-  std::vector<btBroadphaseProxy*> proxies;
-  for (std::size_t i = 0; i < boxes.size(); ++i) {
-    const Box& b = boxes[i];
-    proxies.push_back(bp.createProxy(b.lo, b.hi, BOX_SHAPE_PROXYTYPE,
-                                     reinterpret_cast<void*>(std::intptr_t(i)), b.group, b.mask, dispatcher));
-  }
-  bp.calculateOverlappingPairs(dispatcher);
-  const btVector3 d(0.001f, 0.0f, 0.0f);
-  for (std::size_t i = 0; i < boxes.size(); ++i)
-    bp.setAabb(proxies[i], boxes[i].lo + d, boxes[i].hi + d, dispatcher);
-  bp.calculateOverlappingPairs(dispatcher);
-}
-
-/// One scene of `count` random boxes in a cube of half side `side`, stepped by a broad phase that copies the
-/// boxes and by one that reads them in place, the default (stepAndNudge): the same pairs, at least `minPairs`
-/// of them, and a peak at least `savedPerProxy` bytes per proxy lower in place. `homeCells` is both's
-/// GridBroadphaseTuning::homeCells.
-void expectInPlaceSamePairsLowerPeak(const gpucol::Config& config, int count, float side, std::uint32_t seed,
-                                     std::size_t savedPerProxy, std::uint64_t minPairs, bool homeCells) {
-  btDefaultCollisionConfiguration configuration;
-  btCollisionDispatcher dispatcher(&configuration);
-  gpucol::GridBroadphaseTuning copy, inPlace;
-  copy.boxesInPlace = false;
-  copy.homeCells = inPlace.homeCells = homeCells;
-  gpucol::GridBroadphase copying(config), reading(config);
-  copying.setTuning(copy);
-  reading.setTuning(inPlace);
-  ASSERT_TRUE(gpucol::GridBroadphaseTuning{}.boxesInPlace);
-  std::mt19937 rng(seed);
-  std::vector<Box> boxes(std::size_t(count), Box{});
-  for (Box& b : boxes) randomBox(rng, b, side);
-  {
-    // Each thread that takes a slab holds its own scratch, so peaks vary with how the threads were scheduled
-    // (under load, by more than the margin): one thread makes them repeatable.
-    tbb::global_control oneThread(tbb::global_control::max_allowed_parallelism, 1);
-    for (gpucol::GridBroadphase* bp : {&copying, &reading}) stepAndNudge(*bp, boxes, &dispatcher);
-  }
-  ASSERT_GE(copying.stats().overlappingPairs, minPairs);
-  EXPECT_EQ(cachePairs(copying.getOverlappingPairCache()), cachePairs(reading.getOverlappingPairCache()));
-  EXPECT_GE(copying.stats().peakBytes, reading.stats().peakBytes + savedPerProxy * std::size_t(count))
-      << "copy " << copying.stats().peakBytes << " in place " << reading.stats().peakBytes;
-}
-
-TEST(GridBroadphase, BoxesReadInPlaceAreSearchedInSlabsAtAnySize) {
-  // Beyond 2^18 moving proxies a copy is searched whole, and in place in slabs: the same pairs, and a peak
-  // lower by more than the copy's 24 bytes per proxy (the whole-grid search's own working memory).
-  expectInPlaceSamePairsLowerPeak(gpucol::Config{}, 270000, 90.0f, 5, 60, 10000, false);
-  // By home cell (GridBroadphaseTuning::homeCells; these boxes are of about one size) both are searched in
-  // slabs: a peak lower by about the copy's 24 bytes per proxy.
-  expectInPlaceSamePairsLowerPeak(gpucol::Config{}, 270000, 90.0f, 5, 20, 10000, true);
-}
-
-TEST(GridBroadphase, BoxesCopiedForTheSearchGiveTheSamePairsAsInPlace) {
-  // The default reads the boxes in place (PairCacheMatchesBruteForceOverStepsGrid); the copy, as every finder
-  // but the CPU one reads them, against brute force over the same kind of steps.
-  gpucol::Config config;
-  config.bruteForceBelow = 100;
-  gpucol::GridBroadphaseTuning copy;
-  copy.boxesInPlace = false;
-  gpucol::GridBroadphase bp(config);
-  bp.setTuning(copy);
-  runSteps(bp, bp.getOverlappingPairCache(), 1500, 3);
-  EXPECT_TRUE(bp.stats().usedGrid);
-
-  // The same scene stepped by both: one step that moves every box a little (few pairs change, so the
-  // step's peak is the search's), and the peaks differ by about the copy's 24 bytes per proxy.
-  expectInPlaceSamePairsLowerPeak(config, 4000, 40.0f, 4, 20, 0, false);
-}
-
 /// Issue 4's memory target: at most 100 bytes per proxy plus 8 per pair at the peak of a step
-/// (GridBroadphaseStats::peakBytes), with the default tuning, once every box moves each step and once 1% do
+/// (GridBroadphaseStats::peakBytes), with the defaults, once every box moves each step and once 1% do
 /// (stage 11 on the kept grid), and at the steps that keep the grid (the first, and the first where few
 /// moved). 40,000 random boxes in a cube of half side `side`, with between `minPairsPerProxy` and
 /// `maxPairsPerProxy` pairs per proxy.
@@ -586,7 +514,7 @@ void expectPeakOfAStepWithinTarget(float side, double minPairsPerProxy, double m
   tbb::global_control oneThread(tbb::global_control::max_allowed_parallelism, 1);
   btDefaultCollisionConfiguration configuration;
   btCollisionDispatcher dispatcher(&configuration);
-  gpucol::GridBroadphase bp(config);  // tuning defaults
+  gpucol::GridBroadphase bp(config);
   const int count = 40000;
   std::mt19937 rng(17);
   std::vector<Box> boxes = createAndStep(bp, count, side, rng, &dispatcher);
@@ -618,8 +546,8 @@ void expectPeakOfAStepWithinTarget(float side, double minPairsPerProxy, double m
   EXPECT_LE(peakPerProxy(), 100.0) << "1% of the boxes moving";
 }
 
-/// A sparse cloud, about 0.5 pairs per proxy. Copying the boxes for the search (boxesInPlace false) adds 24
-/// bytes per proxy at the peak (measurement history) and fails it.
+/// A sparse cloud, about 0.5 pairs per proxy. Copying the boxes for the search (as a double-precision Bullet
+/// needs) adds 24 bytes per proxy at the peak (measurement history) and fails it.
 TEST(GridBroadphase, PeakOfAStepStaysWithin100BytesPerProxyPlus8PerPair) {
   expectPeakOfAStepWithinTarget(48.0f, 0.25, 1.0);
 }
@@ -670,7 +598,7 @@ TEST(GridBroadphase, SmallScenesPeakWithin100BytesPerProxyPlus8PerPair) {
   }
   for (std::vector<Box>* boxes : {&cloud, &pile}) {
     SCOPED_TRACE(boxes == &cloud ? "cloud" : "pile");
-    gpucol::GridBroadphase bp;  // Config and tuning defaults
+    gpucol::GridBroadphase bp;  // Config's defaults
     for (int i = 0; i < count; ++i) addProxy(bp, *boxes, i, &dispatcher);
     for (int t = 0; t < 4; ++t) {
       const btVector3 d(0.0f, -0.001f, 0.0f);
@@ -694,10 +622,7 @@ TEST(GridBroadphase, SmallScenesPeakWithin100BytesPerProxyPlus8PerPair) {
 TEST(GridBroadphase, BoxesReadInPlaceAreSurveyedByTheScan) {
   gpucol::Config config;
   config.bruteForceBelow = 100;
-  gpucol::GridBroadphaseTuning inPlace;
-  inPlace.boxesInPlace = true;
   gpucol::GridBroadphase bp(config);
-  bp.setTuning(inPlace);
   btDefaultCollisionConfiguration configuration;
   btCollisionDispatcher dispatcher(&configuration);
   std::mt19937 rng(41);

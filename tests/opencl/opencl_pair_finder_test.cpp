@@ -7,6 +7,7 @@
 #include <string>
 #include <vector>
 
+#include "broadphase/brute_force_pair_finder.h"
 #include "broadphase/grid_pair_finder.h"
 #include "broadphase/packed_pairs.h"
 #include "opencl_test_device.h"
@@ -103,7 +104,7 @@ void expectMatchesReferences(const Scene& scene, const std::string& what,
                                          makePairFinder(Config{}, listedRuns())};
   std::unique_ptr<PairFinder> cpu = makeCpuPairFinder();
   const ProxyArrays proxies = scene.view();
-  const std::vector<std::uint64_t> expected = findPairsBruteForce(proxies);
+  const std::vector<std::uint64_t> expected = BruteForcePairFinder::pairsOf(proxies);
   // The boxes in six arrays, and in records read in place (where the device shares the host's memory) or
   // copied from them.
   const ProxyRecords records = recordsOf(scene);
@@ -143,7 +144,7 @@ TEST(OpenClPairFinder, UniformCloud) {
   GPUCOL_REQUIRE_OPENCL(context);
   expectMatchesReferences(uniformScene(3000, 100.0f, 1.5f, 1), "uniform");
   expectMatchesReferences(uniformScene(500, 30.0f, 1.5f, 2), "small uniform");
-  EXPECT_GT(findPairsBruteForce(uniformScene(3000, 100.0f, 1.5f, 1).view()).size(), 100u)
+  EXPECT_GT(BruteForcePairFinder::pairsOf(uniformScene(3000, 100.0f, 1.5f, 1).view()).size(), 100u)
       << "scene too sparse";
   EXPECT_TRUE(sortsByCountingOn(uniformScene(3000, 100.0f, 1.5f, 1))) << "the counting sort was not run";
   // Runs of a dense grid: the filled cells listed (under two thirds filled), and every cell a run.
@@ -267,7 +268,7 @@ TEST(OpenClPairFinder, TrivialInputs) {
   expectMatchesReferences(one, "one box");
   one.add(2, 0, 0, 1, 1, 1);  // touching faces count
   expectMatchesReferences(one, "two touching");
-  EXPECT_EQ(findPairsBruteForce(one.view()).size(), 1u);
+  EXPECT_EQ(BruteForcePairFinder::pairsOf(one.view()).size(), 1u);
 }
 
 TEST(OpenClPairFinder, GrowsItsOutputAcrossSteps) {
@@ -299,7 +300,7 @@ class SteppedFinders {
     view.moved = moved;
     std::vector<std::uint64_t> fromCpu;
     m_cpu->findPairs(view, m_options, fromCpu);
-    const std::vector<std::uint64_t> expected = findPairsBruteForce(view);
+    const std::vector<std::uint64_t> expected = BruteForcePairFinder::pairsOf(view);
     EXPECT_TRUE(fromCpu == expected) << what << ": the CPU finder differs from brute force";
     const PairFinderStats& cpu = m_cpu->stats();
     const ProxyRecords records = recordsOf(scene);
@@ -488,7 +489,7 @@ TEST(OpenClPairFinder, FullSearchWhenTheGridOptionsOrMotionAreUnknown) {
     gpu->findPairs(view, o, fromGpu);
     cpu->findPairs(view, o, fromCpu);
     EXPECT_TRUE(fromGpu == fromCpu) << what;
-    EXPECT_TRUE(fromGpu == findPairsBruteForce(view)) << what;
+    EXPECT_TRUE(fromGpu == BruteForcePairFinder::pairsOf(view)) << what;
     return gpu->stats();
   };
   search(options, nullptr, "first");

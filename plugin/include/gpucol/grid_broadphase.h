@@ -11,36 +11,9 @@
 
 namespace gpucol {
 
-/// Measured alternatives of the grid broad phase, for benchmarks and experiments; defaults are the winners.
-struct GridBroadphaseTuning {
-  /// Cell size from the density rule of Avril et al. §4.1 instead of the objects' median size.
-  bool densityCellSize = false;
-  /// Write candidate results to the §3.4 bit mask instead of compacted per-chunk lists. CPU path only (the
-  /// OpenCL finder always compacts); the grid is then searched whole, not in slabs. Slower in 7 of the 9
-  /// cases measured (docs/measured-results.md, "Broad phase").
-  bool bitMaskOutput = false;
-  /// Use the Newton/"magic constant" square root (§3.3) for the mapping function's first guess.
-  bool newtonSqrt = false;
-  /// A box covering more cells than this is tested against all instead of being put in the grid.
-  std::uint32_t hugeCellLimit = 64;
-  /// Let rayTest and aabbTest build and use the query index; false: every query tests every proxy.
-  bool queryIndex = true;
-  /// CPU path: search the grid slab by slab, up to 2^18 proxies (less memory at the peak of a step; at any
-  /// number with boxesInPlace); false: always as a whole (the pairs are the same).
-  bool slabSearch = true;
-  /// Read each box where Bullet's proxy holds it instead of from a copy of every box made for the search. On
-  /// the CPU path the slabs are then searched at any size: 24 bytes less per proxy at the peak of a step
-  /// (about 100 less at 1M proxies), at about the same speed (steps took 0.89-1.00 times as long at 100K
-  /// moving proxies and 0.82-1.07 at 1M; the measurement history has both); the OpenCL path gathers the boxes
-  /// from the proxies as it uploads them (24 bytes less per proxy at its peak). false: the search reads a
-  /// copy of every box. Needs single-precision Bullet; ignored otherwise (always a copy).
-  bool boxesInPlace = true;
-  /// CPU path: where the boxes are of about one size, search the slabs by home cell (each box in the cell of
-  /// its min corner, tested against the neighbouring cells); false: each box in every cell it overlaps. The
-  /// pairs are the same. Steps at 100K moving boxes took 0.94-1.00 times as long in a uniform cloud and
-  /// 0.85-0.95 in a falling column (docs/measured-results.md, "Broad phase"); boxes of mixed sizes are searched the other way.
-  bool homeCells = true;
-};
+namespace detail {
+struct GridBroadphaseAccess;  // tests and gpucol-bench: bullet/grid_broadphase_options.h
+}  // namespace detail
 
 /// What the last calculateOverlappingPairs did.
 struct GridBroadphaseStats {
@@ -73,7 +46,7 @@ struct GridBroadphaseStats {
   std::uint32_t rebinnedProxies = 0;
   /// Edge of the grid's cubic cells (0 without grid).
   float cellSize = 0.0f;
-  /// True when the boxes, read in place (GridBroadphaseTuning::boxesInPlace), were surveyed for the grid
+  /// True when the boxes, read in place (single-precision Bullet), were surveyed for the grid
   /// choice by the step's scan of the proxies, which then read no box itself.
   bool boxesSurveyed = false;
   /// Bytes the broad phase holds between steps: the proxies Bullet holds (56 bytes each, in blocks of 256),
@@ -161,14 +134,13 @@ class GridBroadphase : public btBroadphaseInterface {
   /// Prints proxy and pair counts and the last step's path to stdout.
   void printStats() override;
 
-  /// Chooses among the measured alternatives (takes effect at the next calculateOverlappingPairs).
-  void setTuning(const GridBroadphaseTuning& tuning);
   /// Statistics of the last calculateOverlappingPairs.
   const GridBroadphaseStats& stats() const;
   /// How the queries (rayTest, aabbTest) were answered so far.
   GridBroadphaseQueryStats queryStats() const;
 
  private:
+  friend struct detail::GridBroadphaseAccess;
   struct Impl;
   std::unique_ptr<Impl> m_impl;
 };

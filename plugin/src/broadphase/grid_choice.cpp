@@ -97,7 +97,7 @@ Grid chooseGrid(const ProxyArrays& p, const std::vector<std::uint32_t>& active,
   // Stage 2: the median of the largest extent, robust to a few huge boxes (a mean would follow them). Above
   // kMedianSamples boxes, the median of every stride-th box: the cell size only sets the speed, never the
   // pairs. nth_element over every box was the larger part of this stage at 1M boxes (serial), and in place
-  // (boxesInPlace) a pass over every box is a walk over all of Bullet's proxies in memory.
+  // (Bullet's proxies read where they are) a pass over every box is a walk over all of them in memory.
   const std::size_t stride = std::max<std::size_t>(1, n / kMedianSamples);
   const std::size_t samples = (n + stride - 1) / stride;
   extentScratch.resize(samples);
@@ -113,7 +113,7 @@ Grid chooseGrid(const ProxyArrays& p, const std::vector<std::uint32_t>& active,
   const float median = extentScratch[samples / 2];
   // The home grid's cell: the largest sampled extent up to kHomeExtentRatio times the median (after
   // nth_element those lie above it), and how many sampled boxes are larger.
-  const bool homeWanted = home && options.homeCells && options.cellSizeRule == CellSizeRule::Size;
+  const bool homeWanted = home && options.cellSizeRule == CellSizeRule::Size;
   float homeExtent = median;
   std::size_t larger = 0;
   for (std::size_t i = samples / 2; homeWanted && i < samples; ++i) {

@@ -103,7 +103,7 @@ inline float bitsFloat(std::uint32_t b) {
 /// is working memory kept by the caller between searches. With `kept` and kept->axis set, also fills
 /// kept->lo and kept->hi for the binned boxes. With `survey` (made for every slot of `p`), stage 3 and the
 /// bounds come from it when its cell edge is taken (`*surveyTaken`); `kept` is then left alone.
-/// With `home` (CPU finder, options.homeCells under the size rule), also says whether the boxes are of about
+/// With `home` (CPU finder, under the size rule), also says whether the boxes are of about
 /// one size, judged from stage 2's sample: few of them (kHomeLargerShare) larger than kHomeExtentRatio times
 /// its median. If so, *home becomes the grid of the search by home cell (SlabSearch): the same origin, cells
 /// just larger than the largest of the others, so that nearly every box spans at most two cells per axis,

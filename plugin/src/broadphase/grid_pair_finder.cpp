@@ -1183,22 +1183,4 @@ bool takeInjectedOpenClFailure() {
 }
 }  // namespace detail
 
-std::vector<std::uint64_t> findPairsBruteForce(const ProxyArrays& p) {
-  // Deliberately naive and independent of the grid code: double comparisons, nested loops.
-  std::vector<std::uint64_t> pairs;
-  for (std::uint32_t a = 0; a < p.count; ++a) {
-    if (!(p.flags[a] & kProxyActive)) continue;
-    for (std::uint32_t b = a + 1; b < p.count; ++b) {
-      if (!(p.flags[b] & kProxyActive)) continue;
-      const BoxCorners x = p.box(a), y = p.box(b);
-      bool overlap = true;
-      for (int k = 0; k < 3; ++k)
-        overlap = overlap && double(x.lo[k]) <= double(y.hi[k]) && double(y.lo[k]) <= double(x.hi[k]);
-      const bool filter = (p.group[a] & p.mask[b]) && (p.group[b] & p.mask[a]);
-      if (overlap && filter) pairs.push_back((std::uint64_t(a) << 32) | b);
-    }
-  }
-  return pairs;
-}
-
 }  // namespace gpucol

@@ -179,9 +179,9 @@ enum class MappingSqrt { Double, Newton };
 /// Auto: full searches with compacted output, of at most kMaxSlabBoxes binned boxes, when the grid cuts into
 /// at least kMinSlabs slabs (any number in a scene of fewer than kAnySlabsBelow binned boxes); a grid kept
 /// for stage 11 is then binned after the search (its cells and entries only). AnySize: as Auto with no limit
-/// on the boxes (less memory at the peak than the whole-grid search, which was faster at 1M boxes;
-/// GridBroadphaseTuning::boxesInPlace). Always: every full search of a dense grid with compacted output
-/// (tests). Off: never (benchmarks compare).
+/// on the boxes (less memory at the peak than the whole-grid search; GridBroadphase asks for it where it
+/// reads the boxes in Bullet's proxies). Always: every full search of a dense grid with compacted output
+/// (tests). Off: never (tests: the whole-grid search, which sparse grids and the bit mask take anyway).
 enum class SlabTiling { Auto, AnySize, Always, Off };
 
 /// How a slab search's thread reads the boxes of its slab (slab_search.h); results are identical. Copy: into
@@ -190,6 +190,10 @@ enum class SlabTiling { Auto, AnySize, Always, Off };
 /// thousand boxes (whose proxies stay in the cache anyway) when the copies that the threads' largest slabs
 /// would hold at once come to more than a few bytes per binned box.
 enum class SlabBoxReading { Auto, Copy, InPlace };
+
+/// A box covering more cells than this is tested against all instead of being binned (stage 3; chosen in
+/// docs/measured-results.md, "Grid choice").
+constexpr std::uint32_t kHugeCellLimit = 64;
 
 /// Knobs of one pair search.
 struct PairFinderOptions {
@@ -202,17 +206,13 @@ struct PairFinderOptions {
   /// Square root of the mapping function's guess.
   MappingSqrt mappingSqrt = MappingSqrt::Double;
   /// A box covering more cells than this is tested against all instead of being binned.
-  std::uint32_t hugeCellLimit = 64;
+  std::uint32_t hugeCellLimit = kHugeCellLimit;
   /// CPU finder: slab tiling of full searches.
   SlabTiling slabTiling = SlabTiling::Auto;
   /// CPU finder: boxes per slab aimed at (0: automatic, slab_search.cpp).
   std::uint32_t slabBoxes = 0;
   /// CPU finder: how a slab search reads its boxes.
   SlabBoxReading slabBoxReading = SlabBoxReading::Auto;
-  /// CPU finder, size rule: a slab search of boxes of about one size puts each box in its home cell alone and
-  /// pairs it with the boxes of the neighbouring cells (slab_search.h); false: always in every cell it
-  /// overlaps. The pairs are the same.
-  bool homeCells = true;
 };
 
 /// What one search did (for benchmarks, tests and printStats).
@@ -250,7 +250,7 @@ struct PairFinderStats {
   /// True when an OpenCL finder's full search took every cell of its dense grid as a run of entries, empty
   /// cells too, rather than listing the filled ones (OpenClPairFinderTuning::runsAreCells).
   bool runsAreCells = false;
-  /// True when the slab search paired boxes by home cell (PairFinderOptions::homeCells) on a grid of its own
+  /// True when the slab search paired boxes by home cell (boxes of about one size) on a grid of its own
   /// (cellSize and dims give that grid's).
   bool homeCells = false;
   /// Boxes of a search by home cell that spanned three or more of its cells on an axis and were tested, as
@@ -327,8 +327,5 @@ bool takeInjectedOpenClFailure();
 inline std::uint64_t makePairKey(std::uint32_t a, std::uint32_t b) {
   return a < b ? (std::uint64_t(a) << 32) | b : (std::uint64_t(b) << 32) | a;
 }
-
-/// Brute-force reference: all active pairs tested one by one in double precision; sorted keys.
-std::vector<std::uint64_t> findPairsBruteForce(const ProxyArrays& proxies);
 
 }  // namespace gpucol

@@ -16,7 +16,7 @@
 // order, so it needs no numbering. The bit-mask output (§3.4) is indexed by that numbering, so it always
 // uses the whole-grid search. A grid kept for stage 11 is binned whole by the finder after the slabs.
 //
-// By home cell (boxes of about one size, PairFinderOptions::homeCells): on a grid whose cells are as large as
+// By home cell (boxes of about one size): on a grid whose cells are as large as
 // the largest box, a box spans at most two cells per axis, so two boxes that overlap have home cells (the
 // cells of their min corners) at most one apart on every axis: cellOf is monotone, and a.lo <= b.hi gives
 // cellOf(a.lo) <= cellOf(b.hi) <= cellOf(b.lo) + 1. Each box then goes into its home cell alone, one entry

@@ -1,11 +1,13 @@
 // gpucol::GridBroadphase: Bullet's side of the grid broad phase. Proxies live in fixed blocks (stable
 // addresses) and are the one place a box is kept between steps; the finders read the boxes in the proxies
-// (GridBroadphaseTuning::boxesInPlace; the OpenCL one as it uploads them), and for a finder that cannot, each
-// search copies the live boxes into a structure-of-arrays view (broadphase/grid_pair_finder.h) and drops it
+// (the OpenCL one as it uploads them); where they cannot (a double-precision Bullet), each search copies the
+// live boxes as floats into a structure-of-arrays view (broadphase/grid_pair_finder.h) and drops it
 // afterwards. Each step's sorted pair list is diffed against the last one so the pair cache only sees
 // additions and removals (DESIGN.md, data flow): the diff lists them, then the cache gets them. That list is
 // also the pair finder's previous result, which it carries resting pairs over from (no second copy is kept).
 #include "gpucol/grid_broadphase.h"
+
+#include "bullet/grid_broadphase_options.h"
 
 #include <LinearMath/btAabbUtil2.h>
 #include <tbb/blocked_range.h>
@@ -116,8 +118,8 @@ BoxCorners floatBoxHolding(const btBroadphaseProxy& p) {
   return b;
 }
 
-/// GridBroadphaseTuning::boxesInPlace reads the proxies' boxes as floats (BoxRecords), so it needs Bullet
-/// built in single precision; otherwise every finder gets float copies.
+/// The finders read the proxies' boxes in place as floats (BoxRecords), so only where Bullet is built in single
+/// precision; otherwise every finder gets float copies.
 constexpr bool kProxyBoxesAreFloats = std::is_same<btScalar, float>::value;
 /// The bounds of no box, for the survey's running min and max.
 constexpr float kFloatMax = std::numeric_limits<float>::max();
@@ -152,7 +154,7 @@ struct ViewBuffer {
 
 struct GridBroadphase::Impl {
   Config config;
-  GridBroadphaseTuning tuning;
+  GridBroadphaseOptions internalOptions;  // tests and gpucol-bench (grid_broadphase_options.h)
   GridBroadphaseStats stats;
   btOverlappingPairCache* pairCache = nullptr;
   std::unique_ptr<btHashedOverlappingPairCache> ownedCache;
@@ -269,11 +271,11 @@ struct GridBroadphase::Impl {
     surveying = false;
     float cell = 0.0f;
     int axis = -1;
-    if (!(kProxyBoxesAreFloats && tuning.boxesInPlace) || liveCount < options().bruteForceBelow ||
+    if (!kProxyBoxesAreFloats || liveCount < options().bruteForceBelow ||
         !cpuFinder->surveyWanted(options(), cell, axis))
       return;
     survey.cell = cell;
-    survey.hugeCellLimit = tuning.hugeCellLimit;
+    survey.hugeCellLimit = internalOptions.hugeCellLimit;
     survey.huge.clear();
     survey.extents.axis = axis;
     survey.extents.bySlot = true;
@@ -413,13 +415,11 @@ struct GridBroadphase::Impl {
                       });
   }
 
-  /// True when the scan copies the boxes into the view: when they are not read in place.
-  bool copyInScan() const { return !(kProxyBoxesAreFloats && tuning.boxesInPlace); }
 
   /// The finder's view of the filled buffer (consumes nonFiniteChanged): the boxes in the proxies when
   /// `readsRecords`, else in the view's arrays (a copy less than half the proxies' size, which took 24 more
-  /// bytes per proxy at the peak and no less time: measurement history), which the scan filled unless
-  /// boxesInPlace met a finder that cannot read them in place.
+  /// bytes per proxy at the peak and no less time: measurement history), which the scan filled for a
+  /// double-precision Bullet.
   ProxyArrays finderView(bool readsRecords) {
     ProxyArrays v;
     v.count = slotCount;
@@ -492,7 +492,7 @@ struct GridBroadphase::Impl {
   /// The query index when a query should use it, building it when it is due; nullptr: test every proxy.
   const QueryGrid* queryIndex() {
     if (indexReady.load(std::memory_order_acquire)) return &queryGrid;
-    if (liveCount < kQueryIndexMinProxies || !tuning.queryIndex) return nullptr;
+    if (liveCount < kQueryIndexMinProxies || !internalOptions.queryIndex) return nullptr;
     if (scansSinceChange.fetch_add(1, std::memory_order_relaxed) < kScansBeforeIndex &&
         lastIndexQueries < kQueriesOfABusyIndex)
       return nullptr;
@@ -528,7 +528,7 @@ struct GridBroadphase::Impl {
     if (slots.empty())
       queryGrid.clear();
     else
-      queryGrid.build(p, slots, tuning.hugeCellLimit);
+      queryGrid.build(p, slots, internalOptions.hugeCellLimit);
     indexedProxies = std::uint32_t(slots.size());
     ++indexBuilds;
     indexedAtBuild = queryIndexed.load(std::memory_order_relaxed);
@@ -774,16 +774,13 @@ struct GridBroadphase::Impl {
   PairFinderOptions options() const {
     PairFinderOptions o;
     o.bruteForceBelow = config.bruteForceBelow < 0 ? 0u : std::uint32_t(config.bruteForceBelow);
-    o.cellSizeRule = tuning.densityCellSize ? CellSizeRule::Density : CellSizeRule::Size;
-    o.output = tuning.bitMaskOutput ? PairOutput::BitMask : PairOutput::Compacted;
-    o.mappingSqrt = tuning.newtonSqrt ? MappingSqrt::Newton : MappingSqrt::Double;
-    o.hugeCellLimit = tuning.hugeCellLimit;
-    o.homeCells = tuning.homeCells;
+    o.cellSizeRule = internalOptions.densityCellSize ? CellSizeRule::Density : CellSizeRule::Size;
+    o.output = internalOptions.bitMaskOutput ? PairOutput::BitMask : PairOutput::Compacted;
+    o.mappingSqrt = internalOptions.newtonSqrt ? MappingSqrt::Newton : MappingSqrt::Double;
+    o.hugeCellLimit = internalOptions.hugeCellLimit;
     // Boxes read in place ask for the least memory: slabs at every size (at 1M boxes the whole-grid search's
     // own working memory is larger than the copy of the boxes that reading in place saves).
-    o.slabTiling = !tuning.slabSearch                            ? SlabTiling::Off
-                   : kProxyBoxesAreFloats && tuning.boxesInPlace ? SlabTiling::AnySize
-                                                                 : SlabTiling::Auto;
+    o.slabTiling = kProxyBoxesAreFloats ? SlabTiling::AnySize : SlabTiling::Auto;
     return o;
   }
 
@@ -992,10 +989,10 @@ void GridBroadphase::calculateOverlappingPairs(btDispatcher* dispatcher) {
   // marked moved there); otherwise it only looks for filter changes, and the view is filled when it found
   // one. A second filling scan would find the moved marks cleared by the first.
   const bool filling = d.dirty;
-  if (filling) d.view.allocate(d.slotCount, d.copyInScan()), d.prepareSurvey();
+  if (filling) d.view.allocate(d.slotCount, !kProxyBoxesAreFloats), d.prepareSurvey();
   if (d.scan(filling) && !filling) {
     d.dirty = true;
-    d.view.allocate(d.slotCount, d.copyInScan());
+    d.view.allocate(d.slotCount, !kProxyBoxesAreFloats);
     d.prepareSurvey();
     d.scan(true);
   }
@@ -1011,7 +1008,7 @@ void GridBroadphase::calculateOverlappingPairs(btDispatcher* dispatcher) {
   st.searched = true;
   d.finderFilters = cacheFiltersByGroupAndMask(*d.pairCache);
   PairFinder* chosen = &d.chooseFinder(st);
-  ProxyArrays view = d.finderView(kProxyBoxesAreFloats && d.tuning.boxesInPlace && chosen->readsBoxRecords());
+  ProxyArrays view = d.finderView(kProxyBoxesAreFloats && chosen->readsBoxRecords());
   // kMoved is relative to the previous search of the same finder; after a switch of finder, all moved.
   if (chosen != d.lastFinder) view.moved = nullptr;
   // Nothing is freed before the search: the step holds at least what was held before it, and the view (a
@@ -1033,7 +1030,7 @@ void GridBroadphase::calculateOverlappingPairs(btDispatcher* dispatcher) {
     d.dropOpenCl(e.what());
     st.usedOpenCl = false;
     chosen = d.cpuFinder.get();
-    view = d.finderView(kProxyBoxesAreFloats && d.tuning.boxesInPlace && chosen->readsBoxRecords());
+    view = d.finderView(kProxyBoxesAreFloats && chosen->readsBoxRecords());
     view.moved = nullptr;
     search(*chosen, view);
   }
@@ -1285,11 +1282,13 @@ void GridBroadphase::printStats() {
       st.memoryBytes);
 }
 
-void GridBroadphase::setTuning(const GridBroadphaseTuning& tuning) {
-  m_impl->tuning = tuning;
-  m_impl->dirty = true;
-  m_impl->lastFinder = nullptr;  // a full search with the new options
-  m_impl->dropQueryIndex();      // and an index (if any) with them
+void detail::GridBroadphaseAccess::setOptions(GridBroadphase& broadphase,
+                                              const GridBroadphaseOptions& options) {
+  GridBroadphase::Impl& d = *broadphase.m_impl;
+  d.internalOptions = options;
+  d.dirty = true;
+  d.lastFinder = nullptr;  // a full search with the new options
+  d.dropQueryIndex();      // and an index (if any) with them
 }
 
 const GridBroadphaseStats& GridBroadphase::stats() const {

@@ -85,9 +85,6 @@ struct MeshBatchDeviceOptions {
   /// Run the float plane and interval tests of triangle_plane.h as a stage of their own, then the double
   /// test only on the candidates they could not prove apart (the early-out).
   bool nearPrefilter = true;
-  /// Keep each mesh resident on the device between batches; false re-sends every mesh every batch (the
-  /// thesis's choice, §5.4.1), for the measurement.
-  bool resident = true;
   /// Where the candidates are sorted.
   CandidateSort candidateSort = CandidateSort::Auto;
   /// Wait after the traversal too, so that the stats split its time from the near kernel's and the
