@@ -32,9 +32,7 @@ MeshDeviceCache::Arena MeshDeviceCache::makeArena(std::size_t capacity) const {
   if (capacity == 0) return arena;
   // The traversal and the near phase read nodes and triangles at random across arenas of tens of MB; on a
   // CPU device, in the driver's own allocation, those reads missed the TLB. Huge pages (as the CPU path's
-  // trees have them, memory/large_array_allocator.h): PoCL, armadillo-399904 thesis scene, one thread,
-  // 3 alternating rounds of 100 calls, median 4.42-4.76 ms against 4.73-5.17 in the driver's memory (and
-  // 4.30-4.81 against 4.86-5.07 with transparent huge pages switched on for every allocation). Smaller
+  // trees have them, memory/large_array_allocator.h) were faster on PoCL (measurement history). Smaller
   // arenas, and every GPU's, stay in the driver's memory.
   if (!m_context.isGpu() && capacity >= kLargeArrayMapFrom) {
     arena.host = std::make_shared<HostBytes>(capacity);

@@ -65,9 +65,7 @@ constexpr std::size_t kGroupSizeCap = 64;
 
 /// The same on a CPU device, which runs one group at a time per thread: the smaller the group, the more
 /// evenly the two threads share a small launch (armadillo-2766's traversal is 256 work-items whose work
-/// differs widely). PoCL, thesis scene, 4 alternating rounds at load about 1.4, end to end: armadillo-99976
-/// 1.91-1.96 ms with 16 (one round 2.79, its CPU path slow too) against 2.05-2.32 with 64, armadillo-2766
-/// 0.40-0.43 (one round 0.58) against 0.42-0.44.
+/// differs widely; 16 beat 64 on PoCL: measurement history).
 constexpr std::size_t kCpuGroupSizeCap = 16;
 
 /// Work-groups of the depth-first traversal per compute unit on a CPU device, whose work-items take start
@@ -75,23 +73,18 @@ constexpr std::size_t kCpuGroupSizeCap = 16;
 constexpr std::uint64_t kCpuTraversalGroupsPerUnit = 2;
 
 /// Candidates per work-item of mesh_near_filter_test (its GPUCOL_LANES: 4, 8 or 16). 8 floats are one AVX
-/// register; measured on PoCL (thesis scene): see the README.
+/// register.
 constexpr std::uint64_t kPrefilterLanes = 8;
 
 /// Work-items the depth-first traversal's automatic start depth aims for (MeshBatchDeviceOptions): the
 /// batch's triangles (the smaller mesh of each pair, summed) / kTrianglesPerItem, within kDepthFirstMinItems
 /// .. kDepthFirstItems. Every work-item walks again from the roots to the start front, which on a small pair
-/// costs more than the balance it buys. Measured on PoCL (thesis scene, 2 cores at load 8-9, 4 interleaved
-/// rounds, docs/measured-results.md "Mesh pairs on OpenCL"): armadillo-2766 alone was fastest at 256 (0.57-0.60 ms end to end
-/// against 0.65-0.90 at 4096), a batch of 100 of its pairs at 4096 (1.3-1.5x over single calls, 1.0-1.2x at
-/// 256). One item per 128 triangles instead of 16: the walk to a start front d levels down costs
-/// sum over levels l of (overlapping node pairs at l) x 4^(d - l) box tests, about 14,700 at d = 6 on
-/// armadillo-27674 (87,657 tests in all) and 3,600 at d = 5, while only 145 (d = 5) or 279 (d = 6) of the
-/// work-items reach a live node pair anyway. 4 interleaved rounds at load 3.7-3.9, end to end:
-/// armadillo-27674 2.04-2.15 ms at d = 6 (the 16-triangle rule), 1.80-2.02 at d = 4, 1.80-1.91 at d = 5;
-/// armadillo-99976 3.49-8.39 at d = 6, 3.23-4.05 at d = 5 (lower in each round); armadillo-2766 (256 items)
-/// and -399904 and a batch of 100 armadillo-2766 pairs (depth 3, 6,400 items) keep their depth. 128 gives d =
-/// 4, 5, 6 for 27674, 99976, 399904.
+/// costs more than the balance it buys (on PoCL armadillo-2766 alone was fastest at 256, a batch of 100 of its
+/// pairs at 4096: docs/measured-results.md "Mesh pairs on OpenCL"). One item per 128 triangles instead of 16:
+/// the walk to a start front d levels down costs sum over levels l of (overlapping node pairs at l) x
+/// 4^(d - l) box tests, about 14,700 at d = 6 on armadillo-27674 (87,657 tests in all) and 3,600 at d = 5,
+/// while only 145 (d = 5) or 279 (d = 6) of the work-items reach a live node pair anyway. 128 gives d = 4, 5,
+/// 6 for 27674, 99976, 399904.
 constexpr std::uint64_t kDepthFirstItems = 4096;
 constexpr std::uint64_t kDepthFirstMinItems = 256;
 constexpr std::uint64_t kTrianglesPerItem = 128;

@@ -134,8 +134,8 @@ constexpr std::size_t kComparisonSortBelow = 512;
 /// the 2 x slotBits significant bits in 11-bit digits, using `scratch` as the second buffer and `offsets`
 /// for the digit counts (up to 256 KB; the caller counts and frees both with its scratch). Each pass is
 /// parallel over kSortChunks fixed chunks (a histogram per chunk, then each chunk scatters its keys in order
-/// to its own offsets), so the passes are stable and the result does not depend on threads; the serial form
-/// of the same sort took 5-22 ms at 1M boxes. Faster than a comparison sort here (a pair list is a few keys
+/// to its own offsets), so the passes are stable and the result does not depend on threads (the serial form
+/// was several times slower at 1M boxes). Faster than a comparison sort here (a pair list is a few keys
 /// per proxy and slots are dense), and the result is the sorted list whatever the input order.
 void sortPairs(std::vector<std::uint64_t>& keys, std::vector<std::uint64_t>& scratch,
                std::vector<std::size_t>& offsets, std::uint32_t slotBits) {
@@ -633,8 +633,7 @@ void CpuPairFinder::binSorted(const ProxyArrays& p, const Grid& g) {
     ++m_homeOrderAge;
   } else if (dense) {
     // Counting sort of the slots by home cell. (Scattering each box straight to its place instead was
-    // slower in our runs at 1M boxes, about 300 against 235 ms of CPU time on the shared machine:
-    // 28-byte writes at random.)
+    // slower at 1M boxes: 28-byte writes at random.)
     m_homeOrder.resize(n);
     countingSort(
         n, cells, m_cellStart, [&](std::size_t i, auto&& f) { f(homeCell(p, m_binned[i], g)); },
@@ -661,8 +660,8 @@ void CpuPairFinder::binSorted(const ProxyArrays& p, const Grid& g) {
                       });
   }
   // Copy in slot order (sequential reads of the nine SoA arrays) to the home positions (one scattered write
-  // of a 40-byte box): gathering in home order instead read nine arrays at random, 46-52 against 15 ms of
-  // CPU time per step on one thread at 1M uniform boxes in our runs.
+  // of a 40-byte box): gathering in home order instead read nine arrays at random, about three times slower
+  // at 1M uniform boxes.
   tbb::parallel_for(tbb::blocked_range<std::size_t>(0, n, 4096),
                     [&](const tbb::blocked_range<std::size_t>& r) {
                       for (std::size_t i = r.begin(); i != r.end(); ++i)

@@ -141,8 +141,8 @@ struct ProxyArrays {
     if (minX) return BoxCorners{{minX[s], minY[s], minZ[s]}, {maxX[s], maxY[s], maxZ[s]}};
     const unsigned char* r = record(s);
     // Float by float: a 12-byte copy per corner became 8 + 4-byte stores that callers then reloaded as one
-    // 16-byte vector, which cannot be forwarded from the stores: every box read in place stalled (steps took
-    // 1.03-1.19 times the copy's at 100K before; measurement history).
+    // 16-byte vector, which cannot be forwarded from the stores: every box read in place stalled (measurement
+    // history).
     BoxCorners b;
     for (int a = 0; a < 3; ++a) {
       std::memcpy(&b.lo[a], r + records.minOffset + a * sizeof(float), sizeof(float));

@@ -1103,8 +1103,8 @@ void GridBroadphase::calculateOverlappingPairs(btDispatcher* dispatcher) {
 /// The diff of the last pair list (`current`) with this step's (`foundCoded`) in one merge walk that only
 /// lists the changes, then the cache's calls, removals first and additions after, each in key order (the
 /// cache's pair array then never holds both). Listing first keeps the walk over the two pair lists apart from
-/// the cache's hash-table work: handing each change to the cache as the walk found it cost 25.6/26.5 ms
-/// against 17.3/18.1 at 1M uniform boxes. Pairs only in `current` that the cache holds are removed (those of
+/// the cache's hash-table work: handing each change to the cache as the walk found it was about half as
+/// slow again at 1M uniform boxes. Pairs only in `current` that the cache holds are removed (those of
 /// destroyed proxies went with destroyProxy already); pairs only in `foundCoded`, and refused ones found
 /// again (the cache's filter callback may change its mind), are offered to the cache. Then `foundCoded`
 /// becomes `current`, and the last list is freed.
