@@ -7,7 +7,9 @@ set -euo pipefail
 root="$(cd "$(dirname "${BASH_SOURCE[0]}")/.." && pwd)"
 "$root/scripts/build.sh" -DGPUCOL_BUILD_DEMOS=ON >/dev/null
 bench="$root/build/release/demos/gpucol-bench"
-cpu="$(awk -F': ' '/model name/ {split($2, w, " "); print tolower(w[1]); exit}' /proc/cpuinfo)"
+# The model's first word that is not the maker's or a trade mark: "xeon", "epyc", ...
+cpu="$(awk -F': ' '/model name/ {print tolower($2); exit}' /proc/cpuinfo | tr -c 'a-z0-9\n' ' ' |
+  tr ' ' '\n' | grep -v -x -E 'intel|amd|r|tm|cpu|processor|' | head -1 || true)"
 name="${1:-${cpu:-cpu}-$(nproc)core-$(git -C "$root" rev-parse --short HEAD)}"
 out="$root/demos/bench/results/headline/$name"
 mkdir -p "$out"
