@@ -380,7 +380,7 @@ void runAll(const Options& o) {
   if (wanted("opencl") || wanted("b3")) {
     if (opencl::OpenClContext* context = opencl::OpenClContext::tryGet(o.device)) {
       deviceName = context->deviceName();
-      if (!makeOpenClPairFinder(base)) openClWhy = "not run: no OpenCL pair finder registered";
+      if (!makeOpenClPairFinder(base)) openClWhy = "not run: no OpenCL pair finder (no device, or built without OpenCL)";
     } else {
       openClWhy = "not run: no usable OpenCL device";
     }

@@ -45,7 +45,7 @@ std::string pathName(std::optional<MeasuredBackendChoice::Path> path, bool devic
 }
 
 bool openClGpu(const Config& config) {
-  MeshBatchDevice* device = meshBatchDeviceFactory() ? meshBatchDeviceFactory()(config) : nullptr;
+  MeshBatchDevice* device = sharedMeshBatchDevice(config);
   return device != nullptr && device->isGpu();
 }
 

@@ -84,7 +84,7 @@ void run(const MeshBatchOptions& options) {
   for (Backend backend : {Backend::Cpu, Backend::OpenCL}) {
     Config config;
     config.meshBackend = backend;
-    if (backend == Backend::OpenCL && !(meshBatchDeviceFactory() && meshBatchDeviceFactory()(config))) {
+    if (backend == Backend::OpenCL && !sharedMeshBatchDevice(config)) {
       std::cout << "| OpenCL | no usable device | | | | |\n";
       continue;
     }

@@ -374,7 +374,7 @@ void printOpenClTables(const std::vector<OpenClRow>& rows, const std::string& de
 void runOpenCl(const MeshPairOptions& options) {
   Config cl;
   cl.meshBackend = Backend::OpenCL;
-  MeshBatchDevice* device = meshBatchDeviceFactory() ? meshBatchDeviceFactory()(cl) : nullptr;
+  MeshBatchDevice* device = sharedMeshBatchDevice(cl);
   if (device == nullptr) throw std::runtime_error("--backend opencl: no usable OpenCL device");
   std::vector<OpenClRow> rows;
   if (options.builtin) {

@@ -702,19 +702,4 @@ MeshBatchDevice* sharedMeshPipeline(const Config& config) {
   return pipeline;
 }
 
-void registerOpenClMeshPipeline() {
-  gpucol::meshBatchDeviceFactory() = [](const Config& config) { return sharedMeshPipeline(config); };
-}
-
-namespace {
-// Installs the factory when this object file is linked in (see registerOpenClMeshPipeline()).
-const bool kRegistered = (registerOpenClMeshPipeline(), true);
-}  // namespace
-
 }  // namespace gpucol::opencl
-
-/// Anchor with a plain C name: libgpucol's consumers link with --undefined=gpucol_link_opencl_mesh_pipeline
-/// (plugin/CMakeLists.txt), which pulls this object file, and so its registration, out of a static library.
-extern "C" void gpucol_link_opencl_mesh_pipeline() {
-  gpucol::opencl::registerOpenClMeshPipeline();
-}

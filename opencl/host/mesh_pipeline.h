@@ -12,8 +12,4 @@ namespace gpucol::opencl {
 /// then takes the CPU path. Throws OpenClError when the programs fail to build on a usable device.
 MeshBatchDevice* sharedMeshPipeline(const Config& config);
 
-/// Installs sharedMeshPipeline as gpucol::meshBatchDeviceFactory(). Also done at static initialisation; the
-/// C anchor gpucol_link_opencl_mesh_pipeline keeps this object file in a static libgpucol.
-void registerOpenClMeshPipeline();
-
 }  // namespace gpucol::opencl

@@ -67,30 +67,6 @@ std::vector<cl::Device> allDevices(std::vector<DeviceCandidate>& candidates) {
 
 // The probe of opencl_started.h: the chosen device's type from the device lists, once per filter (the lists
 // do not change while the process runs).
-bool probeChosenDeviceIsGpu(const std::string& configured) {
-  static std::mutex mutex;
-  static std::map<std::string, bool> answers;
-  const std::string filter = effectiveDeviceFilter(configured);
-  std::lock_guard<std::mutex> lock(mutex);
-  const auto found = answers.find(filter);
-  if (found != answers.end()) return found->second;
-  bool isGpu = false;
-  try {
-    std::vector<DeviceCandidate> candidates;
-    allDevices(candidates);
-    const std::optional<std::size_t> chosen = chooseDevice(candidates, filter);
-    isGpu = chosen && candidates[*chosen].isGpu;
-  } catch (const std::exception&) {
-    isGpu = false;  // A failing platform query: the caller stays on the CPU, as with no device.
-  }
-  answers[filter] = isGpu;
-  return isGpu;
-}
-
-const bool kProbeInstalled = [] {
-  chosenDeviceIsGpuProbe() = probeChosenDeviceIsGpu;
-  return true;
-}();
 
 /// CL_DEVICE_HOST_UNIFIED_MEMORY, deprecated since OpenCL 2.0: a driver that no longer answers it is taken
 /// to share the host's memory unless its device is a GPU.
@@ -124,6 +100,26 @@ std::string hexHash(const char* source) {
 }
 
 }  // namespace
+
+bool probeChosenDeviceIsGpu(const std::string& configured) {
+  static std::mutex mutex;
+  static std::map<std::string, bool> answers;
+  const std::string filter = effectiveDeviceFilter(configured);
+  std::lock_guard<std::mutex> lock(mutex);
+  const auto found = answers.find(filter);
+  if (found != answers.end()) return found->second;
+  bool isGpu = false;
+  try {
+    std::vector<DeviceCandidate> candidates;
+    allDevices(candidates);
+    const std::optional<std::size_t> chosen = chooseDevice(candidates, filter);
+    isGpu = chosen && candidates[*chosen].isGpu;
+  } catch (const std::exception&) {
+    isGpu = false;  // A failing platform query: the caller stays on the CPU, as with no device.
+  }
+  answers[filter] = isGpu;
+  return isGpu;
+}
 
 OpenClContext::OpenClContext(const std::string& filter) {
   translateClErrors("OpenCL setup", [&] {

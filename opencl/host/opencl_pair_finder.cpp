@@ -829,19 +829,4 @@ std::unique_ptr<PairFinder> makePairFinder(const Config& config, const OpenClPai
   return std::make_unique<OpenClPairFinder>(*context, tuning);
 }
 
-void registerOpenClPairFinder() {
-  gpucol::registerOpenClPairFinder([](const Config& config) { return makePairFinder(config); });
-}
-
-namespace {
-// Installs the factory when this object file is linked in (see registerOpenClPairFinder()).
-const bool kRegistered = (registerOpenClPairFinder(), true);
-}  // namespace
-
 }  // namespace gpucol::opencl
-
-/// Anchor with a plain C name: libgpucol's consumers link with --undefined=gpucol_link_opencl_pair_finder
-/// (plugin/CMakeLists.txt), which pulls this object file, and so its registration, out of a static library.
-extern "C" void gpucol_link_opencl_pair_finder() {
-  gpucol::opencl::registerOpenClPairFinder();
-}

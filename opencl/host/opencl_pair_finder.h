@@ -66,9 +66,4 @@ inline bool runsAreCells(std::uint64_t cells, std::uint64_t filled) {
 /// (said once on stderr by OpenClContext::tryGet); throws OpenClError when setup fails on a usable device.
 std::unique_ptr<PairFinder> makePairFinder(const Config& config, const OpenClPairFinderTuning& tuning = {});
 
-/// Installs makePairFinder as the factory behind gpucol::makeOpenClPairFinder. Also done at static
-/// initialisation; calling it from code that is linked in anyway (GridBroadphase) keeps the linker from
-/// dropping this object file out of a static library.
-void registerOpenClPairFinder();
-
 }  // namespace gpucol::opencl

@@ -946,15 +946,4 @@ TEST(GridPairFinder, DeterministicWhateverTheThreadCount) {
   EXPECT_EQ(many, one);
 }
 
-TEST(GridPairFinder, OpenClFactorySeam) {
-  // Without a registered factory there is no OpenCL finder; a registered one is what makeOpenCl returns.
-  gpucol::registerOpenClPairFinder(nullptr);
-  EXPECT_EQ(gpucol::makeOpenClPairFinder(gpucol::Config{}), nullptr);
-  gpucol::registerOpenClPairFinder([](const gpucol::Config&) { return gpucol::makeCpuPairFinder(); });
-  auto finder = gpucol::makeOpenClPairFinder(gpucol::Config{});
-  ASSERT_NE(finder, nullptr);
-  EXPECT_EQ(finder->name(), "cpu");
-  gpucol::registerOpenClPairFinder(nullptr);
-}
-
 }  // namespace

@@ -416,7 +416,7 @@ TEST(MeshPipeline, MeshesStayResidentUntilTheirLastOwnerIsGone) {
   GPUCOL_REQUIRE_OPENCL(context);
   Config config;
   config.meshBackend = Backend::OpenCL;
-  MeshBatchDevice* device = meshBatchDeviceFactory() ? meshBatchDeviceFactory()(config) : nullptr;
+  MeshBatchDevice* device = sharedMeshBatchDevice(config);
   ASSERT_NE(device, nullptr);
   MeshShape keep(sharedMesh(scenes::makeIcosphere(1.0f, 2)));
   const btTransform identity = btTransform::getIdentity();

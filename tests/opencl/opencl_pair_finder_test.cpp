@@ -512,9 +512,8 @@ TEST(OpenClPairFinder, FullSearchWhenTheGridOptionsOrMotionAreUnknown) {
   EXPECT_FALSE(search(density, moved.data(), "grid again").incremental);
 }
 
-TEST(OpenClPairFinder, IsInstalledBehindTheBroadphaseSeam) {
+TEST(OpenClPairFinder, IsWhatTheBroadphaseGetsWhereOpenClIsBuiltIn) {
   GPUCOL_REQUIRE_OPENCL(context);
-  registerOpenClPairFinder();
   std::unique_ptr<PairFinder> finder = gpucol::makeOpenClPairFinder(Config{});
   ASSERT_NE(finder, nullptr);
   EXPECT_EQ(finder->name(), "opencl");

@@ -1134,11 +1134,6 @@ std::size_t CpuPairFinder::scratchBytes() const {
   return bytes + (m_keptExtents.lo.capacity() + m_keptExtents.hi.capacity()) * 4 + m_slabs.bytes();
 }
 
-PairFinderFactory& openClFactory() {
-  static PairFinderFactory factory;
-  return factory;
-}
-
 }  // namespace
 
 void PairFinder::findCodedPairs(const ProxyArrays& proxies, const PairFinderOptions& options,
@@ -1155,14 +1150,7 @@ std::unique_ptr<PairFinder> makeCpuPairFinder() {
   return std::make_unique<CpuPairFinder>();
 }
 
-void registerOpenClPairFinder(PairFinderFactory factory) {
-  openClFactory() = std::move(factory);
-}
 
-std::unique_ptr<PairFinder> makeOpenClPairFinder(const Config& config) {
-  if (!openClFactory()) return nullptr;
-  return openClFactory()(config);
-}
 
 namespace detail {
 namespace {

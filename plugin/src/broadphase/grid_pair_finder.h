@@ -1,8 +1,8 @@
 #pragma once
 // The pair-finding stage of the grid broad phase (Avril et al. 2012, §3–§4) on plain types: AABBs in,
 // the sorted list of overlapping proxy pairs out. GridBroadphase (plugin/src/bullet) owns the Bullet side;
-// this file is the seam where the CPU implementation and the OpenCL one (opencl/host, registered through
-// registerOpenClPairFinder) plug in, and the contract both must meet bit for bit.
+// this file is the seam where the CPU implementation and the OpenCL one (opencl/host, built in with
+// GPUCOL_WITH_OPENCL) plug in, and the contract both must meet bit for bit.
 //
 // The stages, which the OpenCL kernels mirror one to one:
 //  0. Active proxies: slots with kProxyActive set; the rest are holes left by destroyed proxies.
@@ -306,13 +306,9 @@ class PairFinder {
 /// The CPU implementation (oneTBB), the reference the OpenCL path must match bit for bit.
 std::unique_ptr<PairFinder> makeCpuPairFinder();
 
-/// Makes an OpenCL pair finder for `config`, or returns nullptr when no device/setup is available.
-using PairFinderFactory = std::function<std::unique_ptr<PairFinder>(const Config& config)>;
-
-/// Installs the OpenCL factory (called once by opencl/host at static initialisation).
-void registerOpenClPairFinder(PairFinderFactory factory);
-
-/// Calls the installed OpenCL factory; nullptr when none is installed or it returned none.
+/// The OpenCL pair finder for `config` (opencl/host/opencl_pair_finder.h); nullptr when gpucol was built
+/// without OpenCL (GPUCOL_WITH_OPENCL) or no device is usable. Defined with the plugin's other entry into
+/// the OpenCL module, bullet/opencl_backends.cpp.
 std::unique_ptr<PairFinder> makeOpenClPairFinder(const Config& config);
 
 namespace detail {

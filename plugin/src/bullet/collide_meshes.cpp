@@ -555,8 +555,7 @@ bool collideOnDevice(const std::vector<MeshPairQuery>& queries, const Config& co
 
   MeshBatchDevice* device = nullptr;
   try {
-    const MeshBatchDeviceFactory& factory = meshBatchDeviceFactory();
-    device = factory ? factory(config) : nullptr;
+    device = sharedMeshBatchDevice(config);
   } catch (const std::exception& e) {
     warnOnce("mesh-opencl-setup",
              std::string("the OpenCL mesh pipeline failed to set up, using the CPU: ") + e.what());
@@ -566,7 +565,7 @@ bool collideOnDevice(const std::vector<MeshPairQuery>& queries, const Config& co
   if (device == nullptr) {
     if (config.meshBackend == Backend::OpenCL) {
       warnOnce("mesh-opencl-absent",
-               meshBatchDeviceFactory()
+               kBuiltWithOpenCl
                    ? "Backend::OpenCL was asked for mesh pairs, but no usable OpenCL device "
                      "was found: they run on the CPU"
                    : "Backend::OpenCL was asked for mesh pairs, but gpucol was built without "

@@ -1,8 +1,7 @@
 #pragma once
 // The seam between the mesh pair query (plugin/src/bullet/collide_meshes.cpp) and a device that runs the
-// middle and near phases of a whole batch at once (opencl/host/mesh_pipeline.cpp, registered through
-// meshBatchDeviceFactory()). The plugin does not depend on the OpenCL module: it asks the factory, and takes
-// its CPU path when none is installed or it returns none. Plain types only (no Bullet types): the plugin
+// middle and near phases of a whole batch at once (opencl/host/mesh_pipeline.cpp, built in with
+// GPUCOL_WITH_OPENCL). The plugin asks sharedMeshBatchDevice, and takes its CPU path when it returns none. Plain types only (no Bullet types): the plugin
 // prepares each pair's frame, the device returns candidates and hits, and the plugin turns those into
 // Bullet contacts and reduces them exactly as its CPU path does.
 #include <Eigen/Core>
@@ -128,14 +127,16 @@ class MeshBatchDevice {
   virtual std::size_t residentMeshes() const = 0;
 };
 
-/// Returns the shared device for `config` (one per device, living until the process ends), or nullptr when
-/// there is none; it says why once on stderr.
-using MeshBatchDeviceFactory = std::function<MeshBatchDevice*(const Config& config)>;
+/// True when gpucol was built with OpenCL (GPUCOL_WITH_OPENCL).
+#ifdef GPUCOL_WITH_OPENCL
+inline constexpr bool kBuiltWithOpenCl = true;
+#else
+inline constexpr bool kBuiltWithOpenCl = false;
+#endif
 
-/// The installed factory (empty until the OpenCL module installs one at static initialisation).
-inline MeshBatchDeviceFactory& meshBatchDeviceFactory() {
-  static MeshBatchDeviceFactory factory;
-  return factory;
-}
+/// The shared device for `config` (one per device, living until the process ends: opencl/host/
+/// mesh_pipeline.h), or nullptr when there is none (it says why once on stderr) or gpucol was built without
+/// OpenCL. Defined in bullet/opencl_backends.cpp.
+MeshBatchDevice* sharedMeshBatchDevice(const Config& config);
 
 }  // namespace gpucol
