@@ -237,38 +237,6 @@ TEST(ContactTriangleIds, MeshOnMeshInBothOrdersNameTheTouchingTriangles) {
   EXPECT_NE(boxIsObject0[0], boxIsObject0[1]);
 }
 
-TEST(ContactTriangleIds, MeshOnABvhOfTwoPartsNamesThePartAndTriangle) {
-  // A ground of two parts (two 4x4 m quads side by side, each two triangles): a box resting across the seam
-  // touches triangles of both parts.
-  static const float vertices[2][12] = {{-4, 0, -2, 0, 0, -2, 0, 0, 2, -4, 0, 2}, {0, 0, -2, 4, 0, -2, 4, 0, 2, 0, 0, 2}};
-  static const int faces[6] = {0, 2, 1, 0, 3, 2};
-  auto meshInterface = std::make_shared<btTriangleIndexVertexArray>();
-  for (int part = 0; part < 2; ++part) {
-    btIndexedMesh m;
-    m.m_numTriangles = 2;
-    m.m_triangleIndexBase = reinterpret_cast<const unsigned char*>(faces);
-    m.m_triangleIndexStride = 3 * sizeof(int);
-    m.m_numVertices = 4;
-    m.m_vertexBase = reinterpret_cast<const unsigned char*>(vertices[part]);
-    m.m_vertexStride = 3 * sizeof(float);
-    meshInterface->addIndexedMesh(m, PHY_INTEGER);
-  }
-  CallbackGuard guard;
-  test::TestWorld world(test::DispatchKind::Gpucol);
-  world.add(std::make_shared<btBvhTriangleMeshShape>(meshInterface.get(), true), 0, at(btVector3(0, 0, 0)));
-  btRigidBody* box = world.add(meshBox(0.5f, 2), 1, at(btVector3(0, 0.49f, 0.3f), 0.2f));
-  box->setCollisionFlags(box->getCollisionFlags() | btCollisionObject::CF_CUSTOM_MATERIAL_CALLBACK);
-  world.step(30);
-  const std::size_t checked = expectTouchingTriangles(0.02f, [](const btCollisionObject*) { return true; });
-  EXPECT_GT(checked, 4u);
-  bool parts[2] = {false, false};
-  for (const Seen& s : seen()) {
-    const int groundPart = isMesh(s.object0) ? s.part1 : s.part0;
-    if (groundPart == 0 || groundPart == 1) parts[groundPart] = true;
-  }
-  EXPECT_TRUE(parts[0] && parts[1]) << "the box across the seam touches both parts";
-}
-
 /// Two 4 x 4 m quads side by side at y = 0, each a part of two triangles, as Bullet's mesh interface.
 std::shared_ptr<btTriangleIndexVertexArray> twoPartGround() {
   static const float vertices[2][12] = {{-4, 0, -2, 0, 0, -2, 0, 0, 2, -4, 0, 2},
@@ -286,6 +254,25 @@ std::shared_ptr<btTriangleIndexVertexArray> twoPartGround() {
     meshInterface->addIndexedMesh(m, PHY_INTEGER);
   }
   return meshInterface;
+}
+
+TEST(ContactTriangleIds, MeshOnABvhOfTwoPartsNamesThePartAndTriangle) {
+  // A ground of two parts: a box resting across the seam touches triangles of both parts.
+  const auto meshInterface = twoPartGround();
+  CallbackGuard guard;
+  test::TestWorld world(test::DispatchKind::Gpucol);
+  world.add(std::make_shared<btBvhTriangleMeshShape>(meshInterface.get(), true), 0, at(btVector3(0, 0, 0)));
+  btRigidBody* box = world.add(meshBox(0.5f, 2), 1, at(btVector3(0, 0.49f, 0.3f), 0.2f));
+  box->setCollisionFlags(box->getCollisionFlags() | btCollisionObject::CF_CUSTOM_MATERIAL_CALLBACK);
+  world.step(30);
+  const std::size_t checked = expectTouchingTriangles(0.02f, [](const btCollisionObject*) { return true; });
+  EXPECT_GT(checked, 4u);
+  bool parts[2] = {false, false};
+  for (const Seen& s : seen()) {
+    const int groundPart = isMesh(s.object0) ? s.part1 : s.part0;
+    if (groundPart == 0 || groundPart == 1) parts[groundPart] = true;
+  }
+  EXPECT_TRUE(parts[0] && parts[1]) << "the box across the seam touches both parts";
 }
 
 TEST(ContactTriangleIds, GImpactMeshesNameTheirPartAndTriangleAsGImpactDoes) {

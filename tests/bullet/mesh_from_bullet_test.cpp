@@ -98,33 +98,25 @@ struct TwoKindsOfArrays {
     for (std::uint32_t i : torus.indices()) ints.push_back(int(i));
     for (float x : box.positions()) floats2.push_back(x - 3);
     for (std::uint32_t i : box.indices()) bytes.push_back(static_cast<unsigned char>(i));
-    btIndexedMesh p0;
-    p0.m_numTriangles = int(box.triangleCount());
-    p0.m_triangleIndexBase = reinterpret_cast<const unsigned char*>(shorts.data());
-    p0.m_triangleIndexStride = 3 * sizeof(unsigned short);
-    p0.m_numVertices = int(box.vertexCount());
-    p0.m_vertexBase = reinterpret_cast<const unsigned char*>(doubles.data());
-    p0.m_vertexStride = 3 * sizeof(double);
-    p0.m_vertexType = PHY_DOUBLE;
-    arrays.addIndexedMesh(p0, PHY_SHORT);
-    btIndexedMesh p1;
-    p1.m_numTriangles = int(torus.triangleCount());
-    p1.m_triangleIndexBase = reinterpret_cast<const unsigned char*>(ints.data());
-    p1.m_triangleIndexStride = 3 * sizeof(int);
-    p1.m_numVertices = int(torus.vertexCount());
-    p1.m_vertexBase = reinterpret_cast<const unsigned char*>(floats.data());
-    p1.m_vertexStride = 4 * sizeof(float);
-    p1.m_vertexType = PHY_FLOAT;
-    arrays.addIndexedMesh(p1, PHY_INTEGER);
-    btIndexedMesh p2;
-    p2.m_numTriangles = int(box.triangleCount());
-    p2.m_triangleIndexBase = bytes.data();
-    p2.m_triangleIndexStride = 3;
-    p2.m_numVertices = int(box.vertexCount());
-    p2.m_vertexBase = reinterpret_cast<const unsigned char*>(floats2.data());
-    p2.m_vertexStride = 3 * sizeof(float);
-    p2.m_vertexType = PHY_FLOAT;
-    arrays.addIndexedMesh(p2, PHY_UCHAR);
+    add(box.triangleCount(), shorts.data(), 3 * sizeof(unsigned short), PHY_SHORT, box.vertexCount(),
+        doubles.data(), 3 * sizeof(double), PHY_DOUBLE);
+    add(torus.triangleCount(), ints.data(), 3 * sizeof(int), PHY_INTEGER, torus.vertexCount(), floats.data(),
+        4 * sizeof(float), PHY_FLOAT);
+    add(box.triangleCount(), bytes.data(), 3, PHY_UCHAR, box.vertexCount(), floats2.data(), 3 * sizeof(float),
+        PHY_FLOAT);
+  }
+  /// Appends one part to `arrays`.
+  void add(std::size_t triangles, const void* indices, int indexStride, PHY_ScalarType indexType,
+           std::size_t vertices, const void* positions, int vertexStride, PHY_ScalarType vertexType) {
+    btIndexedMesh part;
+    part.m_numTriangles = int(triangles);
+    part.m_triangleIndexBase = static_cast<const unsigned char*>(indices);
+    part.m_triangleIndexStride = indexStride;
+    part.m_numVertices = int(vertices);
+    part.m_vertexBase = static_cast<const unsigned char*>(positions);
+    part.m_vertexStride = vertexStride;
+    part.m_vertexType = vertexType;
+    arrays.addIndexedMesh(part, indexType);
   }
   std::vector<double> doubles;
   std::vector<unsigned short> shorts;

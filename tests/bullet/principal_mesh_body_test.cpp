@@ -53,6 +53,13 @@ struct LCompound {
                            boxes[1].get());
     masses = {s * w, w * (s - w)};
   }
+  /// Bullet's principal frame and moments of the compound for a body of `mass` (the boxes' masses in
+  /// proportion to their volumes).
+  void principalAxes(btScalar mass, btTransform& principal, btVector3& inertia) {
+    const btScalar total = masses[0] + masses[1];
+    const btScalar scaled[2] = {masses[0] * mass / total, masses[1] * mass / total};
+    compound.calculatePrincipalAxisTransform(scaled, principal, inertia);
+  }
   std::unique_ptr<btBoxShape> boxes[2];
   btCompoundShape compound;
   std::array<btScalar, 2> masses{};
@@ -64,11 +71,9 @@ TEST(PrincipalMeshBody, MatchesBulletsPrincipalAxisTransformOfTheSameSolid) {
   const PrincipalMeshBody body = principalMeshBody(*shape, mass);
 
   LCompound reference;
-  const btScalar total = reference.masses[0] + reference.masses[1];
-  const btScalar masses[2] = {reference.masses[0] * mass / total, reference.masses[1] * mass / total};
   btTransform principal;
   btVector3 inertia;
-  reference.compound.calculatePrincipalAxisTransform(masses, principal, inertia);
+  reference.principalAxes(mass, principal, inertia);
 
   // The same centre of mass and the same moments (Bullet's come in an order of its own).
   EXPECT_LT((body.principal.getOrigin() - principal.getOrigin()).length(), 1e-5f);
@@ -138,11 +143,9 @@ TEST(PrincipalMeshBody, TumblesAsBulletsCompoundOfTheSameSolidDoes) {
   const btScalar mass = 3;
   const PrincipalMeshBody body = principalMeshBody(*shape, mass);
   LCompound reference;
-  const btScalar total = reference.masses[0] + reference.masses[1];
-  const btScalar masses[2] = {reference.masses[0] * mass / total, reference.masses[1] * mass / total};
   btTransform principal;
   btVector3 inertia;
-  reference.compound.calculatePrincipalAxisTransform(masses, principal, inertia);
+  reference.principalAxes(mass, principal, inertia);
   // Bullet's recipe: the children moved into the principal frame, the body placed at principal.
   btCompoundShape centred;
   for (int i = 0; i < 2; ++i) {
