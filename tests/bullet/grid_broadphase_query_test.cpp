@@ -227,17 +227,26 @@ TEST(GridBroadphaseQueries, IndexedQueriesReportWhatTheScanReports) {
     for (std::size_t i = 0; i < boxes.size(); i += 2) move(i);
     grid.calculateOverlappingPairs(nullptr);
     hits += checkQueries(grid, boxes, rng, 150, "half moved");
-    // Every box moves three times: more moves than the index has room to refile, so it is dropped, queries
-    // scan, then it is built again.
-    const gpucol::GridBroadphaseQueryStats beforeMoves = grid.queryStats();
+    // Every box moves three times: the index moves each box it filed by its min corner to its new cell and
+    // keeps the others aside (dropped and built again when they are too many).
     for (int round = 0; round < 3; ++round) {
       for (std::size_t i = 0; i < boxes.size(); ++i) move(i);
       grid.calculateOverlappingPairs(nullptr);
+      hits += checkQueries(grid, boxes, rng, 50, "all moved, round " + std::to_string(round));
     }
-    hits += checkQueries(grid, boxes, rng, 150, "all moved thrice");
+    // Every box grows to three times its size, beyond what the index reaches back by: it cannot follow
+    // them, so it is dropped, queries scan, then it is built again.
+    const gpucol::GridBroadphaseQueryStats beforeGrowth = grid.queryStats();
+    for (std::size_t i = 0; i < boxes.size(); ++i) {
+      const btVector3 c = (boxes[i].lo + boxes[i].hi) * 0.5f, h = (boxes[i].hi - boxes[i].lo) * 1.5f;
+      boxes[i].lo = c - h, boxes[i].hi = c + h;
+      grid.setAabb(boxes[i].proxy, boxes[i].lo, boxes[i].hi, nullptr);
+    }
+    grid.calculateOverlappingPairs(nullptr);
+    hits += checkQueries(grid, boxes, rng, 150, "all grown");
     const gpucol::GridBroadphaseQueryStats last = grid.queryStats();
-    EXPECT_GT(last.indexBuilds, beforeMoves.indexBuilds) << "so many moves should drop the index";
-    EXPECT_GE(last.scans, beforeMoves.scans + 6) << "queries after many moves should scan before the rebuild";
+    EXPECT_GT(last.indexBuilds, beforeGrowth.indexBuilds) << "boxes it cannot follow should drop the index";
+    EXPECT_GE(last.scans, beforeGrowth.scans + 6) << "queries after the drop should scan before the rebuild";
     EXPECT_GT(hits, 2000u) << "queries should hit something";
   }
 }
@@ -332,6 +341,16 @@ TEST(GridBroadphaseQueries, MovedBoxesAreRefiledWhereverTheyGo) {
     checkQueries(grid, boxes, rng, 200, "jumped");
     grid.calculateOverlappingPairs(nullptr);
     checkQueries(grid, boxes, rng, 100, "jumped, after a step");
+    // Then every box jumps, three times: cells fill beyond what they held at the build and empty again.
+    for (int round = 0; round < 3; ++round) {
+      for (QueryBox& b : boxes) {
+        const btVector3 by(jump * (unit(rng) - 0.5f), jump * (unit(rng) - 0.5f), jump * (unit(rng) - 0.5f));
+        b.lo += by, b.hi += by;
+        grid.setAabb(b.proxy, b.lo, b.hi, nullptr);
+      }
+      grid.calculateOverlappingPairs(nullptr);
+      checkQueries(grid, boxes, rng, 100, "all jumped, round " + std::to_string(round));
+    }
     EXPECT_EQ(grid.queryStats().indexBuilds, 1u) << "boxes of the filed size should be refiled";
   }
 }

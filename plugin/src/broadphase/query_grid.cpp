@@ -158,28 +158,71 @@ void QueryGrid::build(const ProxyArrays& p, const std::vector<std::uint32_t>& sl
     sum += count;
   }
   m_entries.resize(entries);
+  m_place.assign(p.count, kNone);
   for (std::size_t i = 0; i < binned.size(); ++i)
     forCells(filedRange(i), [&](std::uint64_t c) {
+      if (homeFiled[i]) m_homeCell[binned[i]] = std::uint32_t(c), m_place[binned[i]] = m_cellStart[c];
       m_entries[m_cellStart[c]++] = binned[i];
-      if (homeFiled[i]) m_homeCell[binned[i]] = std::uint32_t(c);
     });
   for (std::uint64_t c = cells; c > 0; --c) m_cellStart[c] = m_cellStart[c - 1];
   m_cellStart[0] = 0;
+  m_cellCount.resize(cells);
+  for (std::uint64_t c = 0; c < cells; ++c) m_cellCount[c] = m_cellStart[c + 1] - m_cellStart[c];
 }
 
 bool QueryGrid::refile(std::uint32_t id, const float lo[3], const float hi[3]) {
   if (!m_built || id >= m_homeCell.size() || m_homeCell[id] == kNone) return false;
   for (int a = 0; a < 3; ++a)
     if (!(lo[a] <= hi[a]) || !(double(hi[a]) - double(lo[a]) <= m_homeReach[a])) return false;
-  if (m_refiled.size() >= std::max<std::size_t>(m_entries.size(), kCellsSlack)) return false;
-  for (int a = 0; a < 3; ++a) m_lo[a] = std::min(m_lo[a], lo[a]), m_hi[a] = std::max(m_hi[a], hi[a]);
-  const std::uint64_t cell = cellAt(lo);
+  const std::uint32_t cell = std::uint32_t(cellAt(lo));
   if (cell == m_homeCell[id]) return true;
-  if (m_refiledHead.empty()) m_refiledHead.assign(m_grid.cells(), kNone);
-  m_refiled.push_back(Refiled{id, m_refiledHead[cell]});
-  m_refiledHead[cell] = std::uint32_t(m_refiled.size() - 1);
-  m_homeCell[id] = std::uint32_t(cell);
+  const bool full = m_cellCount[cell] == m_cellStart[cell + 1] - m_cellStart[cell];
+  if (full && m_place[id] != kNone && m_overflowed >= std::max<std::size_t>(m_entries.size(), kCellsSlack))
+    return false;
+  for (int a = 0; a < 3; ++a) m_lo[a] = std::min(m_lo[a], lo[a]), m_hi[a] = std::max(m_hi[a], hi[a]);
+  unfile(id);
+  fileHome(id, cell);
   return true;
+}
+
+void QueryGrid::unfile(std::uint32_t id) {
+  const std::uint32_t cell = m_homeCell[id], place = m_place[id];
+  if (place != kNone) {
+    // The cell's last entry in use takes the place, so the entries in use stay first.
+    const std::uint32_t last = m_cellStart[cell] + --m_cellCount[cell];
+    const std::uint32_t moved = m_entries[last];
+    m_entries[place] = moved;
+    if (moved != id) m_place[moved] = place;
+    m_entries[last] = kNone;
+  } else {
+    const std::uint32_t next = m_overflowNext[id], prev = m_overflowPrev[id];
+    (prev == kNone ? m_overflowHead[cell] : m_overflowNext[prev]) = next;
+    if (next != kNone) m_overflowPrev[next] = prev;
+    --m_overflowed;
+  }
+  m_homeCell[id] = kNone;
+}
+
+void QueryGrid::fileHome(std::uint32_t id, std::uint32_t cell) {
+  m_homeCell[id] = cell;
+  const std::uint32_t room = m_cellStart[cell + 1] - m_cellStart[cell];
+  if (m_cellCount[cell] < room) {
+    const std::uint32_t place = m_cellStart[cell] + m_cellCount[cell]++;
+    m_entries[place] = id;
+    m_place[id] = place;
+    return;
+  }
+  if (m_overflowHead.empty()) {
+    m_overflowHead.assign(m_cellCount.size(), kNone);
+    m_overflowNext.assign(m_homeCell.size(), kNone);
+    m_overflowPrev.assign(m_homeCell.size(), kNone);
+  }
+  const std::uint32_t first = m_overflowHead[cell];
+  m_overflowNext[id] = first, m_overflowPrev[id] = kNone;
+  if (first != kNone) m_overflowPrev[first] = id;
+  m_overflowHead[cell] = id;
+  m_place[id] = kNone;
+  ++m_overflowed;
 }
 
 std::uint64_t QueryGrid::cellAt(const float x[3]) const {
@@ -192,18 +235,20 @@ void QueryGrid::clear() {
   m_built = false;
   m_grid = Grid{};
   for (double& r : m_homeReach) r = 0;
-  std::vector<std::uint32_t>().swap(m_homeCell);
-  std::vector<std::uint32_t>().swap(m_refiledHead);
-  std::vector<Refiled>().swap(m_refiled);
-  std::vector<std::uint32_t>().swap(m_cellStart);
+  m_overflowed = 0;
+  for (std::vector<std::uint32_t>* v : {&m_homeCell, &m_place, &m_overflowHead, &m_overflowNext,
+                                        &m_overflowPrev, &m_cellStart, &m_cellCount})
+    std::vector<std::uint32_t>().swap(*v);
   std::vector<std::uint32_t>().swap(m_entries);
   std::vector<std::uint32_t>().swap(m_huge);
 }
 
 std::size_t QueryGrid::memoryBytes() const {
-  return (m_cellStart.capacity() + m_entries.capacity() + m_huge.capacity() + m_homeCell.capacity() +
-          m_refiledHead.capacity()) * sizeof(std::uint32_t) +
-         m_refiled.capacity() * sizeof(Refiled);
+  std::size_t words = 0;
+  for (const std::vector<std::uint32_t>* v : {&m_cellStart, &m_cellCount, &m_entries, &m_huge, &m_homeCell,
+                                              &m_place, &m_overflowHead, &m_overflowNext, &m_overflowPrev})
+    words += v->capacity();
+  return words * sizeof(std::uint32_t);
 }
 
 std::uint64_t QueryGrid::rowStart(std::uint32_t y, std::uint32_t z) const {
@@ -220,13 +265,15 @@ std::size_t QueryGrid::appendRow(std::uint32_t x0, std::uint32_t x1, std::uint32
                                  std::vector<std::uint32_t>& out, const CandidateTest& keep) const {
   const std::uint64_t row = rowStart(y, z);
   const std::uint32_t begin = m_cellStart[row + x0], end = m_cellStart[row + x1 + 1];
-  for (std::uint32_t e = begin; e < end; ++e)
-    if (keep(m_entries[e])) out.push_back(m_entries[e]);
+  for (std::uint32_t e = begin; e < end; ++e) {
+    const std::uint32_t id = m_entries[e];
+    if (id != kNone && keep(id)) out.push_back(id);
+  }
   std::size_t read = end - begin;
-  if (!m_refiledHead.empty())
+  if (m_overflowed != 0)
     for (std::uint64_t c = row + x0; c <= row + x1; ++c)
-      for (std::uint32_t e = m_refiledHead[c]; e != kNone; e = m_refiled[e].next, ++read)
-        if (keep(m_refiled[e].id)) out.push_back(m_refiled[e].id);
+      for (std::uint32_t id = m_overflowHead[c]; id != kNone; id = m_overflowNext[id], ++read)
+        if (keep(id)) out.push_back(id);
   return read;
 }
 

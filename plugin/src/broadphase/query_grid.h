@@ -41,11 +41,12 @@ class QueryGrid {
   /// Files the boxes of `slots` of `p` (not empty); boxes covering more than `hugeCellLimit` cells go to a
   /// list every query names.
   void build(const ProxyArrays& p, const std::vector<std::uint32_t>& slots, std::uint32_t hugeCellLimit);
-  /// Files `id` (a box of the last build, filed by its min corner) in the cell of its new box [lo, hi] too,
-  /// so that the index follows a box that moved without a rebuild. Returns false, changing nothing, when it
-  /// cannot: `id` was filed in every cell it overlapped, the new box is larger than the reach queries look
-  /// back by, inverted or not finite, or the index already holds as many refiled entries as boxes. The entry
-  /// in the old cell stays: a candidate is tested on its filed box (CandidateTest) before it is named.
+  /// Moves `id` (a box of the last build, filed by its min corner) to the cell of its new box [lo, hi], so
+  /// that the index follows a box that moved without a rebuild: into a free place of that cell's entries
+  /// (one left by a box that moved out) or, when it has none, onto the cell's overflow list. Returns false,
+  /// changing nothing, when it cannot: `id` was filed in every cell it overlapped, the new box is larger than
+  /// the reach queries look back by, inverted or not finite, or the overflow lists already hold as many boxes
+  /// as the entries.
   bool refile(std::uint32_t id, const float lo[3], const float hi[3]);
   /// Drops the index and its memory.
   void clear();
@@ -77,23 +78,33 @@ class QueryGrid {
   /// The cell holding point x (clamped to the grid).
   std::uint64_t cellAt(const float x[3]) const;
 
+  /// Takes `id` out of the cell it is filed in by its min corner (m_homeCell).
+  void unfile(std::uint32_t id);
+  /// Files `id` by its min corner in `cell`.
+  void fileHome(std::uint32_t id, std::uint32_t cell);
+
   static constexpr std::uint32_t kNone = 0xffffffffu;
-  /// An entry added by refile: the id and the next such entry of its cell (kNone ends the list).
-  struct Refiled {
-    std::uint32_t id;
-    std::uint32_t next;
-  };
 
   Grid m_grid;
   float m_lo[3] = {0, 0, 0};               // min corner of the filed boxes (refiled ones may lie beyond the
   float m_hi[3] = {0, 0, 0};               // grid's cells: cellOf clamps them into its edge cells), max corner
   double m_homeReach[3] = {0, 0, 0};       // largest extent of the boxes filed only in their min corner's cell
-  std::vector<std::uint32_t> m_cellStart;  // first entry per cell, plus the total at the end
-  std::vector<std::uint32_t> m_entries;    // slots by cell
+  // Entries by cell: cell c owns [m_cellStart[c], m_cellStart[c + 1]) of m_entries, its first
+  // m_cellCount[c] places in use, the rest kNone (left by boxes that moved out).
+  std::vector<std::uint32_t> m_cellStart;
+  std::vector<std::uint32_t> m_cellCount;
+  std::vector<std::uint32_t> m_entries;
   std::vector<std::uint32_t> m_huge;       // slots named by every query
-  std::vector<std::uint32_t> m_homeCell;   // per id: the cell it was last filed in by its min corner, or kNone
-  std::vector<std::uint32_t> m_refiledHead;  // per cell (once a box was refiled): first Refiled entry, or kNone
-  std::vector<Refiled> m_refiled;
+  // Per id filed by its min corner: its cell, and its place in m_entries (kNone: on the cell's overflow
+  // list); kNone for the others.
+  std::vector<std::uint32_t> m_homeCell;
+  std::vector<std::uint32_t> m_place;
+  // The overflow lists, doubly linked through the ids (made when a box first finds its new cell full):
+  // first id per cell, next and previous id per id (kNone ends a list).
+  std::vector<std::uint32_t> m_overflowHead;
+  std::vector<std::uint32_t> m_overflowNext;
+  std::vector<std::uint32_t> m_overflowPrev;
+  std::size_t m_overflowed = 0;            // ids on overflow lists
   bool m_built = false;
 };
 
