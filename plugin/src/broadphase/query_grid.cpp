@@ -194,6 +194,15 @@ void QueryGrid::unfile(std::uint32_t id) {
     m_entries[place] = moved;
     if (moved != id) m_place[moved] = place;
     m_entries[last] = kNone;
+    // A box on the cell's overflow list takes the freed place: queries read the lists only where cells
+    // hold more boxes than at the build.
+    if (m_overflowed != 0 && m_overflowHead[cell] != kNone) {
+      const std::uint32_t promoted = m_overflowHead[cell];
+      m_homeCell[id] = kNone;
+      unfile(promoted);
+      fileHome(promoted, cell);
+      return;
+    }
   } else {
     const std::uint32_t next = m_overflowNext[id], prev = m_overflowPrev[id];
     (prev == kNone ? m_overflowHead[cell] : m_overflowNext[prev]) = next;
