@@ -975,6 +975,89 @@ TEST(GridBroadphase, SmallScenesAtRestTestOnlyTheirGrownPairsWithAFilterCallback
   expectGrownPairsAnswerSmallScenes(&filter);
 }
 
+/// A larger scene at rest (1,000 boxes on a lattice, each overlapping its neighbours by 0.04 as Bullet's AABB
+/// margins make them, jiggling about its place every step by less than that), with now and then a box thrown
+/// far, a filter edited on its proxy, a proxy destroyed or created; then every box wanders (a random walk, so
+/// that pairs come and go). After every step the cache holds the brute-force pairs and the pairs that stay
+/// keep their cache entries; while the pile rests most steps search nothing (GridBroadphaseStats::boxesQuiet),
+/// and while it wanders few do. With and without a user's filter callback.
+void expectQuietBoxesAnswerLargerScenes(btOverlapFilterCallback* callback) {
+  gpucol::Config config;  // default bruteForceBelow: 1,000 boxes are a larger scene
+  gpucol::GridBroadphase bp(config);
+  btOverlappingPairCache* cache = bp.getOverlappingPairCache();
+  cache->setOverlapFilterCallback(callback);
+  btDefaultCollisionConfiguration configuration;
+  btCollisionDispatcher dispatcher(&configuration);
+  std::mt19937 rng(29);
+  std::uniform_real_distribution<float> jiggle(-0.004f, 0.004f);
+  const int count = 1000;
+  const btVector3 half(0.52f, 0.52f, 0.52f);
+  std::vector<Box> boxes(count);
+  std::vector<btVector3> place(count);
+  for (int i = 0; i < count; ++i) {
+    place[i] = btVector3(float(i % 10), float((i / 10) % 10), float(i / 100));
+    boxes[i].lo = place[i] - half, boxes[i].hi = place[i] + half;
+    if (i % 9 == 0) boxes[i].group = btBroadphaseProxy::StaticFilter, boxes[i].mask = ~btBroadphaseProxy::StaticFilter;
+    if (i % 13 == 0) boxes[i].group = 64, boxes[i].mask = 64 | btBroadphaseProxy::DefaultFilter;
+    addProxy(bp, boxes, i, &dispatcher);
+  }
+  int quietResting = 0, quietWandering = 0;
+  const int restSteps = 160, wanderSteps = 60;
+  for (int t = 0; t < restSteps + wanderSteps; ++t) {
+    const bool wandering = t >= restSteps;
+    for (int i = 0; i < cache->getNumOverlappingPairs(); ++i)
+      cache->getOverlappingPairArray()[i].m_internalTmpValue = 777;
+    const std::set<IdPair> before = cachePairs(cache);
+    for (int i = 0; i < count; ++i) {
+      Box& b = boxes[i];
+      if (!b.proxy) continue;
+      const btVector3 step(jiggle(rng), jiggle(rng), jiggle(rng));
+      if (wandering) place[i] += step;
+      const btVector3 c = wandering ? place[i] : place[i] + step;
+      b.lo = c - half, b.hi = c + half;
+      bp.setAabb(b.proxy, b.lo, b.hi, &dispatcher);
+    }
+    const int event = t % 40;
+    const int v = int(rng() % count);
+    Box& victim = boxes[std::size_t(v)];
+    if (event == 10 && victim.proxy) {  // thrown far, and it stays there
+      place[v] += btVector3(0, 30, 0);
+      victim.lo += btVector3(0, 30, 0), victim.hi += btVector3(0, 30, 0);
+      bp.setAabb(victim.proxy, victim.lo, victim.hi, &dispatcher);
+    } else if (event == 20 && victim.proxy) {  // a filter edited on the proxy, as Bullet code may
+      victim.group = victim.proxy->m_collisionFilterGroup = 64;
+      victim.mask = victim.proxy->m_collisionFilterMask = 64;
+    } else if (event == 30) {  // a proxy destroyed, or created again
+      if (victim.proxy) {
+        bp.destroyProxy(victim.proxy, &dispatcher);
+        victim.proxy = nullptr;
+      } else {
+        addProxy(bp, boxes, v, &dispatcher);
+      }
+    }
+    bp.calculateOverlappingPairs(&dispatcher);
+    (wandering ? quietWandering : quietResting) += bp.stats().boxesQuiet;
+    EXPECT_FALSE(bp.stats().grownPairsTested) << "step " << t << ": a larger scene has no grown pairs";
+    const std::set<IdPair> after = cachePairs(cache);
+    ASSERT_EQ(after, bruteForce(boxes, callback ? cache : nullptr)) << "step " << t;
+    for (int i = 0; i < cache->getNumOverlappingPairs(); ++i) {
+      const btBroadphasePair& p = cache->getOverlappingPairArray()[i];
+      if (before.count(idsOf(p))) EXPECT_EQ(p.m_internalTmpValue, 777) << "step " << t << ": a kept pair re-created";
+    }
+  }
+  EXPECT_GT(quietResting, restSteps * 3 / 4) << "a resting pile's steps should search nothing";
+  EXPECT_LT(quietWandering, wanderSteps / 2) << "wandering boxes leave their slacks";
+}
+
+TEST(GridBroadphase, LargerScenesAtRestSearchNothingWhileNoPairCanChange) {
+  expectQuietBoxesAnswerLargerScenes(nullptr);
+}
+
+TEST(GridBroadphase, LargerScenesAtRestSearchNothingWithAFilterCallback) {
+  OddSumFilter filter;
+  expectQuietBoxesAnswerLargerScenes(&filter);
+}
+
 /// Collects the client ids a ray or box query reports.
 struct Collect : btBroadphaseRayCallback {
   std::set<int> ids;

@@ -47,6 +47,7 @@ void QueryGrid::build(const ProxyArrays& p, const std::vector<std::uint32_t>& sl
                       std::uint32_t hugeCellLimit) {
   clear();
   m_built = true;
+  m_buildPeak = 0;
   PairFinderOptions options;
   options.hugeCellLimit = hugeCellLimit;
   std::vector<float> extents;
@@ -168,6 +169,8 @@ void QueryGrid::build(const ProxyArrays& p, const std::vector<std::uint32_t>& sl
   m_cellStart[0] = 0;
   m_cellCount.resize(cells);
   for (std::uint64_t c = 0; c < cells; ++c) m_cellCount[c] = m_cellStart[c + 1] - m_cellStart[c];
+  m_buildPeak = memoryBytes() + extents.capacity() * sizeof(float) + binned.capacity() * sizeof(std::uint32_t) +
+                extentBin.capacity() + homeFiled.capacity();
 }
 
 bool QueryGrid::refile(std::uint32_t id, const float lo[3], const float hi[3]) {

@@ -5,6 +5,7 @@
 // huge boxes by the same choice, grid_choice.h, paper §4.1). A query then visits the cells its region
 // reaches instead of every proxy. The index only names candidates, a superset of the answer (with
 // repeats): the caller runs its exact test on each, so the answer is exactly what testing every box gives.
+#include <algorithm>
 #include <cstddef>
 #include <cstdint>
 #include <vector>
@@ -65,6 +66,8 @@ class QueryGrid {
                        const CandidateTest& keep = CandidateTest()) const;
   /// Bytes held (capacities).
   std::size_t memoryBytes() const;
+  /// Bytes the last build held at its peak, its scratch included (capacities).
+  std::size_t buildPeakBytes() const { return std::max(m_buildPeak, memoryBytes()); }
 
  private:
   /// Index of the cell (0, y, z): the first cell of row (y, z).
@@ -105,6 +108,7 @@ class QueryGrid {
   std::vector<std::uint32_t> m_overflowNext;
   std::vector<std::uint32_t> m_overflowPrev;
   std::size_t m_overflowed = 0;            // ids on overflow lists
+  std::size_t m_buildPeak = 0;             // buildPeakBytes of the last build with boxes to file
   bool m_built = false;
 };
 

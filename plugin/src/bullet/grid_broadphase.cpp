@@ -34,6 +34,7 @@
 #include "broadphase/grid_choice.h"
 #include "broadphase/grid_pair_finder.h"
 #include "broadphase/grown_box_pairs.h"
+#include "broadphase/quiet_boxes.h"
 #include "broadphase/packed_pairs.h"
 #include "broadphase/pair_diff.h"
 #include "broadphase/query_grid.h"
@@ -88,6 +89,10 @@ constexpr std::uint32_t kScansBeforeIndex = 10;
 /// The index is dropped once more than this share of its boxes moved since it was built (the moved ones are
 /// tested one by one by every query).
 constexpr std::uint32_t kOffIndexShare = 8;  // 1/8
+/// What building a larger scene's quiet boxes takes at its peak per box beyond the boxes it keeps, a little
+/// more than measured (19-25 bytes, QueryGrid::buildPeakBytes): the query grid's cells, entries and places,
+/// its build's lists, and the list of boxes.
+constexpr std::size_t kQuietBuildBytesPerBox = 32;
 /// A query's candidates cost about this many proxies of a scan each (gathered, sorted, tested at random).
 constexpr std::uint32_t kScanPerCandidate = 4;
 /// An index that answered this many queries before the boxes moved it away marks a world that queries every
@@ -199,12 +204,15 @@ struct GridBroadphase::Impl {
   PackedPairs current;
   std::vector<std::uint64_t> refused;
 
-  // Small scenes on the CPU path: the pairs of the last search's grown boxes (GrownBoxPairs), kept while no
-  // proxy comes or goes, no filter changes and every box stays inside its grown box; a step then tests only
-  // those. A list that did not last one step makes the next lists wait (grownWait searches, doubling up to
-  // kGrownWaitMax), so scenes that keep moving do not pay for building them.
+  // What the last CPU search keeps for the steps after it, while no proxy comes or goes and no filter
+  // changes: a small scene the pairs of its grown boxes (GrownBoxPairs), tested instead of a search while
+  // every box stays inside its grown box; a large scene its boxes with their slacks (QuietBoxes): while
+  // every box stays within its slack, no pair changed and the step searches nothing. What did not last one
+  // step makes the next ones wait (grownWait searches, doubling up to kGrownWaitMax), so scenes that keep
+  // moving do not pay for building them.
   GrownBoxPairs grown;
-  std::uint32_t grownReuses = 0;  // steps answered from the kept list since it was built
+  QuietBoxes quiet;
+  std::uint32_t grownReuses = 0;  // steps answered from what was kept since it was built
   std::uint32_t grownWait = 0, grownWaitLeft = 0;
   static constexpr std::uint32_t kGrownWaitMax = 64;
   std::vector<std::uint64_t> grownFound;  // scratch of a step answered from the list
@@ -606,7 +614,7 @@ struct GridBroadphase::Impl {
 
   void setInverted(std::uint32_t s, bool value) {
     if (bool(state[s] & kInverted) == value) return;
-    dropGrownPairs();
+    dropKeptSearch();
     state[s] = std::uint8_t(value ? state[s] | kInverted : state[s] & ~kInverted);
     invertedCount += value ? 1 : -1;
     nonFiniteChanged = true;  // a life change for the finder, as a box turning non-finite
@@ -645,22 +653,88 @@ struct GridBroadphase::Impl {
     foundCoded.assign(merged, !PackedPairs::worthCoding(merged.size(), slotCount));
   }
 
-  /// The kept grown pairs no longer answer for the scene (GrownBoxPairs::clear).
-  void dropGrownPairs() {
-    if (!grown.kept()) return;
+  /// What the last search kept (grown pairs or quiet boxes) no longer answers for the scene.
+  void dropKeptSearch() {
+    if (!grown.kept() && !quiet.kept()) return;
     grown.clear();
+    quiet.clear();
     grownWait = grownReuses > 0 ? 0 : std::min(kGrownWaitMax, 2 * grownWait + 1);
     grownWaitLeft = grownWait;
   }
 
-  /// After a full CPU search of a small scene, the grown pairs for the next steps (`view` is the search's).
-  void keepGrownPairs(const ProxyArrays& view) {
+  /// After a full CPU search, what answers the next steps while boxes move little (`view` is the
+  /// search's): a small scene's grown pairs; for a larger one, true when its quiet boxes are due, built
+  /// by keepQuietBoxes once the step is done.
+  bool keepSearch(const ProxyArrays& view) {
     if (grownWaitLeft > 0) {
       --grownWaitLeft;
-      return;
+      return false;
     }
-    grown.build(view);
+    if (liveCount < options().bruteForceBelow) {
+      grown.build(view);
+      grownReuses = 0;
+      return false;
+    }
+    return kProxyBoxesAreFloats;
+  }
+
+  /// At the end of a larger scene's step whose search changed no pair (a pile at rest, its boxes nudged by
+  /// the solver), its boxes and their slacks for the next steps; built from the proxies once the step's
+  /// scratch is gone, so that its peak stays below the search's. Returns the build's peak beyond what it
+  /// keeps.
+  std::size_t keepQuietBoxes(std::size_t pairs) {
+    // Only where the memory bound leaves room (100 bytes per proxy and 8 per pair at a step's peak;
+    // measured-results, "Broad phase"): the boxes with their slacks, and the query grid's build.
+    const std::size_t room = 100 * std::size_t(liveCount) + 8 * pairs;
+    const std::size_t need = heldBytes() + std::size_t(slotCount) * (sizeof(BoxCorners) + sizeof(float)) +
+                             std::size_t(liveCount) * kQuietBuildBytesPerBox;
+    if (need > room) return 0;
+    std::vector<std::uint32_t> slots;
+    slots.reserve(liveCount);
+    for (std::uint32_t s = 0; s < slotCount; ++s)
+      if (visible(s)) slots.push_back(s);
+    quiet.build(
+        slotCount, slots, [&](std::uint32_t s) { return floatBoxHolding(proxy(s)); }, group.data(), mask.data(),
+        internalOptions.hugeCellLimit);
     grownReuses = 0;
+    return quiet.buildScratchBytes() + slots.capacity() * sizeof(std::uint32_t);
+  }
+
+  /// A step of a large scene whose boxes all stayed within their slacks: no pair changed, so nothing is
+  /// searched and the cache keeps its pairs (but those its filter refused, offered again as a search would).
+  /// Returns false, having done nothing but drop the quiet boxes, when a filter changed (a full search
+  /// follows).
+  bool answerQuietly(btDispatcher* dispatcher, GridBroadphaseStats& st) {
+    if (cacheFiltersByGroupAndMask(*pairCache) != finderFilters) {
+      dropKeptSearch();
+      return false;
+    }
+    const auto start = std::chrono::steady_clock::now();
+    // A filter edited on a proxy is found here, as the scan would find it.
+    for (std::uint32_t s = 0; s < slotCount; ++s) {
+      if (!(state[s] & kLive)) continue;
+      const GridProxy& p = proxy(s);
+      if (group[s] != p.m_collisionFilterGroup || mask[s] != p.m_collisionFilterMask) {
+        dropKeptSearch();
+        return false;
+      }
+    }
+    const auto cacheStart = std::chrono::steady_clock::now();
+    ++grownReuses;
+    st.boxesQuiet = true;
+    st.overlappingPairs = current.size();
+    st.searchMs = std::chrono::duration<double, std::milli>(cacheStart - start).count();
+    if (!refused.empty()) {
+      foundCoded.assign(current.toVector());
+      diffAndUpdateCache(dispatcher, st);
+      for (auto* v : {&addedKeys, &removedKeys}) std::vector<std::uint64_t>().swap(*v);
+    }
+    dirty = false;
+    st.memoryBytes = st.peakBytes = heldBytes();
+    st.cacheMs =
+        std::chrono::duration<double, std::milli>(std::chrono::steady_clock::now() - cacheStart).count();
+    stats = st;
+    return true;
   }
 
   /// A step of a small scene whose boxes all stayed inside their grown boxes: the kept pairs are tested on
@@ -668,7 +742,7 @@ struct GridBroadphase::Impl {
   /// drop the list, when a filter changed since (a full search follows).
   bool answerFromGrownPairs(btDispatcher* dispatcher, GridBroadphaseStats& st) {
     if (cacheFiltersByGroupAndMask(*pairCache) != finderFilters) {
-      dropGrownPairs();
+      dropKeptSearch();
       return false;
     }
     const auto start = std::chrono::steady_clock::now();
@@ -685,7 +759,7 @@ struct GridBroadphase::Impl {
         },
         grownFound);
     if (filterEdited) {
-      dropGrownPairs();
+      dropKeptSearch();
       return false;
     }
     const auto cacheStart = std::chrono::steady_clock::now();
@@ -715,7 +789,7 @@ struct GridBroadphase::Impl {
 
   void setNonFinite(std::uint32_t s, bool value) {
     if (bool(state[s] & kNonFinite) == value) return;
-    dropGrownPairs();
+    dropKeptSearch();
     state[s] = std::uint8_t(value ? state[s] | kNonFinite : state[s] & ~kNonFinite);
     nonFiniteCount += value ? 1 : -1;
     nonFiniteChanged = true;
@@ -793,7 +867,7 @@ struct GridBroadphase::Impl {
     std::size_t bytes = blockCount() * kBlockSize * sizeof(GridProxy) + (blocks ? blocks->tableBytes() : 0);
     bytes += (group.capacity() + mask.capacity() + acceptAll.capacity()) * sizeof(std::int32_t) + state.capacity();
     bytes += (freeSlots.capacity() + pendingFree.capacity()) * sizeof(std::uint32_t);
-    bytes += current.bytes() + refused.capacity() * sizeof(std::uint64_t) + grown.bytes() +
+    bytes += current.bytes() + refused.capacity() * sizeof(std::uint64_t) + grown.bytes() + quiet.bytes() +
              grownFound.capacity() * sizeof(std::uint64_t);
     for (const PairFinder* f : {cpuFinder.get(), openClFinder.get()})
       if (f) bytes += f->stats().scratchBytes;
@@ -836,7 +910,7 @@ btBroadphaseProxy* GridBroadphase::createProxy(const btVector3& aabbMin, const b
     d.growSlots();
     d.group.push_back(0), d.mask.push_back(0), d.state.push_back(0);
   }
-  d.dropGrownPairs();
+  d.dropKeptSearch();
   GridProxy& p = d.proxy(slot);
   static_cast<btBroadphaseProxy&>(p) =
       btBroadphaseProxy(aabbMin, aabbMax, userPtr, collisionFilterGroup, collisionFilterMask);
@@ -864,7 +938,7 @@ void GridBroadphase::destroyProxy(btBroadphaseProxy* proxy, btDispatcher* dispat
   // Its pairs leave the cache now (algorithms and manifolds freed through the dispatcher); the keys in
   // `current` are dropped at the next search, and the slot is reused only after that search.
   d.pairCache->removeOverlappingPairsContainingProxy(proxy, dispatcher);
-  d.dropGrownPairs();
+  d.dropKeptSearch();
   if (Impl::flagsOf(d.group[slot]) & kProxyStatic) --d.staticCount;
   d.setNonFinite(slot, false);
   d.setInverted(slot, false);
@@ -891,10 +965,10 @@ void GridBroadphase::setAabb(btBroadphaseProxy* proxy, const btVector3& aabbMin,
   d.store(s, aabbMin, aabbMax);
   d.boxChanged(s);
   d.dirty = true;
-  if (d.grown.kept()) {
+  if (d.grown.kept() || d.quiet.kept()) {
     const float lo[3] = {float(aabbMin.x()), float(aabbMin.y()), float(aabbMin.z())};
     const float hi[3] = {float(aabbMax.x()), float(aabbMax.y()), float(aabbMax.z())};
-    if (!d.grown.holds(s, lo, hi)) d.dropGrownPairs();
+    if (d.grown.kept() ? !d.grown.holds(s, lo, hi) : !d.quiet.holds(s, lo, hi)) d.dropKeptSearch();
   }
 }
 
@@ -985,6 +1059,7 @@ void GridBroadphase::calculateOverlappingPairs(btDispatcher* dispatcher) {
   st.proxies = d.liveCount;
   st.staticProxies = d.staticCount;
   if (d.dirty && d.grown.kept() && d.answerFromGrownPairs(dispatcher, st)) return;
+  if (d.dirty && d.quiet.kept() && d.answerQuietly(dispatcher, st)) return;
   // When a box already changed, the scan fills the finder's view as it goes (a filter it finds changed is
   // marked moved there); otherwise it only looks for filter changes, and the view is filled when it found
   // one. A second filling scan would find the moved marks cleared by the first.
@@ -1036,10 +1111,11 @@ void GridBroadphase::calculateOverlappingPairs(btDispatcher* dispatcher) {
   }
   PairFinder& finder = *chosen;
   const auto cacheStart = std::chrono::steady_clock::now();
-  if (&finder == d.cpuFinder.get() && d.liveCount < d.options().bruteForceBelow && d.invertedCount == 0)
-    d.keepGrownPairs(view);
+  bool quietDue = false;
+  if (&finder == d.cpuFinder.get() && d.invertedCount == 0)
+    quietDue = d.keepSearch(view);
   else
-    d.dropGrownPairs();
+    d.dropKeptSearch();
   st.searchMs = std::chrono::duration<double, std::milli>(cacheStart - searchStart).count();
   if (d.autoMeasuring) {
     d.autoChoice.record(
@@ -1095,6 +1171,11 @@ void GridBroadphase::calculateOverlappingPairs(btDispatcher* dispatcher) {
   st.peakBytes = std::max({startBytes, before + outputBytes + stepBytes, before + foundBytes + listBytes,
                            before + listBytes + changeBytes});
   for (auto* v : {&d.addedKeys, &d.removedKeys}) std::vector<std::uint64_t>().swap(*v);
+  if (quietDue && st.added == 0 && st.removed == 0) {
+    const std::size_t scratch = d.keepQuietBoxes(st.overlappingPairs);
+    st.memoryBytes = d.heldBytes();
+    st.peakBytes = std::max(st.peakBytes, st.memoryBytes + scratch);
+  }
   st.cacheMs =
       std::chrono::duration<double, std::milli>(std::chrono::steady_clock::now() - cacheStart).count();
   d.stats = st;
