@@ -15,7 +15,7 @@
 
 #include "bench_commands.h"
 #include "bench_stats.h"
-#include "bullet/mesh_device_backend.h"
+#include "mesh_pairs/mesh_device_backend.h"
 #include "scenes/gimpact_peer.h"
 
 namespace gpucol::bench {

@@ -5,13 +5,14 @@
 #include <utility>
 
 #include "opencl/host/device_array.h"
+#include "sorting/radix_sort.h"
 
 namespace gpucol::opencl {
 
 namespace {
 
 /// Widest digit: 8192 counters (32 KiB) per pass, as the CPU path's candidate sort (tree_traversal.cpp). The
-/// key's bits are split into the fewest passes of at most this width, all counted in one sweep. 400 sorts of
+/// key's bits are split into the fewest passes of at most this width (RadixDigits). 400 sorts of
 /// random keys, medians of two runs: 17,667 keys of 34 bits (an armadillo-99976 pair's) 94.5-95.7 us in three
 /// passes of 12 bits against 102.6-103.2 in four of 9 with an 11-bit limit; 35,792 of 38 bits
 /// (armadillo-399904) 213.3-213.6 us in three of 13 against 209.7-212.4 in four of 10.
@@ -44,30 +45,10 @@ void MeshHostSort::sortAndRank(const std::vector<std::uint64_t>& keys, unsigned 
   m_packed.resize(n);
   m_scratch.resize(n);
   for (std::size_t i = 0; i < n; ++i) m_packed[i] = (keys[i] << indexBits) | i;
-  const unsigned passes = (keyBits + kMaxDigitBits - 1) / kMaxDigitBits;
-  const unsigned digitBits = passes == 0 ? 0 : (keyBits + passes - 1) / passes;
-  const std::size_t buckets = std::size_t(1) << digitBits;
-  const std::uint64_t digitMask = buckets - 1;
-  m_counts.assign(passes * buckets, 0);
-  for (std::uint64_t w : m_packed) {
-    const std::uint64_t key = w >> indexBits;
-    for (unsigned p = 0; p < passes; ++p) ++m_counts[p * buckets + ((key >> (p * digitBits)) & digitMask)];
-  }
-  for (unsigned p = 0; p < passes; ++p) {
-    std::uint32_t* count = m_counts.data() + p * buckets;
-    const unsigned shift = indexBits + p * digitBits;
-    // A digit shared by every word (the pair bits of a one-pair batch, the high bits of small meshes) leaves
-    // the order as it is: the pass is skipped.
-    if (count[(m_packed[0] >> shift) & digitMask] == n) continue;
-    std::uint32_t offset = 0;
-    for (std::size_t d = 0; d < buckets; ++d) {
-      const std::uint32_t here = count[d];
-      count[d] = offset;
-      offset += here;
-    }
-    for (std::uint64_t w : m_packed) m_scratch[count[(w >> shift) & digitMask]++] = w;
+  const RadixDigits digits(keyBits, kMaxDigitBits);
+  m_counts.resize(digits.buckets());
+  if (radixSort(m_packed.data(), m_scratch.data(), n, indexBits, digits, m_counts.data()) != m_packed.data())
     std::swap(m_packed, m_scratch);
-  }
   const std::uint64_t indexMask = (std::uint64_t(1) << indexBits) - 1;
   for (std::size_t p = 0; p < n; ++p) {
     sorted[p] = m_packed[p] >> indexBits;

@@ -12,9 +12,9 @@ namespace gpucol::opencl {
 class MeshHostSort {
  public:
   /// Writes `keys` ascending to `sorted` and, for every i, `rank[i]` = the place of keys[i] in `sorted`
-  /// (equal keys keep their input order). Every key must be below 2^keyBits (keyBits <= 64). An LSD radix
-  /// sort on the key's digits of key and index packed in one 64-bit word when they fit (keyBits + index bits
-  /// <= 64); otherwise a comparison sort of (key, index).
+  /// (equal keys keep their input order). Every key must be below 2^keyBits (keyBits <= 64). The radix sort
+  /// of sorting/radix_sort.h on the key's digits of key and index packed in one 64-bit word when they fit
+  /// (keyBits + index bits <= 64); otherwise a comparison sort of (key, index).
   void sortAndRank(const std::vector<std::uint64_t>& keys, unsigned keyBits,
                    std::vector<std::uint64_t>& sorted, std::vector<std::uint32_t>& rank);
 

@@ -254,12 +254,12 @@ void OpenClMeshPipeline::runBatch(const std::vector<DeviceMeshPair>& pairs,
     treeDepths = std::max(treeDepths, in.treeA->depth() + in.treeB->depth());
     smallerTriangles += std::min(in.meshA->triangleCount(), in.meshB->triangleCount());
     GpucolMeshPair& p = m_hostPairs[i];
-    writeBoxMap(boxMapIntoA(*in.treeB, in.treeMap, in.reach.inA), p.intoA);
-    writeBoxMap(boxMapIntoB(*in.treeA, in.treeMap, in.reach.inB), p.intoB);
+    writeBoxMap(boxMapIntoA(*in.treeB, in.frame.treeMap, in.frame.candidateReach.inA), p.intoA);
+    writeBoxMap(boxMapIntoB(*in.treeA, in.frame.treeMap, in.frame.candidateReach.inB), p.intoB);
     for (int r = 0; r < 3; ++r) {
-      for (int c = 0; c < 3; ++c) p.bLinear[3 * r + c] = in.bLinear(r, c);
-      p.bTranslation[r] = in.bTranslation(r);
-      p.scaleA[r] = in.scaleA(r);
+      for (int c = 0; c < 3; ++c) p.bLinear[3 * r + c] = in.frame.bLinear(r, c);
+      p.bTranslation[r] = in.frame.bTranslation(r);
+      p.scaleA[r] = in.frame.scaleA(r);
     }
     p.nodesA = slotA.nodes;
     p.nodesB = slotB.nodes;
@@ -267,8 +267,8 @@ void OpenClMeshPipeline::runBatch(const std::vector<DeviceMeshPair>& pairs,
     p.entriesB = slotB.entries;
     p.trianglesA = slotA.triangles;
     p.trianglesB = slotB.triangles;
-    p.flipA = in.flipA ? 1u : 0u;
-    p.flipB = in.flipB ? 1u : 0u;
+    p.flipA = in.frame.flipA ? 1u : 0u;
+    p.flipB = in.frame.flipB ? 1u : 0u;
   }
   const unsigned bitsA = indexBits(maxTrianglesA);
   const unsigned bitsB = indexBits(maxTrianglesB);

@@ -1,6 +1,6 @@
 #pragma once
 
-#include "bvh/mesh_batch_device.h"
+#include "mesh_pairs/mesh_batch_device.h"
 #include "gpucol/config.h"
 
 namespace gpucol::opencl {

@@ -448,7 +448,7 @@ void mesh_count_tests(__global uint* counters, uint tests) {
 
 // The fused near test reads a candidate's two triangles from the soup when its batch is flushed, up to
 // GPUCOL_DFS_BATCH candidates later: asking for them when the candidate is found overlaps those cache misses
-// (the soup of a 400K-triangle mesh is 14 MB) with the traversal, as collide_meshes.cpp's kSoupAhead does.
+// (the soup of a 400K-triangle mesh is 14 MB) with the traversal, as cpu_mesh_pair.cpp's kSoupAhead does.
 // A triangle's 36 bytes may straddle two cache lines, so both are asked for.
 #if defined(GPUCOL_FUSED_NEAR) && defined(GPUCOL_CPU_PREFETCH)
 #define GPUCOL_PREFETCH_TRIANGLE(t)             \

@@ -6,7 +6,7 @@
 // triangle_test.h (one pair) and triangle_lanes.h (four pairs in double4 lanes), double arithmetic on the float
 // input (cl_khr_fp64, which the host checks), no contraction, so the device decides every pair as the CPU does
 // and its contacts carry the same bits. The triangles are built in A's scaled frame as
-// plugin/src/bullet/collide_meshes.cpp builds them.
+// plugin/src/mesh_pairs/cpu_mesh_pair.cpp builds them.
 //
 // The early-out (mesh_near_filter_test) comes first in the same kernel: the CPU's float plane and interval
 // tests (plugin/src/shared_math/triangle_pretest.h, their error bounds proven there), straight-line code on
@@ -34,7 +34,7 @@ GPUCOL_INLINE void mesh_corner(__global const float* soup, uint triangle, int c,
 }
 
 // Triangles triangleA of A and triangleB of B of pair `p` (a private copy) in A's scaled frame, in float, as
-// collide_meshes.cpp builds them. Its loops are unrolled: left as loops, PoCL vectorised them (two floats
+// cpu_mesh_pair.cpp builds them. Its loops are unrolled: left as loops, PoCL vectorised them (two floats
 // wide) inside each work-item, and the loop over the work-items, no longer innermost, stayed scalar.
 GPUCOL_INLINE void mesh_pair_triangles(const GpucolMeshPair* p, __global const float* soup,
                                        const uint triangleA, const uint triangleB, float af[3][3],

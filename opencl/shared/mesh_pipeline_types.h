@@ -20,10 +20,11 @@ typedef struct GpucolBoxMap {
   float inflation[3];
 } GpucolBoxMap;
 
-/* One mesh pair of a batch. Matrices are row-major. The traversal tests boxes in both frames, as the CPU's
-   does: B's boxes carried into A's unscaled mesh frame (intoA) and A's into B's (intoB); the near phase
-   builds A's triangles in A's scaled frame (scaleA, flipA) and carries B's in (bLinear, bTranslation, flipB),
-   as plugin/src/bullet/collide_meshes.cpp does. The offsets place each mesh in the resident arenas. */
+/* One mesh pair of a batch: the device's layout of the pair's frame (PairFrame, plugin/src/mesh_pairs/
+   pair_frame.h, which opencl/host/mesh_pipeline.cpp writes here) and the pair's place in the resident
+   arenas. Matrices are row-major. The traversal tests boxes in both frames, as the CPU's does: B's boxes
+   carried into A's unscaled mesh frame (intoA) and A's into B's (intoB); the near phase builds A's triangles
+   in A's scaled frame (scaleA, flipA) and carries B's in (bLinear, bTranslation, flipB), as the CPU's does. */
 typedef struct GpucolMeshPair {
   GpucolBoxMap intoA;
   GpucolBoxMap intoB;

@@ -14,7 +14,7 @@
 #include <random>
 #include <vector>
 
-#include "bullet/mesh_device_backend.h"
+#include "mesh_pairs/mesh_device_backend.h"
 #include "opencl/opencl_test_device.h"
 #include "opencl/shared/mesh_pipeline_types.h"
 #include "scenes/gimpact_peer.h"

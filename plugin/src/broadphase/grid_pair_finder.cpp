@@ -23,6 +23,7 @@
 #include "shared_math/pair_mapping.h"
 #include "broadphase/slab_search.h"
 #include "memory/large_array_allocator.h"
+#include "sorting/radix_sort.h"
 
 namespace gpucol {
 namespace {
@@ -130,17 +131,15 @@ inline std::uint32_t atomicAdd(std::uint32_t& counter, std::uint32_t value) {
 /// Keys below which sortPairs compares instead (as fast there, and without the radix sort's memory).
 constexpr std::size_t kComparisonSortBelow = 512;
 
-/// Sorts pair keys (lower slot << 32 | higher slot, both below 2^slotBits) ascending: an LSD radix sort of
-/// the 2 x slotBits significant bits in 11-bit digits, using `scratch` as the second buffer and `offsets`
-/// for the digit counts (up to 256 KB; the caller counts and frees both with its scratch). Each pass is
-/// parallel over kSortChunks fixed chunks (a histogram per chunk, then each chunk scatters its keys in order
-/// to its own offsets), so the passes are stable and the result does not depend on threads (the serial form
-/// was several times slower at 1M boxes). Faster than a comparison sort here (a pair list is a few keys
-/// per proxy and slots are dense), and the result is the sorted list whatever the input order.
+/// Sorts pair keys (lower slot << 32 | higher slot, both below 2^slotBits) ascending with the radix sort of
+/// sorting/radix_sort.h on the 2 x slotBits significant bits, in digits of at most 11 bits, using `scratch`
+/// as the second buffer and `offsets` for the digit counts (up to 256 KB; the caller counts and frees both
+/// with its scratch). Each pass is parallel over kSortChunks fixed chunks (the serial form was several times
+/// slower at 1M boxes). Faster than a comparison sort here (a pair list is a few keys per proxy and slots are
+/// dense), and the result is the sorted list whatever the input order.
 void sortPairs(std::vector<std::uint64_t>& keys, std::vector<std::uint64_t>& scratch,
                std::vector<std::size_t>& offsets, std::uint32_t slotBits) {
-  constexpr int kDigitBits = 11;
-  constexpr std::size_t kBuckets = std::size_t(1) << kDigitBits;
+  constexpr unsigned kMaxDigitBits = 11;
   const std::size_t n = keys.size();
   if (n < kComparisonSortBelow) {
     // A few keys (the pairs of a handful of moved proxies): no second buffer and no 16 KB digit table.
@@ -152,36 +151,21 @@ void sortPairs(std::vector<std::uint64_t>& keys, std::vector<std::uint64_t>& scr
   auto forChunks = [&](auto&& f) {
     tbb::parallel_for(std::size_t(0), chunks, [&](std::size_t c) {
       const std::size_t begin = c * chunk, end = std::min(n, begin + chunk);
-      if (begin < end) f(c, begin, end);
+      if (begin < end) f(begin, end);
     });
   };
   // Compact (a, b) to (a << slotBits) | b so that every pass sorts significant bits.
-  forChunks([&](std::size_t, std::size_t begin, std::size_t end) {
+  forChunks([&](std::size_t begin, std::size_t end) {
     for (std::size_t i = begin; i < end; ++i)
       keys[i] = ((keys[i] >> 32) << slotBits) | (keys[i] & 0xffffffffu);
   });
   scratch.resize(n);
-  offsets.resize(chunks * kBuckets);
-  std::size_t* const offset = offsets.data();
-  const int bits = 2 * int(slotBits);
-  for (int shift = 0; shift < bits; shift += kDigitBits) {
-    forChunks([&](std::size_t c, std::size_t begin, std::size_t end) {
-      std::size_t* count = offset + c * kBuckets;
-      std::fill(count, count + kBuckets, std::size_t(0));
-      for (std::size_t i = begin; i < end; ++i) ++count[(keys[i] >> shift) & (kBuckets - 1)];
-    });
-    std::size_t sum = 0;  // digit-major, chunk-minor: the chunks of one digit follow each other in order
-    for (std::size_t d = 0; d < kBuckets; ++d)
-      for (std::size_t c = 0; c < chunks; ++c) sum += std::exchange(offset[c * kBuckets + d], sum);
-    forChunks([&](std::size_t c, std::size_t begin, std::size_t end) {
-      std::size_t* next = offset + c * kBuckets;
-      for (std::size_t i = begin; i < end; ++i)
-        scratch[next[(keys[i] >> shift) & (kBuckets - 1)]++] = keys[i];
-    });
+  const RadixDigits digits(2 * slotBits, kMaxDigitBits);
+  offsets.resize(chunks * digits.buckets());
+  if (radixSort(keys.data(), scratch.data(), n, 0, digits, offsets.data(), chunks) != keys.data())
     keys.swap(scratch);
-  }
   const std::uint64_t low = (std::uint64_t(1) << slotBits) - 1;
-  forChunks([&](std::size_t, std::size_t begin, std::size_t end) {
+  forChunks([&](std::size_t begin, std::size_t end) {
     for (std::size_t i = begin; i < end; ++i) keys[i] = ((keys[i] >> slotBits) << 32) | (keys[i] & low);
   });
 }

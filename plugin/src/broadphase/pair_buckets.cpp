@@ -6,6 +6,7 @@
 #include <array>
 
 #include "memory/exact_vector.h"
+#include "sorting/radix_sort.h"
 
 namespace gpucol {
 namespace {
@@ -22,28 +23,16 @@ std::uint32_t shiftFor(std::uint32_t slotBits) {
   return slotBits - bucketBits;
 }
 
-/// Sorts e[0, n) of `bits` significant bits: an LSD radix sort in passes of at most 11 bits through `s`
-/// (a bucket is a few thousand entries; a comparison sort of them all took longer).
+/// Sorts e[0, n) of `bits` significant bits with the radix sort of sorting/radix_sort.h, in digits of at most
+/// 11 bits, through `s` (a bucket is a few thousand entries; a comparison sort of them all took longer).
 void sortEntries(std::uint32_t* e, std::uint32_t* s, std::size_t n, std::uint32_t bits) {
   if (n < 64) {
     std::sort(e, e + n);
     return;
   }
-  const std::uint32_t passes = (bits + 10) / 11, digit = (bits + passes - 1) / passes;
-  const std::uint32_t mask = (1u << digit) - 1;
   std::array<std::size_t, 2048> count;
-  std::uint32_t* from = e;
-  std::uint32_t* to = s;
-  for (std::uint32_t p = 0; p < passes; ++p) {
-    const std::uint32_t shift = p * digit;
-    std::fill(count.begin(), count.begin() + mask + 1, std::size_t(0));
-    for (std::size_t i = 0; i < n; ++i) ++count[(from[i] >> shift) & mask];
-    std::size_t sum = 0;
-    for (std::uint32_t d = 0; d <= mask; ++d) sum += std::exchange(count[d], sum);
-    for (std::size_t i = 0; i < n; ++i) to[count[(from[i] >> shift) & mask]++] = from[i];
-    std::swap(from, to);
-  }
-  if (from != e) std::copy(from, from + n, e);
+  const std::uint32_t* sorted = radixSort(e, s, n, 0, RadixDigits(bits, 11), count.data());
+  if (sorted != e) std::copy(sorted, sorted + n, e);
 }
 
 }  // namespace

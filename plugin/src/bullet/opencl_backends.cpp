@@ -2,7 +2,7 @@
 // pair finder and the mesh pipeline's device come from opencl/host; without it there are none, and both
 // callers take their CPU paths.
 #include "broadphase/grid_pair_finder.h"
-#include "bvh/mesh_batch_device.h"
+#include "mesh_pairs/mesh_batch_device.h"
 
 #ifdef GPUCOL_WITH_OPENCL
 #include "opencl/host/mesh_pipeline.h"

@@ -17,6 +17,7 @@
 #include "bvh/avx2_clones.h"
 #include "bvh/prefetch.h"
 #include "shared_math/box_carry.h"
+#include "sorting/radix_sort.h"
 
 #if defined(__SSE2__)
 #include <emmintrin.h>
@@ -531,16 +532,15 @@ int indexBits(std::size_t count) {
 /// permit: 30-bit keys (two meshes of up to 32K triangles) take three passes of 10 bits, 38-bit keys (two of
 /// 400K) three of 13. A fixed width of 11 bits costs the 38-bit keys a fourth pass, a fixed 13 slows the 30-bit
 /// keys (measurement history, "Figures moved from code comments").
-constexpr int kMaxRadixBits = 13;
+constexpr unsigned kMaxRadixBits = 13;
 
 /// Below this many pairs a comparison sort is cheaper than clearing the radix counters.
 constexpr std::size_t kRadixMinimum = 256;
 
 /// Sorts pairs by (triangleA, triangleB). Each pair is packed into one integer key, triangleA above the bits
-/// that triangleB needs, so the key order is the pair order; an LSD radix sort on digits of up to
-/// kMaxRadixBits then costs a few linear passes instead of n log n comparisons (the pairs of one query are
-/// tens of thousands, the comparison sort was a sixth of the query). Digits that are the same in every key
-/// are skipped.
+/// that triangleB needs, so the key order is the pair order; the radix sort of sorting/radix_sort.h on digits
+/// of up to kMaxRadixBits then costs a few linear passes instead of n log n comparisons (the pairs of one
+/// query are tens of thousands, the comparison sort was a sixth of the query).
 void sortPairs(std::vector<TrianglePair>& pairs, std::size_t trianglesA, std::size_t trianglesB) {
   const std::size_t n = pairs.size();
   if (n < kRadixMinimum) {
@@ -549,34 +549,15 @@ void sortPairs(std::vector<TrianglePair>& pairs, std::size_t trianglesA, std::si
   }
   const int bitsB = indexBits(trianglesB);
   const int totalBits = indexBits(trianglesA) + bitsB;  // at most 64: both counts fit 32 bits
-  const int passes = std::max(1, (totalBits + kMaxRadixBits - 1) / kMaxRadixBits);
-  const int digitBits = (totalBits + passes - 1) / passes;
-  const std::size_t buckets = std::size_t{1} << digitBits;
-  const std::uint64_t mask = buckets - 1;
+  const RadixDigits digits(unsigned(totalBits), kMaxRadixBits);
 
   // Uninitialised: every key is written before it is read (zero-filling them cost as much as a pass).
   std::unique_ptr<std::uint64_t[]> keyBuffer(new std::uint64_t[n]), scratchBuffer(new std::uint64_t[n]);
-  std::uint64_t* keys = keyBuffer.get();
-  std::uint64_t* scratch = scratchBuffer.get();
-  std::vector<std::uint32_t> counts(static_cast<std::size_t>(passes) * buckets, 0);
+  std::unique_ptr<std::uint32_t[]> counts(new std::uint32_t[digits.buckets()]);
   for (std::size_t i = 0; i < n; ++i) {
-    const std::uint64_t key = (std::uint64_t{pairs[i].triangleA} << bitsB) | pairs[i].triangleB;
-    keys[i] = key;
-    for (int p = 0; p < passes; ++p) ++counts[p * buckets + ((key >> (p * digitBits)) & mask)];
+    keyBuffer[i] = (std::uint64_t{pairs[i].triangleA} << bitsB) | pairs[i].triangleB;
   }
-  for (int p = 0; p < passes; ++p) {
-    std::uint32_t* count = counts.data() + p * buckets;
-    const int shift = p * digitBits;
-    if (count[(keys[0] >> shift) & mask] == n) continue;  // one digit value for all: the order stays
-    std::uint32_t offset = 0;
-    for (std::size_t d = 0; d < buckets; ++d) {
-      const std::uint32_t c = count[d];
-      count[d] = offset;
-      offset += c;
-    }
-    for (std::size_t i = 0; i < n; ++i) scratch[count[(keys[i] >> shift) & mask]++] = keys[i];
-    std::swap(keys, scratch);
-  }
+  const std::uint64_t* keys = radixSort(keyBuffer.get(), scratchBuffer.get(), n, 0, digits, counts.get());
   const std::uint64_t maskB = bitsB == 0 ? 0 : (~std::uint64_t{0} >> (64 - bitsB));
   for (std::size_t i = 0; i < n; ++i) {
     pairs[i] = {static_cast<std::uint32_t>(keys[i] >> bitsB), static_cast<std::uint32_t>(keys[i] & maskB)};

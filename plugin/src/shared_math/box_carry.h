@@ -1,6 +1,6 @@
 /* Carrying a box or a point of one mesh's frame into another's by an affine map (M, t), in float: the CPU's
-   middle phase (plugin/src/bvh/tree_traversal.cpp, BoxCarrier) and near phase (plugin/src/bullet/
-   collide_meshes.cpp, transformRows) and the device's (opencl/kernels/mesh_middle_phase.cl,
+   middle phase (plugin/src/bvh/tree_traversal.cpp, BoxCarrier) and near phase (plugin/src/mesh_pairs/
+   cpu_mesh_pair.cpp, transformRows) and the device's (opencl/kernels/mesh_middle_phase.cl,
    mesh_near_phase.cl) use these, so that both find the same candidates and test the same triangles.
    A box is carried with the |M| trick (thesis §3.3.3 sets the map up once per pair): centre' = M c + t,
    extent' = |M| e + inflation, which contains every point of the box mapped by M, t; the inflation covers the

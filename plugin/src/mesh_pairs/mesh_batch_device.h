@@ -1,10 +1,9 @@
 #pragma once
-// The seam between the mesh pair query (plugin/src/bullet/collide_meshes.cpp) and a device that runs the
-// middle and near phases of a whole batch at once (opencl/host/mesh_pipeline.cpp, built in with
-// GPUCOL_WITH_OPENCL). The plugin asks sharedMeshBatchDevice, and takes its CPU path when it returns none. Plain types only (no Bullet types): the plugin
-// prepares each pair's frame, the device returns candidates and hits, and the plugin turns those into
-// Bullet contacts and reduces them exactly as its CPU path does.
-#include <Eigen/Core>
+// The seam between the mesh pair batch (mesh_batch.cpp) and a device that runs the middle and near phases of a
+// whole batch at once (opencl/host/mesh_pipeline.cpp, built in with GPUCOL_WITH_OPENCL). The batch asks
+// sharedMeshBatchDevice, and takes its CPU path when it returns none. The batch prepares each pair's frame
+// (pair_frame.h), the device returns candidates and hits, and the batch turns those into Bullet contacts and
+// reduces them exactly as its CPU path does.
 #include <cstdint>
 #include <functional>
 #include <memory>
@@ -12,28 +11,22 @@
 #include <vector>
 
 #include "bvh/aabb_tree.h"
-#include "bvh/tree_traversal.h"
 #include "gpucol/collide_meshes.h"
 #include "gpucol/config.h"
 #include "gpucol/triangle_mesh.h"
+#include "mesh_pairs/pair_frame.h"
 #include "narrowphase/triangle_contact.h"
 
 namespace gpucol {
 
 /// One mesh pair as the device takes it: both meshes (their shared pointers key the resident device copies)
-/// and trees, and the pair's frame as collide_meshes.cpp computes it (PairFrame).
+/// and trees, and the pair's frame.
 struct DeviceMeshPair {
-  std::shared_ptr<const TriangleMesh> meshA;         ///< A's mesh; the device keeps a copy while it lives.
-  std::shared_ptr<const TriangleMesh> meshB;         ///< B's mesh.
-  const AabbTree* treeA = nullptr;                   ///< A's tree (built from meshA); must outlive the call.
-  const AabbTree* treeB = nullptr;                   ///< B's tree.
-  AffineMap treeMap;                                 ///< B's mesh coordinates into A's unscaled mesh frame.
-  Eigen::Vector3f scaleA = Eigen::Vector3f::Ones();  ///< A's local scaling.
-  Eigen::Matrix3f bLinear = Eigen::Matrix3f::Identity();   ///< B's mesh coordinates into A's scaled frame...
-  Eigen::Vector3f bTranslation = Eigen::Vector3f::Zero();  ///< ... plus this.
-  bool flipA = false;                                      ///< A's scaling mirrors it: vertices 1 and 2 swap.
-  bool flipB = false;                                      ///< The same for B.
-  CandidateReach reach;  ///< The shapes' margins: the middle phase's box tests are widened by them.
+  std::shared_ptr<const TriangleMesh> meshA;  ///< A's mesh; the device keeps a copy while it lives.
+  std::shared_ptr<const TriangleMesh> meshB;  ///< B's mesh.
+  const AabbTree* treeA = nullptr;            ///< A's tree (built from meshA); must outlive the call.
+  const AabbTree* treeB = nullptr;            ///< B's tree.
+  PairFrame frame;                            ///< The frame the pair is tested in (makePairFrame).
 };
 
 /// One candidate whose triangles intersect, by its index in DeviceMeshPairResult::candidates.
@@ -121,7 +114,7 @@ class MeshBatchDevice {
                    std::vector<DeviceMeshPairResult>& results, MeshBatchDeviceStats* stats = nullptr) = 0;
   /// The device's name.
   virtual std::string deviceName() const = 0;
-  /// True when the device is a GPU (Backend::Auto only ever picks a GPU; see collide_meshes.cpp).
+  /// True when the device is a GPU (Backend::Auto only ever picks a GPU; see mesh_batch.cpp).
   virtual bool isGpu() const = 0;
   /// Meshes resident on the device now (expired ones are dropped at the start of each run).
   virtual std::size_t residentMeshes() const = 0;

@@ -1,46 +1,34 @@
-// The mesh pair query on the CPU: middle phase (tree vs tree), near phase (Möller's test and contact
-// generation, thesis §5.3.4) and contact reduction (6-D binning, §5.3.5), for one pair or a batch.
-#include "gpucol/collide_meshes.h"
+// One mesh pair on the CPU: middle phase (tree vs tree), near phase (Möller's test and contact generation,
+// thesis §5.3.4) and contact reduction (6-D binning, §5.3.5); the hits of either path into the pair's result.
+#include "mesh_pairs/cpu_mesh_pair.h"
 
-#include <tbb/blocked_range.h>
 #include <tbb/enumerable_thread_specific.h>
 #include <tbb/parallel_for.h>
 
 #include <Eigen/Core>
 #include <algorithm>
-#include <chrono>
 #include <cmath>
 #include <memory>
-#include <mutex>
 #include <optional>
 #include <stdexcept>
 #include <string>
 
-#include "bullet/mesh_device_backend.h"
-#include "bullet/warn_once.h"
 #include "bvh/aabb_tree.h"
 #include "bvh/avx2_clones.h"
-#include "bvh/mesh_batch_device.h"
 #include "bvh/prefetch.h"
 #include "bvh/tree_traversal.h"
 #include "gpucol/mesh_shape.h"
+#include "mesh_pairs/stage_clock.h"
 #include "narrowphase/contact_reduction.h"
 #include "narrowphase/contact_rows.h"
 #include "narrowphase/triangle_contact.h"
 #include "narrowphase/triangle_intersection.h"
 #include "narrowphase/triangle_plane.h"
 #include "narrowphase/triangle_proximity.h"
-#include "opencl/host/opencl_started.h"
 #include "shared_math/box_carry.h"
 
 namespace gpucol {
 namespace {
-
-using Clock = std::chrono::steady_clock;
-
-double millisecondsSince(Clock::time_point start) {
-  return std::chrono::duration<double, std::milli>(Clock::now() - start).count();
-}
 
 bool isFinite(const btTransform& t) {
   for (int r = 0; r < 3; ++r) {
@@ -50,70 +38,6 @@ bool isFinite(const btTransform& t) {
     }
   }
   return true;
-}
-
-// The frame a pair is tested in: A's body frame with A's local scaling applied ("A's scaled frame"). It is
-// local to the pair, so scenes far from the origin keep their precision, and A's triangles need only a
-// per-axis scale. B's triangles are carried in by one affine map computed once per pair (in double, so the
-// relative transform adds no rounding of its own to Bullet's float transforms).
-struct PairFrame {
-  Eigen::Vector3f scaleA;   // A's local scaling.
-  bool flipA = false;       // A's scaling mirrors the mesh: swap two vertices to keep the winding outward.
-  bool flipB = false;       // The same for B.
-  Eigen::Matrix3f bLinear;  // B's mesh coordinates into A's scaled frame: R_rel * S_B ...
-  Eigen::Vector3f bTranslation;  // ... + t_rel.
-  AffineMap treeMap;             // B's mesh coordinates into A's unscaled mesh frame, for the traversal.
-  btTransform worldFromA;        // A's rigid transform: from A's scaled frame to the world.
-  float reach = 0;               // The sum of the shapes' margins: triangles this close give contacts.
-  CandidateReach candidateReach;  // `reach` along each mesh frame's axes, for the traversal's box tests.
-};
-
-// The sum of the shapes' margins (a negative sum reaches nothing); a margin that is not finite is an error.
-float pairReach(const MeshShape& a, const MeshShape& b) {
-  const double sum = double(a.getMargin()) + double(b.getMargin());
-  if (!std::isfinite(sum)) {
-    throw std::invalid_argument("collideMeshes: the margin of shape " +
-                                std::string(std::isfinite(a.getMargin()) ? "B" : "A") + " is not finite");
-  }
-  return float(std::max(0.0, sum));
-}
-
-PairFrame makePairFrame(const MeshShape& a, const btTransform& transformA, const MeshShape& b,
-                        const btTransform& transformB) {
-  Eigen::Matrix3d rotationA, rotationB;
-  Eigen::Vector3d originA, originB, scaleA, scaleB;
-  for (int r = 0; r < 3; ++r) {
-    for (int c = 0; c < 3; ++c) {
-      rotationA(r, c) = transformA.getBasis()[r][c];
-      rotationB(r, c) = transformB.getBasis()[r][c];
-    }
-    originA[r] = transformA.getOrigin()[r];
-    originB[r] = transformB.getOrigin()[r];
-    scaleA[r] = a.getLocalScaling()[r];
-    scaleB[r] = b.getLocalScaling()[r];
-  }
-  const Eigen::Matrix3d relativeRotation = rotationA.transpose() * rotationB;
-  const Eigen::Vector3d relativeTranslation = rotationA.transpose() * (originB - originA);
-  const Eigen::Matrix3d bLinear = relativeRotation * scaleB.asDiagonal();
-
-  PairFrame frame;
-  frame.scaleA = scaleA.cast<float>();
-  frame.flipA = scaleA.prod() < 0;
-  frame.flipB = scaleB.prod() < 0;
-  frame.bLinear = bLinear.cast<float>();
-  frame.bTranslation = relativeTranslation.cast<float>();
-  const Eigen::Vector3d inverseScaleA = scaleA.cwiseInverse();
-  frame.treeMap.linear = (inverseScaleA.asDiagonal() * bLinear).cast<float>();
-  frame.treeMap.translation = inverseScaleA.cwiseProduct(relativeTranslation).cast<float>();
-  frame.worldFromA = transformA;
-  frame.reach = pairReach(a, b);
-  if (frame.reach > 0) {
-    // A world distance d is at most d / |s| along a mesh axis scaled by s; the factor covers the float rounding.
-    const double widen = double(frame.reach) * (1 + 1.0 / 1048576);
-    frame.candidateReach.inA = (widen * scaleA.cwiseAbs().cwiseInverse()).cast<float>();
-    frame.candidateReach.inB = (widen * scaleB.cwiseAbs().cwiseInverse()).cast<float>();
-  }
-  return frame;
 }
 
 // One candidate pair whose triangles intersect, by its index among the candidates, with its contact if one is
@@ -423,6 +347,8 @@ MeshContact toWorld(const TrianglePair& pair, const TriangleContact& contact, co
   return out;
 }
 
+}  // namespace
+
 // The near phase's hits (NearHit here, DeviceNearHit from the device; both in candidate order) into the
 // result's intersecting pairs and contacts, then, for shapes with margins, the contacts of the candidates that
 // come within them, then the contact reduction. Shared by both paths, so the same-facing rule, the proximity
@@ -473,8 +399,8 @@ void requireFinite(const btTransform& transformA, const btTransform& transformB)
   }
 }
 
-MeshPairResult collidePair(const MeshShape& shapeA, const btTransform& transformA, const MeshShape& shapeB,
-                           const btTransform& transformB, const Config& config) {
+MeshPairResult collidePairOnCpu(const MeshShape& shapeA, const btTransform& transformA, const MeshShape& shapeB,
+                                const btTransform& transformB, const Config& config) {
   requireFinite(transformA, transformB);
   MeshPairResult result;
   result.stats.backendUsed = Backend::Cpu;
@@ -502,206 +428,9 @@ MeshPairResult collidePair(const MeshShape& shapeA, const btTransform& transform
   return result;
 }
 
-// What collideMeshesBatch's device path shares between batches: its options, the last batch's stages and
-// Auto's measured choice.
-struct DeviceBackendState {
-  std::mutex mutex;
-  MeshBatchDeviceOptions options;
-  MeshBatchDeviceStats lastStats;
-  MeasuredBackendChoice autoChoice;
-};
-
-DeviceBackendState& deviceBackendState() {
-  static DeviceBackendState state;
-  return state;
-}
-
-// The batch on the device (bvh/mesh_batch_device.h), when the backend choice wants it: returns false, having
-// filled nothing, when the batch is to run on the CPU instead (Auto's measured choice, Auto without a GPU, no
-// device, or a device failure, which is said once). When Auto is measuring and the batch goes to the CPU,
-// `timeCpu` is set to the batch's size for the caller to record the CPU path's time. Pairs whose root boxes
-// miss never reach the device.
-bool collideOnDevice(const std::vector<MeshPairQuery>& queries, const Config& config,
-                     std::vector<MeshPairResult>& results, std::optional<std::uint64_t>& timeCpu) {
-  for (const MeshPairQuery& q : queries) requireFinite(q.transformA, q.transformB);
-  const auto start = Clock::now();
-  std::vector<PairFrame> frames;
-  frames.reserve(queries.size());
-  std::vector<std::size_t> overlapping;
-  std::uint64_t triangles = 0;
-  for (std::size_t i = 0; i < queries.size(); ++i) {
-    const MeshPairQuery& q = queries[i];
-    frames.push_back(makePairFrame(*q.shapeA, q.transformA, *q.shapeB, q.transformB));
-    if (rootBoxesOverlap(q.shapeA->tree(), q.shapeB->tree(), frames.back().treeMap, frames.back().candidateReach)) {
-      overlapping.push_back(i);
-      triangles += q.shapeA->mesh().triangleCount() + q.shapeB->mesh().triangleCount();
-    }
-  }
-  const double rootMs = millisecondsSince(start);
-  const bool autoChoice = config.meshBackend == Backend::Auto;
-  const bool autoUsesCpuDevice = detail::autoUsesCpuDevice();
-  MeasuredBackendChoice& measured = deviceBackendState().autoChoice;
-  // Auto: the measured choice for this size first, then, the first time it wants the device, the device
-  // lists: batches that stay on the CPU never touch OpenCL, and a machine whose only OpenCL device is a CPU
-  // one never sets OpenCL up for them.
-  if (autoChoice && measured.choose(triangles) == MeasuredBackendChoice::Path::Cpu) {
-    if (!measured.decided(triangles)) timeCpu = triangles;
-    return false;
-  }
-  if (autoChoice && !autoUsesCpuDevice && !opencl::chosenDeviceIsGpu(config.openclDevice)) {
-    measured.deviceFailed();
-    return false;
-  }
-
-  MeshBatchDevice* device = nullptr;
-  try {
-    device = sharedMeshBatchDevice(config);
-  } catch (const std::exception& e) {
-    warnOnce("mesh-opencl-setup",
-             std::string("the OpenCL mesh pipeline failed to set up, using the CPU: ") + e.what());
-    if (autoChoice) measured.deviceFailed();
-    return false;
-  }
-  if (device == nullptr) {
-    if (config.meshBackend == Backend::OpenCL) {
-      warnOnce("mesh-opencl-absent",
-               kBuiltWithOpenCl
-                   ? "Backend::OpenCL was asked for mesh pairs, but no usable OpenCL device "
-                     "was found: they run on the CPU"
-                   : "Backend::OpenCL was asked for mesh pairs, but gpucol was built without "
-                     "OpenCL: they run on the CPU");
-    }
-    if (autoChoice) measured.deviceFailed();
-    return false;
-  }
-  // Auto never picks a CPU OpenCL device: the CPU path was faster on it at every size measured.
-  if (autoChoice && !autoUsesCpuDevice && !device->isGpu()) {
-    measured.deviceFailed();
-    return false;
-  }
-
-  std::vector<DeviceMeshPair> pairs(overlapping.size());
-  for (std::size_t k = 0; k < overlapping.size(); ++k) {
-    const MeshPairQuery& q = queries[overlapping[k]];
-    const PairFrame& frame = frames[overlapping[k]];
-    DeviceMeshPair& p = pairs[k];
-    p.meshA = q.shapeA->sharedMesh();
-    p.meshB = q.shapeB->sharedMesh();
-    p.treeA = &q.shapeA->tree();
-    p.treeB = &q.shapeB->tree();
-    p.treeMap = frame.treeMap;
-    p.scaleA = frame.scaleA;
-    p.bLinear = frame.bLinear;
-    p.bTranslation = frame.bTranslation;
-    p.flipA = frame.flipA;
-    p.flipB = frame.flipB;
-    p.reach = frame.candidateReach;
-  }
-  MeshBatchDeviceOptions options;
-  {
-    std::lock_guard<std::mutex> lock(deviceBackendState().mutex);
-    options = deviceBackendState().options;
-  }
-  std::vector<DeviceMeshPairResult> found;
-  MeshBatchDeviceStats stats;
-  try {
-    device->run(pairs, options, found, &stats);
-  } catch (const std::exception& e) {
-    warnOnce("mesh-opencl-run",
-             std::string("the OpenCL mesh pipeline failed, running mesh batches on the CPU: ") + e.what());
-    if (autoChoice) measured.deviceFailed();
-    return false;
-  }
-  {
-    std::lock_guard<std::mutex> lock(deviceBackendState().mutex);
-    deviceBackendState().lastStats = stats;
-  }
-
-  // Per-pair timings: the batch's stages shared evenly among its device pairs, so that they add up to the
-  // batch; node tests are counted per batch by the device (MeshBatchDeviceStats), not per pair.
-  const double share = overlapping.empty() ? 0.0 : 1.0 / double(overlapping.size());
-  const double middleMs = (stats.uploadMs + stats.traversalMs + stats.scanMs + stats.sortMs) * share;
-  const double nearMs = (stats.prefilterMs + stats.nearMs + stats.compactionMs + stats.readbackMs) * share;
-  for (std::size_t i = 0; i < queries.size(); ++i) {
-    results[i] = MeshPairResult();
-    results[i].stats.nodeTests = 1;
-    results[i].stats.rootBoxesMissed = true;
-    results[i].stats.middlePhaseMs = rootMs / double(queries.size());
-  }
-  for (std::size_t k = 0; k < overlapping.size(); ++k) {
-    MeshPairResult& result = results[overlapping[k]];
-    result.stats.rootBoxesMissed = false;
-    result.stats.nodeTests = 0;
-    result.stats.backendUsed = Backend::OpenCL;
-    result.stats.middlePhaseMs += middleMs;
-    result.stats.nearPhaseMs = nearMs;
-    result.candidatePairs = std::move(found[k].candidates);
-    collectHits(found[k].hits, *queries[overlapping[k]].shapeA, *queries[overlapping[k]].shapeB,
-                frames[overlapping[k]], config, result);
-  }
-  if (autoChoice) measured.record(triangles, MeasuredBackendChoice::Path::Device, millisecondsSince(start));
-  return true;
-}
-
-}  // namespace
-
-namespace detail {
-
-void setMeshDeviceOptions(const MeshBatchDeviceOptions& options) {
-  std::lock_guard<std::mutex> lock(deviceBackendState().mutex);
-  deviceBackendState().options = options;
-}
-
-MeshBatchDeviceOptions meshDeviceOptions() {
-  std::lock_guard<std::mutex> lock(deviceBackendState().mutex);
-  return deviceBackendState().options;
-}
-
-MeshBatchDeviceStats lastMeshDeviceStats() {
-  std::lock_guard<std::mutex> lock(deviceBackendState().mutex);
-  return deviceBackendState().lastStats;
-}
-
-MeasuredBackendChoice& meshAutoChoice() {
-  return deviceBackendState().autoChoice;
-}
-
-}  // namespace detail
-
-MeshPairResult collideMeshes(const MeshShape& shapeA, const btTransform& transformA, const MeshShape& shapeB,
-                             const btTransform& transformB, const Config& config) {
-  if (config.meshBackend != Backend::Cpu) {
-    std::vector<MeshPairQuery> one(1);
-    one[0] = MeshPairQuery{&shapeA, transformA, &shapeB, transformB};
-    return std::move(collideMeshesBatch(one, config)[0]);
-  }
-  return collidePair(shapeA, transformA, shapeB, transformB, config);
-}
-
-std::vector<MeshPairResult> collideMeshesBatch(const std::vector<MeshPairQuery>& queries,
-                                               const Config& config) {
-  for (std::size_t i = 0; i < queries.size(); ++i) {
-    if (queries[i].shapeA == nullptr || queries[i].shapeB == nullptr) {
-      throw std::invalid_argument("collideMeshesBatch: query " + std::to_string(i) + " has a null shape");
-    }
-  }
-  std::vector<MeshPairResult> results(queries.size());
-  std::optional<std::uint64_t> timeCpu;  // set when Auto is measuring this batch's size on the CPU path
-  if (config.meshBackend != Backend::Cpu && !queries.empty() &&
-      collideOnDevice(queries, config, results, timeCpu)) {
-    return results;
-  }
-  const auto start = Clock::now();
-  // Pairs run in parallel; each pair's own stages are parallel too, and oneTBB balances the nesting.
-  tbb::parallel_for(std::size_t(0), queries.size(), [&](std::size_t i) {
-    const MeshPairQuery& q = queries[i];
-    results[i] = collidePair(*q.shapeA, q.transformA, *q.shapeB, q.transformB, config);
-  });
-  if (timeCpu) {
-    deviceBackendState().autoChoice.record(*timeCpu, MeasuredBackendChoice::Path::Cpu,
-                                           millisecondsSince(start));
-  }
-  return results;
-}
+// The device's hits go through the same function (mesh_batch.cpp).
+template void collectHits<DeviceNearHit>(const std::vector<DeviceNearHit>& hits, const MeshShape& shapeA,
+                                         const MeshShape& shapeB, const PairFrame& frame, const Config& config,
+                                         MeshPairResult& result);
 
 }  // namespace gpucol

@@ -1,8 +1,8 @@
 #pragma once
-// How collideMeshesBatch runs the device path (bvh/mesh_batch_device.h), for the benchmarks and tests that
+// How collideMeshesBatch runs the device path (mesh_pairs/mesh_batch_device.h), for the benchmarks and tests that
 // measure it: the options of the next batches and the stage timings of the last one. Process-wide.
 #include "bullet/measured_backend_choice.h"
-#include "bvh/mesh_batch_device.h"
+#include "mesh_pairs/mesh_batch_device.h"
 
 namespace gpucol::detail {
 
@@ -15,6 +15,9 @@ MeshBatchDeviceOptions meshDeviceOptions();
 
 /// Stage timings and counters of the last batch that ran on the device (empty before the first).
 MeshBatchDeviceStats lastMeshDeviceStats();
+
+/// Keeps `stats` as the last batch's (mesh_batch.cpp, after each batch that ran on the device).
+void recordMeshDeviceStats(const MeshBatchDeviceStats& stats);
 
 /// Backend::Auto's measured choice for mesh batches (one for the process: the device is chosen once), by the
 /// batch's size: its triangles, A's plus B's, summed over the pairs whose root boxes overlap. Auto measures

@@ -1,0 +1,29 @@
+#pragma once
+// One mesh pair on the CPU, and the step both paths end with: the near phase's hits into the pair's result.
+#include <LinearMath/btTransform.h>
+
+#include <vector>
+
+#include "gpucol/collide_meshes.h"
+#include "gpucol/config.h"
+#include "mesh_pairs/mesh_batch_device.h"
+#include "mesh_pairs/pair_frame.h"
+
+namespace gpucol {
+
+/// Throws std::invalid_argument when either transform has a NaN or infinite component.
+void requireFinite(const btTransform& transformA, const btTransform& transformB);
+
+/// The pair (shapeA at transformA, shapeB at transformB) on the CPU: root boxes, middle phase, near phase,
+/// contacts and their reduction.
+MeshPairResult collidePairOnCpu(const MeshShape& shapeA, const btTransform& transformA, const MeshShape& shapeB,
+                                const btTransform& transformB, const Config& config);
+
+/// Fills `result`'s intersecting pairs, contacts and reduced contacts from the near phase's `hits` (in
+/// candidate order, indexing result.candidatePairs), the same way for the CPU's hits and the device's
+/// (DeviceNearHit, the one instantiation outside cpu_mesh_pair.cpp).
+template <class Hit>
+void collectHits(const std::vector<Hit>& hits, const MeshShape& shapeA, const MeshShape& shapeB,
+                 const PairFrame& frame, const Config& config, MeshPairResult& result);
+
+}  // namespace gpucol
