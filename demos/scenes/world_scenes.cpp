@@ -141,6 +141,19 @@ int dropOnGrid(SceneDescription& scene, int bodies, int perRow, float cell, floa
   return bodies / (perRow * perRow);
 }
 
+// Completes a pile whose dynamic meshes and convex pieces are in `scene`: the bin and the grid for `bodies`
+// bodies in cells of `cell` metres (1.5: the pile's, whose bin has scale 1), the bodies, the ground and the
+// extent.
+void fillPile(SceneDescription& scene, int bodies, unsigned seed, float cell) {
+  if (bodies < 0) throw std::invalid_argument("scene '" + scene.name + "': negative body count");
+  const int perRow = pileRow(bodies);
+  const float inside = cell * float(perRow);
+  addBin(scene, inside, cell / 1.5f);
+  const int layers = dropOnGrid(scene, bodies, perRow, cell, cell * (2.0f / 3.0f), seed);
+  scene.groundTop = 0;
+  scene.extent = 10.0f + inside + float(layers) * cell;
+}
+
 }  // namespace
 
 SceneDescription makeStackScene(int boxes, float gap, unsigned seed) {
@@ -171,12 +184,8 @@ SceneDescription makeStackScene(int boxes, float gap, unsigned seed) {
 }
 
 SceneDescription makePileScene(int bodies, unsigned seed) {
-  if (bodies < 0) throw std::invalid_argument("pile scene: negative body count");
   SceneDescription scene;
   scene.name = "pile";
-  const int perRow = pileRow(bodies);
-  constexpr float kCell = 1.5f;  // Above the largest body's bounding diameter (the L's, 1.4 m).
-  const float inside = kCell * float(perRow);
   scene.meshes.push_back(std::make_shared<const TriangleMesh>(makeBox(0.35f, 0.35f, 0.35f)));
   scene.meshes.push_back(std::make_shared<const TriangleMesh>(makeIcosphere(0.4f, 2)));
   scene.meshes.push_back(std::make_shared<const TriangleMesh>(makeTorus(0.3f, 0.12f, 24, 12)));
@@ -190,21 +199,13 @@ SceneDescription makePileScene(int bodies, unsigned seed) {
                         {{ConvexPiece::Kind::Sphere, btVector3(0.4f, 0, 0), btTransform::getIdentity(), {}}},
                         torusPieces(0.3f, 0.12f, 12),
                         lShapePieces(0.8f, 0.3f, lRotation, lTranslation)};
-  addBin(scene, inside, 1.0f);
-  const int layers = dropOnGrid(scene, bodies, perRow, kCell, 1.0f, seed);
-  scene.groundTop = 0;
-  scene.extent = 10.0f + inside + float(layers) * kCell;
+  fillPile(scene, bodies, seed, 1.5f);  // cells above the largest body's bounding diameter (the L's, 1.4 m)
   return scene;
 }
 
 SceneDescription makeThinPileScene(int bodies, unsigned seed) {
-  if (bodies < 0) throw std::invalid_argument("thin pile scene: negative body count");
   SceneDescription scene;
   scene.name = "thin";
-  const int perRow = pileRow(bodies);
-  constexpr float kCell =
-      1.5f;  // Above the largest body's bounding diameter (the plate's, 0.85 m), as the pile's.
-  const float inside = kCell * float(perRow);
   const btVector3 rod(0.4f, 0.04f, 0.04f), plate(0.3f, 0.025f, 0.3f);
   scene.meshes.push_back(std::make_shared<const TriangleMesh>(makeBox(rod.x(), rod.y(), rod.z())));
   scene.meshes.push_back(std::make_shared<const TriangleMesh>(makeBox(plate.x(), plate.y(), plate.z())));
@@ -215,31 +216,21 @@ SceneDescription makeThinPileScene(int bodies, unsigned seed) {
                         {box(plate)},
                         torusPieces(0.3f, 0.05f, 16),
                         {box(btVector3(0.4f, 0.04f, 0.04f)), box(btVector3(0.04f, 0.4f, 0.04f))}};
-  addBin(scene, inside, 1.0f);
-  const int layers = dropOnGrid(scene, bodies, perRow, kCell, 1.0f, seed);
-  scene.groundTop = 0;
-  scene.fallTolerance = 0.25f;  // half the floor: a centre deeper than that has gone through
-  scene.extent = 10.0f + inside + float(layers) * kCell;
+  fillPile(scene, bodies, seed, 1.5f);  // the pile's cells, above the plate's bounding diameter (0.85 m)
+  scene.fallTolerance = 0.25f;          // half the floor: a centre deeper than that has gone through
   return scene;
 }
 
 SceneDescription makeRealMeshPileScene(const PileMeshes& meshes, int bodies, unsigned seed) {
-  if (bodies < 0) throw std::invalid_argument("mesh pile scene: negative body count");
   if (meshes.meshes.empty() || meshes.meshes.size() != meshes.convexPieces.size())
     throw std::invalid_argument("mesh pile scene: needs meshes, each with its convex pieces");
   SceneDescription scene;
   scene.name = "meshes";
   float radius = 0;
   for (const auto& mesh : meshes.meshes) radius = std::max(radius, boundingRadius(*mesh));
-  const int perRow = pileRow(bodies);
-  const float cell = 2.2f * radius;  // a little above the largest bounding diameter
-  const float inside = cell * float(perRow);
   scene.meshes = meshes.meshes;
   scene.convexPieces = meshes.convexPieces;
-  addBin(scene, inside, cell / 1.5f);
-  const int layers = dropOnGrid(scene, bodies, perRow, cell, cell * (2.0f / 3.0f), seed);
-  scene.groundTop = 0;
-  scene.extent = 10.0f + inside + float(layers) * cell;
+  fillPile(scene, bodies, seed, 2.2f * radius);  // a little above the largest bounding diameter
   return scene;
 }
 
