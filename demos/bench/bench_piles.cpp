@@ -1,6 +1,7 @@
 // gpucol-bench piles: mesh piles beside the same piles of Bullet's convex shapes (issue 57's reference):
-// for each body count and seed, the pile of gpucol MeshShapes and the pile of boxes, spheres and compounds of
-// boxes and capsules with the same masses, inertia and start poses, stepped until every body sleeps. Per run:
+// for each scene (the mixed pile, the stack of ten boxes, the pile of thin bodies, the pile of real meshes),
+// body count and seed, the pile of gpucol MeshShapes and the pile of boxes, spheres, hulls and compounds of
+// them with the same masses, inertia and start poses, stepped until every body sleeps. Per run:
 // the step every body was asleep, the deepest penetration over the run and once the reference had settled,
 // the worst kinetic energy after the reference's first fell below 1% of its peak (as a share of that peak),
 // and steps per second.
@@ -13,6 +14,7 @@
 
 #include "bench_commands.h"
 #include "bench_stats.h"
+#include "scenes/pile_meshes.h"
 #include "scenes/scene_run.h"
 #include "scenes/world_scene.h"
 #include "scenes/world_scenes.h"
@@ -21,13 +23,29 @@ namespace gpucol::bench {
 namespace {
 
 struct Options {
+  std::string scene = "pile";
   std::vector<int> bodies{50, 200};
   std::vector<unsigned> seeds{1, 2, 3, 4, 5};
   int steps = 3000;
   std::string csv;
   std::string series;  // kinetic energy per step, for plots
   float meshMargin = 0;
+  std::string meshDir = GPUCOL_DEFAULT_MESH_DIR;
+  std::vector<std::string> meshes{"torus-1152",
+                                  "armadillo-5000"};  // closed solids that HACD splits in seconds
+  float meshSize = 0.3f;
 };
+
+// The stack's boxes start 1 cm apart, so that the seeds' shifted and turned boxes fall onto each other.
+constexpr float kStackGap = 0.01f;
+
+scenes::SceneDescription makeScene(const Options& o, const scenes::PileMeshes& meshes, int bodies,
+                                   unsigned seed) {
+  if (o.scene == "stack") return scenes::makeStackScene(bodies, kStackGap, seed);
+  if (o.scene == "thin") return scenes::makeThinPileScene(bodies, seed);
+  if (o.scene == "meshes") return scenes::makeRealMeshPileScene(meshes, bodies, seed);
+  return scenes::makePileScene(bodies, seed);
+}
 
 /// One pile's run, step by step.
 struct Trace {
@@ -38,8 +56,9 @@ struct Trace {
   double stepsPerSecond = 0;
 };
 
-Trace runPile(int bodies, unsigned seed, scenes::CollisionBackend backend, int steps, float meshMargin) {
-  const scenes::SceneDescription description = scenes::makePileScene(bodies, seed);
+Trace runPile(const scenes::SceneDescription& description, unsigned seed, scenes::CollisionBackend backend,
+              int steps, float meshMargin) {
+  const int bodies = int(description.bodies.size()) - 1;  // less the static bin or ground
   scenes::WorldOptions options;
   options.backend = backend;
   options.meshMargin = meshMargin;
@@ -59,8 +78,8 @@ Trace runPile(int bodies, unsigned seed, scenes::CollisionBackend backend, int s
       1);
   t.stepsPerSecond = summary.stepsPerSecond;
   if (summary.failure != scenes::RunFailure::None)
-    std::printf("  %s pile of %d, seed %u: %s\n", scenes::backendName(backend), bodies, seed,
-                summary.failureMessage.c_str());
+    std::printf("  %s %s of %d, seed %u: %s\n", scenes::backendName(backend), description.name.c_str(),
+                bodies, seed, summary.failureMessage.c_str());
   return t;
 }
 
@@ -78,12 +97,13 @@ struct Row {
   float meshRestingOverlap = 0, referenceRestingOverlap = 0;
 };
 
-Row compare(int bodies, unsigned seed, int steps, float meshMargin) {
+Row compare(const scenes::SceneDescription& description, int bodies, unsigned seed, int steps,
+            float meshMargin) {
   Row r;
   r.bodies = bodies;
   r.seed = seed;
-  r.reference = runPile(bodies, seed, scenes::CollisionBackend::Primitives, steps, meshMargin);
-  r.mesh = runPile(bodies, seed, scenes::CollisionBackend::Gpucol, steps, meshMargin);
+  r.reference = runPile(description, seed, scenes::CollisionBackend::Primitives, steps, meshMargin);
+  r.mesh = runPile(description, seed, scenes::CollisionBackend::Gpucol, steps, meshMargin);
   const std::vector<double>& e = r.reference.energy;
   const auto peakAt = std::max_element(e.begin(), e.end());
   r.peak = peakAt == e.end() ? 0 : *peakAt;
@@ -122,15 +142,25 @@ Row compare(int bodies, unsigned seed, int steps, float meshMargin) {
 }
 
 void runAll(const Options& o) {
+  scenes::PileMeshes meshes;
+  if (o.scene == "meshes") {
+    std::vector<std::string> paths;
+    for (const std::string& name : o.meshes) paths.push_back(o.meshDir + "/" + name + ".ply");
+    meshes = scenes::loadPileMeshes(paths, o.meshSize);
+    for (std::size_t i = 0; i < o.meshes.size(); ++i)
+      std::printf("%s: %zu triangles, %zu convex hulls (HACD)\n", o.meshes[i].c_str(),
+                  meshes.meshes[i]->triangleCount(), meshes.convexPieces[i].size());
+  }
   std::printf(
-      "Mesh piles (gpucol MeshShape, margin %g m) beside the same piles of Bullet's convex shapes; up to %d "
-      "steps of 1/60 s.\n"
+      "Scene %s: mesh piles (gpucol MeshShape, margin %g m) beside the same piles of Bullet's convex shapes; "
+      "up "
+      "to %d steps of 1/60 s.\n"
       "rest: the step every body slept (-: not within the steps). deepest: the deepest contact over the run, "
       "and (after /) once the reference's kinetic energy first fell below 1%% of its peak. overlap: the same "
       "for the deepest overlap of two bodies in contact, measured on the convex pieces of their solids (GJK "
       "and EPA) in both piles. burst: the largest kinetic energy from then on, as %% of the reference's "
       "peak.\n\n",
-      double(o.meshMargin), o.steps);
+      o.scene.c_str(), double(o.meshMargin), o.steps);
   std::printf("%6s %5s | %6s %6s %7s | %15s %15s | %15s %15s | %8s %8s | %9s %9s\n", "bodies", "seed", "rest",
               "ref", "ratio", "deepest mesh", "deepest ref", "overlap mesh", "overlap ref", "burst", "ref",
               "steps/s", "ref");
@@ -149,7 +179,7 @@ void runAll(const Options& o) {
   for (int n : o.bodies) {
     std::vector<double> ratios;
     for (unsigned seed : o.seeds) {
-      const Row r = compare(n, seed, o.steps, o.meshMargin);
+      const Row r = compare(makeScene(o, meshes, n, seed), n, seed, o.steps, o.meshMargin);
       const double ratio = r.mesh.restStep > 0 && r.reference.restStep > 0
                                ? double(r.mesh.restStep) / double(r.reference.restStep)
                                : -1;
@@ -192,6 +222,12 @@ const CommandRegistration kRegistration([](CLI::App& app) {
       "mesh piles beside the same piles of Bullet's convex shapes: steps to rest, deepest penetration, energy "
       "bursts after settling, steps per second, per body count and seed");
   cmd->footer("Example: gpucol-bench piles --bodies 50,200 --seeds 1,2,3,4,5 --steps 3000 --csv piles.csv");
+  cmd->add_option(
+         "--scene", options->scene,
+         "pile (boxes, spheres, tori, L-shapes), stack (boxes on one another; --bodies counts them), "
+         "thin (rods, plates, thin tori, crosses) or meshes (real meshes, --meshes)")
+      ->check(CLI::IsMember({"pile", "stack", "thin", "meshes"}))
+      ->capture_default_str();
   cmd->add_option("--bodies", options->bodies, "body counts")->delimiter(',')->capture_default_str();
   cmd->add_option("--seeds", options->seeds, "seeds of the start poses")->delimiter(',')->capture_default_str();
   cmd->add_option("--steps", options->steps, "most steps per pile")->check(CLI::PositiveNumber)->capture_default_str();
@@ -199,6 +235,14 @@ const CommandRegistration kRegistration([](CLI::App& app) {
   cmd->add_option("--series", options->series, "write each pile's kinetic energy per step to this CSV file");
   cmd->add_option("--mesh-margin", options->meshMargin, "collision margin of the MeshShapes (m)")
       ->check(CLI::NonNegativeNumber)
+      ->capture_default_str();
+  cmd->add_option("--mesh-dir", options->meshDir, "folder of the real meshes (scene meshes)")
+      ->capture_default_str();
+  cmd->add_option("--meshes", options->meshes, "real meshes of the scene meshes, by file name without .ply")
+      ->delimiter(',')
+      ->capture_default_str();
+  cmd->add_option("--mesh-size", options->meshSize, "largest side of each real mesh's bounding box (m)")
+      ->check(CLI::PositiveNumber)
       ->capture_default_str();
   cmd->callback([options] { runAll(*options); });
 });

@@ -7,6 +7,8 @@
 
 #include <algorithm>
 
+#include "scenes/convex_piece_shape.h"
+
 namespace gpucol::scenes {
 
 BodyOverlap::BodyOverlap(const SceneDescription& scene) {
@@ -19,17 +21,7 @@ BodyOverlap::BodyOverlap(const SceneDescription& scene) {
     for (const ConvexPiece& piece : scene.convexPieces[mesh]) {
       Piece p;
       p.pose = piece.pose;
-      switch (piece.kind) {
-        case ConvexPiece::Kind::Box:
-          p.shape = std::make_unique<btBoxShape>(piece.size);
-          break;
-        case ConvexPiece::Kind::Sphere:
-          p.shape = std::make_unique<btSphereShape>(piece.size.x());
-          break;
-        case ConvexPiece::Kind::Capsule:
-          p.shape = std::make_unique<btCapsuleShape>(piece.size.x(), 2 * piece.size.y());
-          break;
-      }
+      p.shape = makePieceShape(piece);
       m_pieces[mesh].push_back(std::move(p));
     }
   }

@@ -171,4 +171,24 @@ TriangleMesh makeLShape(float size, float depth) {
   return TriangleMesh::fromArrays(std::move(arrays.xyz), std::move(arrays.indices), "l-shape");
 }
 
+TriangleMesh makeCross(float arm, float width, float depth) {
+  // The outline counter-clockwise; it is star-shaped about the centre, so each cap is a fan from a centre
+  // vertex.
+  const float a = arm, w = width / 2;
+  const float outline[12][2] = {{a, -w}, {a, w},   {w, w},   {w, a},   {-w, a}, {-w, w},
+                                {-a, w}, {-a, -w}, {-w, -w}, {-w, -a}, {w, -a}, {w, -w}};
+  MeshArrays arrays;
+  const float z0 = -depth / 2, z1 = depth / 2;
+  for (const auto& p : outline) arrays.addVertex(p[0], p[1], z0);
+  for (const auto& p : outline) arrays.addVertex(p[0], p[1], z1);
+  const std::uint32_t bottom = arrays.addVertex(0, 0, z0), top = arrays.addVertex(0, 0, z1);
+  for (std::uint32_t i = 0; i < 12; ++i) {
+    const std::uint32_t j = (i + 1) % 12;
+    arrays.addTriangle(top, i + 12, j + 12);
+    arrays.addTriangle(bottom, j, i);
+    arrays.addQuad(i, j, j + 12, i + 12);
+  }
+  return TriangleMesh::fromArrays(std::move(arrays.xyz), std::move(arrays.indices), "cross");
+}
+
 }  // namespace gpucol::scenes

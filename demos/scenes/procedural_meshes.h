@@ -20,4 +20,8 @@ TriangleMesh makeBin(float outerHalf, float innerHalf, float floorThickness, flo
 /// A closed, concave L-shaped prism: an L of arm length `size` and thickness `size / 3`, `depth` thick in z.
 TriangleMesh makeLShape(float size, float depth);
 
+/// A closed, concave plus-shaped prism in the xy plane: arms reaching `arm` from the centre along ±x and ±y,
+/// `width` wide, `depth` thick in z; symmetric, so its centre of mass is the origin and its axes principal.
+TriangleMesh makeCross(float arm, float width, float depth);
+
 }  // namespace gpucol::scenes

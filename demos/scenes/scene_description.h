@@ -20,12 +20,13 @@ struct SceneBody {
 
 /// One convex piece of a mesh's solid, for the reference world built of Bullet's own convex shapes.
 struct ConvexPiece {
-  enum class Kind { Box, Sphere, Capsule };
+  enum class Kind { Box, Sphere, Capsule, Hull };
   Kind kind = Kind::Box;
   /// Box: half extents. Sphere: the radius in x. Capsule: the radius in x, and half the distance between its
-  /// caps' centres in y (the capsule lies along its own y axis).
+  /// caps' centres in y (the capsule lies along its own y axis). Hull: unused.
   btVector3 size{0, 0, 0};
   btTransform pose = btTransform::getIdentity();  ///< Where the piece lies in the mesh's frame.
+  std::vector<btVector3> points;                  ///< Hull: the points whose convex hull is the piece.
 };
 
 /// A world to build, with either collision backend: meshes shared between bodies (one shape per mesh), the
@@ -40,6 +41,9 @@ struct SceneDescription {
   btVector3 gravity{0, -9.81f, 0};                          ///< Metres per second squared, y is up.
   float groundTop =
       0;  ///< Height of the ground's upper face: zero of the potential energy; below it is "fell".
+  /// How far below groundTop a centre of mass may be before the body counts as through the ground (metres):
+  /// thin bodies that land fast dip below the face for a step, with Bullet's own convex shapes too.
+  float fallTolerance = 0;
   /// Size of the scene (metres): positions beyond a hundred times this from the origin count as an explosion.
   float extent = 10;
   /// Index among the dynamic bodies of the one whose height drift is reported (the stack's top box), or -1.

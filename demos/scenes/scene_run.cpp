@@ -83,7 +83,8 @@ RunSummary runScene(WorldScene& scene, const RunOptions& options,
     if (const int below = scene.bodiesBelowGround()) {
       const std::vector<btVector3> now = scene.positions();
       std::size_t first = 0;
-      while (first + 1 < now.size() && now[first].y() >= scene.description().groundTop) ++first;
+      const float floor = scene.description().groundTop - scene.description().fallTolerance;
+      while (first + 1 < now.size() && now[first].y() >= floor) ++first;
       std::ostringstream what;
       what << below
            << " bodies have their centre of mass below the ground's top face (through the ground or off "

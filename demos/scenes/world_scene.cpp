@@ -3,10 +3,7 @@
 #include <BulletCollision/BroadphaseCollision/btDbvtBroadphase.h>
 #include <BulletCollision/CollisionDispatch/btCollisionDispatcher.h>
 #include <BulletCollision/CollisionDispatch/btDefaultCollisionConfiguration.h>
-#include <BulletCollision/CollisionShapes/btBoxShape.h>
-#include <BulletCollision/CollisionShapes/btCapsuleShape.h>
 #include <BulletCollision/CollisionShapes/btCompoundShape.h>
-#include <BulletCollision/CollisionShapes/btSphereShape.h>
 #include <BulletCollision/Gimpact/btGImpactCollisionAlgorithm.h>
 #include <BulletDynamics/ConstraintSolver/btSequentialImpulseConstraintSolver.h>
 #include <BulletDynamics/Dynamics/btDiscreteDynamicsWorld.h>
@@ -20,6 +17,7 @@
 #include <string>
 
 #include "scenes/body_overlap.h"
+#include "scenes/convex_piece_shape.h"
 #include "scenes/gimpact_peer.h"
 
 namespace gpucol::scenes {
@@ -65,18 +63,6 @@ btVector3 solidInertia(const TriangleMesh& mesh, float mass) {
                    btScalar(properties.inertia[8] * scale));
 }
 
-std::unique_ptr<btCollisionShape> convexShape(const ConvexPiece& piece) {
-  switch (piece.kind) {
-    case ConvexPiece::Kind::Box:
-      return std::make_unique<btBoxShape>(piece.size);
-    case ConvexPiece::Kind::Sphere:
-      return std::make_unique<btSphereShape>(piece.size.x());
-    case ConvexPiece::Kind::Capsule:
-      return std::make_unique<btCapsuleShape>(piece.size.x(), 2 * piece.size.y());
-  }
-  return nullptr;
-}
-
 }  // namespace
 
 WorldScene::WorldScene(const SceneDescription& scene, const WorldOptions& options)
@@ -106,12 +92,12 @@ WorldScene::WorldScene(const SceneDescription& scene, const WorldOptions& option
       }
       const std::vector<ConvexPiece>& pieces = m_scene.convexPieces[mesh];
       if (pieces.size() == 1 && pieces[0].pose == btTransform::getIdentity()) {
-        m_shapes->primitives.push_back(convexShape(pieces[0]));
+        m_shapes->primitives.push_back(makePieceShape(pieces[0]));
         continue;
       }
       auto compound = std::make_unique<btCompoundShape>();
       for (const ConvexPiece& piece : pieces) {
-        m_shapes->pieces.push_back(convexShape(piece));
+        m_shapes->pieces.push_back(makePieceShape(piece));
         compound->addChildShape(piece.pose, m_shapes->pieces.back().get());
       }
       m_shapes->primitives.push_back(std::move(compound));
@@ -295,7 +281,7 @@ int WorldScene::bodiesBelowGround() const {
   // A body resting on the ground has its centre of mass above the ground's top face (the centre of mass lies
   // in the body's convex hull, which rests on the face), so a centre below it means the body went through.
   return int(std::count_if(m_dynamicBodies.begin(), m_dynamicBodies.end(), [this](const btRigidBody* body) {
-    return body->getCenterOfMassPosition().y() < m_scene.groundTop;
+    return body->getCenterOfMassPosition().y() < m_scene.groundTop - m_scene.fallTolerance;
   }));
 }
 

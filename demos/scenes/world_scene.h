@@ -110,8 +110,8 @@ class WorldScene {
   std::vector<btVector3> positions() const;
   /// False when any dynamic body's position, orientation or velocity is NaN or infinite.
   bool allFinite() const;
-  /// Dynamic bodies whose centre of mass is below the ground's top face: they went through the ground (or
-  /// fell off its edge).
+  /// Dynamic bodies whose centre of mass is below the ground's top face (less
+  /// SceneDescription::fallTolerance): they went through the ground (or fell off its edge).
   int bodiesBelowGround() const;
   /// Largest distance of a dynamic body's centre of mass from the origin (metres).
   float farthestBody() const;
