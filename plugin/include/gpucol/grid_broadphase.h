@@ -35,9 +35,9 @@ struct GridBroadphaseStats {
   /// boxes grown at its last search: every box stayed inside its grown box (an eighth of its largest side
   /// on every side), so its pairs are among those.
   bool grownPairsTested = false;
-  /// True when a larger scene's step (CPU path) searched nothing: every box stayed within its slack of its box
-  /// at the last search (half the smallest margin by which it overlapped or missed a box near it, at most a
-  /// sixteenth of its largest side), so no pair can have changed and the pairs stay as they were.
+  /// True when a larger scene's step (CPU path) searched nothing: after a search that changed no pair, every
+  /// box stayed within its slack of its box at that search (half the smallest margin by which it overlapped or
+  /// missed a box near it, at most a sixteenth of its largest side), so no pair can have changed.
   bool boxesQuiet = false;
   /// Live proxies that were neither re-binned nor tested against each other this step: static or sleeping
   /// ones whose box and filter did not change since the grid was last built (their pairs carry over).
@@ -59,8 +59,9 @@ struct GridBroadphaseStats {
   /// them), and what the pair finder keeps between searches (the CPU finder, after a whole-grid search: the
   /// home-cell order of the binned boxes, 8 bytes per proxy; while few proxies move, the kept grid of
   /// stage 11), and what the last search kept for the steps after it (`grownPairsTested`, `boxesQuiet`: for a
-  /// larger scene its boxes and their slacks, 28 bytes per slot). Allocated capacities are counted, not sizes. Bullet's pair cache
-  /// (btHashedOverlappingPairCache or the user's) is not counted: it belongs to Bullet.
+  /// larger scene its boxes and their slacks, 28 bytes per slot). Allocated capacities are counted, not
+  /// sizes. Bullet's pair cache (btHashedOverlappingPairCache or the user's) is not counted: it belongs to
+  /// Bullet.
   std::size_t memoryBytes = 0;
   /// Bytes at the peak of the last step: memoryBytes plus the scratch of the step that is released at its
   /// end (the boxes' structure-of-arrays view, the finder's working arrays at their high-water mark, the last
