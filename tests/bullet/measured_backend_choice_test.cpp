@@ -68,6 +68,15 @@ TEST(MeasuredBackendChoice, ShortCpuWorkNeverTriesTheDevice) {
   EXPECT_EQ(*choice.decided(100), Path::Cpu);
 }
 
+TEST(MeasuredBackendChoice, ShortCpuWorkSlowedOnceNeverTriesTheDevice) {
+  // The second call is slowed (another tenant, a page fault): the class still stays on the CPU.
+  MeasuredBackendChoice choice;
+  const double shortMs = MeasuredBackendChoice::kDeviceWorthMs / 2;
+  const std::vector<Path> taken = measure(choice, 100, [&](Path, int call) { return call == 1 ? 40.0 : shortMs; });
+  EXPECT_EQ(taken, std::vector<Path>(2, Path::Cpu));
+  EXPECT_EQ(*choice.decided(100), Path::Cpu);
+}
+
 TEST(MeasuredBackendChoice, SizeClassesArePowersOfTwoAndIndependent) {
   MeasuredBackendChoice choice;
   measure(choice, 1024, [](Path p, int) { return p == Path::Cpu ? 2.0 : 1.0; });

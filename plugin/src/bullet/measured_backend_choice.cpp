@@ -41,7 +41,8 @@ void MeasuredBackendChoice::record(std::uint64_t size, Path path, double millise
   SizeClass& c = m_classes[classOf(size)];
   if (c.decided) return;
   (path == Path::Cpu ? c.cpuMs : c.deviceMs).push_back(milliseconds);
-  if (c.cpuMs.size() == 2 && c.deviceMs.empty() && c.cpuMs[1] < kDeviceWorthMs) {
+  // The faster of the two: one call slowed by another tenant does not send short work to the device.
+  if (c.cpuMs.size() == 2 && c.deviceMs.empty() && std::min(c.cpuMs[0], c.cpuMs[1]) < kDeviceWorthMs) {
     c.decided = Path::Cpu;
     return;
   }

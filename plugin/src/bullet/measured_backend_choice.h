@@ -13,8 +13,8 @@ namespace gpucol {
 /// the path that was faster on this machine, so that Auto's crossover is the device's own, whatever device it
 /// is.
 ///
-/// Sizes fall in classes (powers of two). A class starts on the CPU path. When its second CPU call takes less
-/// than kDeviceWorthMs, it stays there without trying the device. Otherwise its next calls alternate between
+/// Sizes fall in classes (powers of two). A class starts on the CPU path. When the faster of its first two CPU
+/// calls takes less than kDeviceWorthMs, it stays there without trying the device. Otherwise its next calls alternate between
 /// the two paths, the device first, until each path has kTimedCalls calls counted beyond its first (the first
 /// is not counted: on the device it pays the set-up, kernel builds and uploads of meshes new to it); then the
 /// class goes for good to the path with the lower median time.
