@@ -899,6 +899,49 @@ TEST(GridBroadphase, OverlapFilterCallbackIsHonoured) {
   EXPECT_GT(bp.stats().overlappingPairs, expect.size()) << "the filter should have rejected some pairs";
 }
 
+/// Marks every pair the cache holds (m_internalTmpValue 777, see expectKeptPairsKeptTheirEntries) and
+/// returns them.
+std::set<IdPair> markCachePairs(btOverlappingPairCache* cache) {
+  for (int i = 0; i < cache->getNumOverlappingPairs(); ++i)
+    cache->getOverlappingPairArray()[i].m_internalTmpValue = 777;
+  return cachePairs(cache);
+}
+
+/// Every pair of `before` (marked by markCachePairs) the cache still holds is the same entry, not re-created.
+void expectKeptPairsKeptTheirEntries(btOverlappingPairCache* cache, const std::set<IdPair>& before,
+                                     int step) {
+  for (int i = 0; i < cache->getNumOverlappingPairs(); ++i) {
+    const btBroadphasePair& p = cache->getOverlappingPairArray()[i];
+    if (before.count(idsOf(p)))
+      EXPECT_EQ(p.m_internalTmpValue, 777) << "step " << step << ": a kept pair re-created";
+  }
+}
+
+/// What may happen to box `v` of a resting scene at step t (t % 40): thrown by `throwBy` (returns true), a
+/// filter edited on its proxy as Bullet code may, or its proxy destroyed or created again.
+bool restingSceneEvent(int t, int v, const btVector3& throwBy, gpucol::GridBroadphase& bp,
+                       std::vector<Box>& boxes, btDispatcher* dispatcher) {
+  Box& victim = boxes[std::size_t(v)];
+  const int event = t % 40;
+  if (event == 10 && victim.proxy) {
+    victim.lo += throwBy, victim.hi += throwBy;
+    bp.setAabb(victim.proxy, victim.lo, victim.hi, dispatcher);
+    return true;
+  }
+  if (event == 20 && victim.proxy) {
+    victim.group = victim.proxy->m_collisionFilterGroup = 64;
+    victim.mask = victim.proxy->m_collisionFilterMask = 64;
+  } else if (event == 30) {
+    if (victim.proxy) {
+      bp.destroyProxy(victim.proxy, dispatcher);
+      victim.proxy = nullptr;
+    } else {
+      addProxy(bp, boxes, v, dispatcher);
+    }
+  }
+  return false;
+}
+
 /// A small scene at rest (boxes on a lattice, faces touching, each jiggling about its place every step so that
 /// pairs of neighbours come and go), with now and then a box thrown far, a filter edited on its proxy, a proxy
 /// destroyed or created: after every step the cache holds the brute-force pairs, the pairs that stay keep
@@ -930,9 +973,7 @@ void expectGrownPairsAnswerSmallScenes(btOverlapFilterCallback* callback) {
   int grownSteps = 0;
   const int steps = 300;
   for (int t = 0; t < steps; ++t) {
-    for (int i = 0; i < cache->getNumOverlappingPairs(); ++i)
-      cache->getOverlappingPairArray()[i].m_internalTmpValue = 777;
-    const std::set<IdPair> before = cachePairs(cache);
+    const std::set<IdPair> before = markCachePairs(cache);
     for (int i = 0; i < count; ++i) {
       Box& b = boxes[i];
       if (!b.proxy) continue;
@@ -940,30 +981,12 @@ void expectGrownPairsAnswerSmallScenes(btOverlapFilterCallback* callback) {
       b.lo = c - btVector3(0.5f, 0.5f, 0.5f), b.hi = c + btVector3(0.5f, 0.5f, 0.5f);
       bp.setAabb(b.proxy, b.lo, b.hi, &dispatcher);
     }
-    const int event = t % 40;
-    Box& victim = boxes[std::size_t(rng() % count)];
-    if (event == 10 && victim.proxy) {  // thrown far and back later
-      victim.lo += btVector3(0, 3, 0), victim.hi += btVector3(0, 3, 0);
-      bp.setAabb(victim.proxy, victim.lo, victim.hi, &dispatcher);
-    } else if (event == 20 && victim.proxy) {  // a filter edited on the proxy, as Bullet code may
-      victim.group = victim.proxy->m_collisionFilterGroup = 64;
-      victim.mask = victim.proxy->m_collisionFilterMask = 64;
-    } else if (event == 30) {  // a proxy destroyed, or created again
-      if (victim.proxy) {
-        bp.destroyProxy(victim.proxy, &dispatcher);
-        victim.proxy = nullptr;
-      } else {
-        addProxy(bp, boxes, int(&victim - boxes.data()), &dispatcher);
-      }
-    }
+    // A thrown box comes back to its place next step.
+    restingSceneEvent(t, int(rng() % count), btVector3(0, 3, 0), bp, boxes, &dispatcher);
     bp.calculateOverlappingPairs(&dispatcher);
     grownSteps += bp.stats().grownPairsTested;
-    const std::set<IdPair> after = cachePairs(cache);
-    ASSERT_EQ(after, expected()) << "step " << t;
-    for (int i = 0; i < cache->getNumOverlappingPairs(); ++i) {
-      const btBroadphasePair& p = cache->getOverlappingPairArray()[i];
-      if (before.count(idsOf(p))) EXPECT_EQ(p.m_internalTmpValue, 777) << "step " << t << ": a kept pair re-created";
-    }
+    ASSERT_EQ(cachePairs(cache), expected()) << "step " << t;
+    expectKeptPairsKeptTheirEntries(cache, before, t);
   }
   EXPECT_GT(grownSteps, steps * 3 / 4);
 }
@@ -1005,9 +1028,7 @@ void expectQuietBoxesAnswerLargerScenes(btOverlapFilterCallback* callback) {
   const int restSteps = 160, wanderSteps = 60;
   for (int t = 0; t < restSteps + wanderSteps; ++t) {
     const bool wandering = t >= restSteps;
-    for (int i = 0; i < cache->getNumOverlappingPairs(); ++i)
-      cache->getOverlappingPairArray()[i].m_internalTmpValue = 777;
-    const std::set<IdPair> before = cachePairs(cache);
+    const std::set<IdPair> before = markCachePairs(cache);
     for (int i = 0; i < count; ++i) {
       Box& b = boxes[i];
       if (!b.proxy) continue;
@@ -1017,33 +1038,15 @@ void expectQuietBoxesAnswerLargerScenes(btOverlapFilterCallback* callback) {
       b.lo = c - half, b.hi = c + half;
       bp.setAabb(b.proxy, b.lo, b.hi, &dispatcher);
     }
-    const int event = t % 40;
+    // A thrown box stays where it was thrown.
     const int v = int(rng() % count);
-    Box& victim = boxes[std::size_t(v)];
-    if (event == 10 && victim.proxy) {  // thrown far, and it stays there
-      place[v] += btVector3(0, 30, 0);
-      victim.lo += btVector3(0, 30, 0), victim.hi += btVector3(0, 30, 0);
-      bp.setAabb(victim.proxy, victim.lo, victim.hi, &dispatcher);
-    } else if (event == 20 && victim.proxy) {  // a filter edited on the proxy, as Bullet code may
-      victim.group = victim.proxy->m_collisionFilterGroup = 64;
-      victim.mask = victim.proxy->m_collisionFilterMask = 64;
-    } else if (event == 30) {  // a proxy destroyed, or created again
-      if (victim.proxy) {
-        bp.destroyProxy(victim.proxy, &dispatcher);
-        victim.proxy = nullptr;
-      } else {
-        addProxy(bp, boxes, v, &dispatcher);
-      }
-    }
+    const btVector3 throwBy(0, 30, 0);
+    if (restingSceneEvent(t, v, throwBy, bp, boxes, &dispatcher)) place[v] += throwBy;
     bp.calculateOverlappingPairs(&dispatcher);
     (wandering ? quietWandering : quietResting) += bp.stats().boxesQuiet;
     EXPECT_FALSE(bp.stats().grownPairsTested) << "step " << t << ": a larger scene has no grown pairs";
-    const std::set<IdPair> after = cachePairs(cache);
-    ASSERT_EQ(after, bruteForce(boxes, callback ? cache : nullptr)) << "step " << t;
-    for (int i = 0; i < cache->getNumOverlappingPairs(); ++i) {
-      const btBroadphasePair& p = cache->getOverlappingPairArray()[i];
-      if (before.count(idsOf(p))) EXPECT_EQ(p.m_internalTmpValue, 777) << "step " << t << ": a kept pair re-created";
-    }
+    ASSERT_EQ(cachePairs(cache), bruteForce(boxes, callback ? cache : nullptr)) << "step " << t;
+    expectKeptPairsKeptTheirEntries(cache, before, t);
   }
   EXPECT_GT(quietResting, restSteps * 3 / 4) << "a resting pile's steps should search nothing";
   EXPECT_LT(quietWandering, wanderSteps / 2) << "wandering boxes leave their slacks";

@@ -59,25 +59,10 @@ bool GrownBoxPairs::retestEveryPair(std::vector<std::uint64_t>& out) {
 
 void GrownBoxPairs::takeSlacks() {
   m_tested = m_now;
-  // A pair's margin: how far its boxes overlap on their least overlapping axis, or how far apart they are
-  // on their most separated one. Its status holds while the two boxes together move its corners less than
-  // that, so each box may move half the smallest margin of its pairs; a hair less, for the rounding of the
-  // differences taken here and in retest.
+  // Each box may move the smallest slack of its pairs.
   m_slack.assign(m_slots.size(), std::numeric_limits<float>::infinity());
   for (std::size_t k = 0; k < m_keys.size(); ++k) {
-    const BoxCorners& a = m_now[m_first[k]];
-    const BoxCorners& b = m_now[m_second[k]];
-    float margin;
-    if (m_overlap[k]) {
-      margin = std::numeric_limits<float>::infinity();
-      for (int axis = 0; axis < 3; ++axis)
-        margin = std::min({margin, a.hi[axis] - b.lo[axis], b.hi[axis] - a.lo[axis]});
-    } else {
-      margin = 0;
-      for (int axis = 0; axis < 3; ++axis)
-        margin = std::max({margin, b.lo[axis] - a.hi[axis], a.lo[axis] - b.hi[axis]});
-    }
-    const float slack = 0.5f * margin * (1.0f - 1.0f / 1048576.0f);
+    const float slack = pairSlack(m_now[m_first[k]], m_now[m_second[k]], m_overlap[k] != 0);
     m_slack[m_first[k]] = std::min(m_slack[m_first[k]], slack);
     m_slack[m_second[k]] = std::min(m_slack[m_second[k]], slack);
   }

@@ -7,6 +7,7 @@
 #include <cmath>
 #include <cstddef>
 #include <cstdint>
+#include <limits>
 #include <vector>
 
 #include "broadphase/grid_pair_finder.h"
@@ -23,6 +24,32 @@ inline BoxCorners grownBox(const BoxCorners& b) {
   BoxCorners g = b;
   for (int a = 0; a < 3; ++a) g.lo[a] -= grow, g.hi[a] += grow;
   return g;
+}
+
+/// How far a box may move while the overlap of boxes a and b (`overlap`: whether they overlap now) cannot
+/// change, the other moving as far: half the pair's margin (how far the boxes overlap on their least
+/// overlapping axis, or how far apart they are on their most separated one), a hair less for the rounding of
+/// the differences taken here and in cornerMove.
+inline float pairSlack(const BoxCorners& a, const BoxCorners& b, bool overlap) {
+  float margin;
+  if (overlap) {
+    margin = std::numeric_limits<float>::infinity();
+    for (int axis = 0; axis < 3; ++axis)
+      margin = std::min({margin, a.hi[axis] - b.lo[axis], b.hi[axis] - a.lo[axis]});
+  } else {
+    margin = 0;
+    for (int axis = 0; axis < 3; ++axis)
+      margin = std::max({margin, b.lo[axis] - a.hi[axis], a.lo[axis] - b.hi[axis]});
+  }
+  return 0.5f * margin * (1.0f - 1.0f / 1048576.0f);
+}
+
+/// The farthest any corner coordinate of box `now` lies from box `then`'s (NaN when a coordinate is NaN).
+inline float cornerMove(const BoxCorners& now, const BoxCorners& then) {
+  float moved = 0;
+  for (int a = 0; a < 3; ++a)
+    moved = std::max({moved, std::fabs(now.lo[a] - then.lo[a]), std::fabs(now.hi[a] - then.hi[a])});
+  return moved;
 }
 
 /// The pairs of grown boxes of one search, and the test of a later step's boxes against them.
@@ -53,13 +80,8 @@ class GrownBoxPairs {
   bool retest(BoxOf&& boxOf, std::vector<std::uint64_t>& out) {
     bool within = true;
     for (std::size_t i = 0; i < m_slots.size(); ++i) {
-      const BoxCorners b = boxOf(m_slots[i]);
-      m_now[i] = b;
-      const BoxCorners& r = m_tested[i];
-      float moved = 0;
-      for (int a = 0; a < 3; ++a)
-        moved = std::max({moved, std::fabs(b.lo[a] - r.lo[a]), std::fabs(b.hi[a] - r.hi[a])});
-      within &= moved < m_slack[i];
+      m_now[i] = boxOf(m_slots[i]);
+      within &= cornerMove(m_now[i], m_tested[i]) < m_slack[i];
     }
     if (within) return false;
     return retestEveryPair(out);

@@ -1,8 +1,6 @@
 #include "broadphase/quiet_boxes.h"
 
 #include <algorithm>
-#include <cmath>
-#include <limits>
 
 #include "broadphase/grown_box_pairs.h"
 #include "broadphase/query_grid.h"
@@ -43,22 +41,10 @@ void QuietBoxes::takeSlacks(const std::vector<std::uint32_t>& slots, const std::
       // Both boxes of a pair take its margin, from either side: a smaller box's grown box may miss the other.
       if (t == s || (group[s] & mask[t]) == 0 || (group[t] & mask[s]) == 0) continue;
       const BoxCorners& b = m_boxes[t];
-      // The pair's margin: how far the boxes overlap on their least overlapping axis, or how far apart they
-      // are on their most separated one (as GrownBoxPairs takes it); the pair's overlap holds while the two
-      // boxes together move their corners less than that; a hair less, for the rounding of the differences.
       bool overlap = true;
-      for (int axis = 0; axis < 3; ++axis) overlap = overlap && a.lo[axis] <= b.hi[axis] && b.lo[axis] <= a.hi[axis];
-      float margin;
-      if (overlap) {
-        margin = std::numeric_limits<float>::infinity();
-        for (int axis = 0; axis < 3; ++axis)
-          margin = std::min({margin, a.hi[axis] - b.lo[axis], b.hi[axis] - a.lo[axis]});
-      } else {
-        margin = 0;
-        for (int axis = 0; axis < 3; ++axis)
-          margin = std::max({margin, b.lo[axis] - a.hi[axis], a.lo[axis] - b.hi[axis]});
-      }
-      const float slack = 0.5f * margin * (1.0f - 1.0f / 1048576.0f);
+      for (int axis = 0; axis < 3; ++axis)
+        overlap = overlap && a.lo[axis] <= b.hi[axis] && b.lo[axis] <= a.hi[axis];
+      const float slack = pairSlack(a, b, overlap);
       m_slack[s] = std::min(m_slack[s], slack);
       m_slack[t] = std::min(m_slack[t], slack);
     }
@@ -74,10 +60,8 @@ void QuietBoxes::takeSlacks(const std::vector<std::uint32_t>& slots, const std::
 
 bool QuietBoxes::holds(std::uint32_t s, const float lo[3], const float hi[3]) const {
   if (s >= m_slack.size()) return false;
-  const BoxCorners& b = m_boxes[s];
-  float moved = 0;
-  for (int a = 0; a < 3; ++a) moved = std::max({moved, std::fabs(lo[a] - b.lo[a]), std::fabs(hi[a] - b.hi[a])});
-  return moved < m_slack[s];  // false for a slot not taken (slack -1) and for NaN
+  const BoxCorners now{{lo[0], lo[1], lo[2]}, {hi[0], hi[1], hi[2]}};
+  return cornerMove(now, m_boxes[s]) < m_slack[s];  // false for a slot not taken (slack -1) and for NaN
 }
 
 void QuietBoxes::clear() {

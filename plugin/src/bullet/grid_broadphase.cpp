@@ -94,22 +94,34 @@ bool GridBroadphase::Impl::answerQuietly(btDispatcher* dispatcher, GridBroadphas
       return false;
     }
   }
-  const auto cacheStart = std::chrono::steady_clock::now();
-  ++grownReuses;
   st.boxesQuiet = true;
   st.overlappingPairs = current.size();
+  finishKeptStep(dispatcher, st, nullptr, start);
+  return true;
+}
+
+void GridBroadphase::Impl::finishKeptStep(btDispatcher* dispatcher, GridBroadphaseStats& st,
+                                          const std::vector<std::uint64_t>* changed,
+                                          std::chrono::steady_clock::time_point start) {
+  const auto cacheStart = std::chrono::steady_clock::now();
+  ++grownReuses;
   st.searchMs = std::chrono::duration<double, std::milli>(cacheStart - start).count();
-  if (!refused.empty()) {
-    foundCoded.assign(current.toVector());
+  // Nothing for the cache when no pair changed and none was refused (a refused pair found again is offered
+  // again, diffAndUpdateCache); the kept pairs' overlaps were those of `current` after its search.
+  if (changed || !refused.empty()) {
+    if (changed)
+      foundCoded.assign(*changed);
+    else
+      foundCoded.assign(current.toVector());
     diffAndUpdateCache(dispatcher, st);
     for (auto* v : {&addedKeys, &removedKeys}) std::vector<std::uint64_t>().swap(*v);
   }
   dirty = false;
+  // What was kept is held between steps; the diff's lists of changes are small.
   st.memoryBytes = st.peakBytes = heldBytes();
   st.cacheMs =
       std::chrono::duration<double, std::milli>(std::chrono::steady_clock::now() - cacheStart).count();
   stats = st;
-  return true;
 }
 
 bool GridBroadphase::Impl::answerFromGrownPairs(btDispatcher* dispatcher, GridBroadphaseStats& st) {
@@ -134,28 +146,10 @@ bool GridBroadphase::Impl::answerFromGrownPairs(btDispatcher* dispatcher, GridBr
     dropKeptSearch();
     return false;
   }
-  const auto cacheStart = std::chrono::steady_clock::now();
-  ++grownReuses;
   st.searched = true;
   st.grownPairsTested = true;
   st.overlappingPairs = changed ? grownFound.size() : current.size();
-  st.searchMs = std::chrono::duration<double, std::milli>(cacheStart - start).count();
-  // Nothing for the cache when no pair changed and none was refused (a refused pair found again is offered
-  // again, diffAndUpdateCache); the kept pairs' overlaps were those of `current` after its search.
-  if (changed || !refused.empty()) {
-    if (changed)
-      foundCoded.assign(grownFound);
-    else
-      foundCoded.assign(current.toVector());
-    diffAndUpdateCache(dispatcher, st);
-    for (auto* v : {&addedKeys, &removedKeys}) std::vector<std::uint64_t>().swap(*v);
-  }
-  dirty = false;
-  // The list and its test's scratch are held between steps; the diff's lists of changes are small.
-  st.memoryBytes = st.peakBytes = heldBytes();
-  st.cacheMs =
-      std::chrono::duration<double, std::milli>(std::chrono::steady_clock::now() - cacheStart).count();
-  stats = st;
+  finishKeptStep(dispatcher, st, changed ? &grownFound : nullptr, start);
   return true;
 }
 

@@ -409,6 +409,12 @@ struct GridBroadphase::Impl {
   /// follows).
   bool answerQuietly(btDispatcher* dispatcher, GridBroadphaseStats& st);
 
+  /// The end of a step answered from what the last search kept (begun at `start`): the cache is told the
+  /// difference to `changed`, the step's pairs when they changed (nullptr: they did not; refused pairs are
+  /// then offered again), and the step's stats are set.
+  void finishKeptStep(btDispatcher* dispatcher, GridBroadphaseStats& st,
+                      const std::vector<std::uint64_t>* changed, std::chrono::steady_clock::time_point start);
+
   /// A step of a small scene whose boxes all stayed inside their grown boxes: the kept pairs are tested on
   /// the boxes as they are, and the cache is told the difference. Returns false, having done nothing but
   /// drop the list, when a filter changed since (a full search follows).
