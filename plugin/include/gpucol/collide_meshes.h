@@ -66,11 +66,18 @@ struct MeshPairQuery {
   btTransform transformA = btTransform::getIdentity();  ///< World transform of shape A.
   const MeshShape* shapeB = nullptr;  ///< Second shape.
   btTransform transformB = btTransform::getIdentity();  ///< World transform of shape B.
+  /// Speculative contacts: triangles up to this much farther apart than the shapes' margins also give
+  /// contacts, at their positive distance, which Bullet's solver lets the bodies close in one step and no
+  /// more (MeshMeshAlgorithm sets it to how far the bodies can move towards each other in the step). 0: none.
+  btScalar speculativeDistance = 0;
 };
 
 /// Collides two mesh shapes at the given world transforms, without a world.
 MeshPairResult collideMeshes(const MeshShape& shapeA, const btTransform& transformA, const MeshShape& shapeB,
                              const btTransform& transformB, const Config& config = Config());
+
+/// Collides one query's pair, without a world.
+MeshPairResult collideMeshes(const MeshPairQuery& query, const Config& config = Config());
 
 /// Collides every pair of the batch, in parallel; results come back in the order of the queries.
 std::vector<MeshPairResult> collideMeshesBatch(const std::vector<MeshPairQuery>& queries,

@@ -50,10 +50,10 @@ class MeshMeshAlgorithm : public btActivatingCollisionAlgorithm {
   /// other mesh pairs. processCollision uses it when the shapes and transforms are the ones given here.
   void setPrecomputedResult(const MeshPairQuery& query, MeshPairResult result);
 
-  /// The query this pair would run between two mesh shapes (a GImpact mesh through its stand-in);
-  /// std::nullopt when it is not a mesh-mesh pair.
+  /// The query this pair would run between two mesh shapes (a GImpact mesh through its stand-in) in a step of
+  /// `timeStep` seconds; std::nullopt when it is not a mesh-mesh pair.
   std::optional<MeshPairQuery> meshPairQuery(const btCollisionObjectWrapper* body0,
-                                             const btCollisionObjectWrapper* body1) const;
+                                             const btCollisionObjectWrapper* body1, btScalar timeStep) const;
 
  private:
   struct Precomputed;

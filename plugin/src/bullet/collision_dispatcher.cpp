@@ -24,8 +24,8 @@ namespace {
 // algorithm, created here if the pair is new.
 class MeshPairCollector : public btOverlapCallback {
  public:
-  MeshPairCollector(btCollisionDispatcher& dispatcher, bool gimpactMeshes)
-      : m_dispatcher(dispatcher), m_gimpactMeshes(gimpactMeshes) {}
+  MeshPairCollector(btCollisionDispatcher& dispatcher, bool gimpactMeshes, btScalar timeStep)
+      : m_dispatcher(dispatcher), m_gimpactMeshes(gimpactMeshes), m_timeStep(timeStep) {}
 
   bool processOverlap(btBroadphasePair& pair) override {
     auto* object0 = static_cast<btCollisionObject*>(pair.m_pProxy0->m_clientObject);
@@ -46,7 +46,7 @@ class MeshPairCollector : public btOverlapCallback {
     }
     auto* algorithm = dynamic_cast<MeshMeshAlgorithm*>(pair.m_algorithm);
     if (algorithm == nullptr) return false;  // a user replaced the create function for meshes
-    if (std::optional<MeshPairQuery> query = algorithm->meshPairQuery(&wrapper0, &wrapper1)) {
+    if (std::optional<MeshPairQuery> query = algorithm->meshPairQuery(&wrapper0, &wrapper1, m_timeStep)) {
       algorithms.push_back(algorithm);
       queries.push_back(*query);
       gimpactPairs += gimpact0 || gimpact1;
@@ -61,6 +61,7 @@ class MeshPairCollector : public btOverlapCallback {
  private:
   btCollisionDispatcher& m_dispatcher;
   bool m_gimpactMeshes;
+  btScalar m_timeStep;
 };
 
 // A concave shape gpucol collides a mesh with (a plane, a BVH, a heightfield, a GImpact mesh, a user's own).
@@ -129,7 +130,7 @@ void CollisionDispatcher::dispatchAllCollisionPairs(btOverlappingPairCache* pair
   m_standIns->beginStep();
   m_standIns->resetBuilt();
   if (dispatchInfo.m_dispatchFunc == btDispatcherInfo::DISPATCH_DISCRETE) {
-    MeshPairCollector collector(*this, m_config.collideGImpactShapes);
+    MeshPairCollector collector(*this, m_config.collideGImpactShapes, dispatchInfo.m_timeStep);
     pairCache->processAllOverlappingPairs(&collector, this, dispatchInfo);
     if (!collector.queries.empty()) {
       const auto start = std::chrono::steady_clock::now();

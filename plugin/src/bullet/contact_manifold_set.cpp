@@ -77,8 +77,9 @@ ContactManifoldSet::~ContactManifoldSet() {
   for (const Group& g : m_groups) m_dispatcher->releaseManifold(g.manifold);
 }
 
-void ContactManifoldSet::write(const std::vector<PairContact>& contacts, const btCollisionObjectWrapper* body0,
-                               const btCollisionObjectWrapper* body1, btManifoldResult* result) {
+void ContactManifoldSet::write(const std::vector<PairContact>& contacts,
+                               const btCollisionObjectWrapper* body0, const btCollisionObjectWrapper* body1,
+                               btManifoldResult* result, btScalar speculativeDistance) {
   btPersistentManifold* const original = result->getPersistentManifold();
   const btMatrix3x3& body1Basis = body1->getWorldTransform().getBasis();
   std::vector<std::vector<PairContact>> byGroup(m_groups.size());
@@ -89,12 +90,15 @@ void ContactManifoldSet::write(const std::vector<PairContact>& contacts, const b
     if (group == m_groups.size()) {
       btPersistentManifold* manifold =
           m_dispatcher->getNewManifold(body0->getCollisionObject(), body1->getCollisionObject());
-      m_groups.push_back({manifold, normalInBody1});
+      m_groups.push_back({manifold, normalInBody1, manifold->getContactBreakingThreshold()});
       byGroup.emplace_back();
     }
     byGroup[group].push_back(contact);
   }
   for (std::size_t g = 0; g < m_groups.size(); ++g) {
+    // Bullet drops a point beyond the breaking threshold, both when it is added and when it is refreshed.
+    m_groups[g].manifold->setContactBreakingThreshold(
+        btMax(m_groups[g].breakingThreshold, speculativeDistance));
     result->setPersistentManifold(m_groups[g].manifold);
     for (std::size_t i : chooseSupport(byGroup[g], body1Basis * m_groups[g].normalInBody1)) {
       const PairContact& contact = byGroup[g][i];

@@ -39,10 +39,13 @@ class ContactManifoldSet {
   ContactManifoldSet(const ContactManifoldSet&) = delete;
   ContactManifoldSet& operator=(const ContactManifoldSet&) = delete;
 
-  /// Writes this step's contacts into the manifolds through `result` (whose body wrappers are body0 and body1),
-  /// refreshes every manifold, releases the empty ones. `result`'s own manifold pointer is restored after.
+  /// Writes this step's contacts into the manifolds through `result` (whose body wrappers are body0 and
+  /// body1), refreshes every manifold, releases the empty ones. `result`'s own manifold pointer is restored
+  /// after. Speculative contacts up to `speculativeDistance` apart are kept: a manifold's breaking threshold
+  /// is Bullet's for the pair, or that distance when it is larger, for this step.
   void write(const std::vector<PairContact>& contacts, const btCollisionObjectWrapper* body0,
-             const btCollisionObjectWrapper* body1, btManifoldResult* result);
+             const btCollisionObjectWrapper* body1, btManifoldResult* result,
+             btScalar speculativeDistance = 0);
 
   /// Appends the pair's manifolds.
   void appendTo(btManifoldArray& manifolds) const;
@@ -51,6 +54,7 @@ class ContactManifoldSet {
   struct Group {
     btPersistentManifold* manifold;
     btVector3 normalInBody1;  // reference normal, in body1's frame
+    btScalar breakingThreshold;  // Bullet's, as the dispatcher made the manifold
   };
   btDispatcher* m_dispatcher;
   std::vector<Group> m_groups;

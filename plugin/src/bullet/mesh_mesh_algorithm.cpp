@@ -6,7 +6,10 @@
 #include <BulletCollision/CollisionDispatch/btManifoldResult.h>
 #include <BulletCollision/CollisionShapes/btStaticPlaneShape.h>
 #include <BulletCollision/Gimpact/btGImpactShape.h>
+#include <BulletCollision/NarrowPhaseCollision/btPersistentManifold.h>
+#include <BulletDynamics/Dynamics/btRigidBody.h>
 
+#include <cmath>
 #include <list>
 #include <mutex>
 #include <stdexcept>
@@ -75,6 +78,40 @@ std::vector<PairContact> toPairContacts(const std::vector<MeshContact>& reduced,
   return out;
 }
 
+// The farthest any point of the body's shape is from the body's origin.
+btScalar reachFromOrigin(const btCollisionShape& shape) {
+  btVector3 center;
+  btScalar radius;
+  shape.getBoundingSphere(center, radius);
+  return center.length() + radius;
+}
+
+// How far the two bodies can move towards each other in a step of `timeStep` at their velocities: their
+// relative linear motion and each one's turn times its reach from its centre. When that is more than Bullet's
+// contact breaking threshold for the pair (what its convex shapes' speculative reach is), triangles that far
+// apart get speculative contacts (thesis §7.1: small triangles otherwise pass through each other between
+// steps), capped at the smaller body's diameter. Slower pairs get none: resting bodies touch, and the closest
+// features of touching triangles have no direction to push along.
+btScalar speculativeDistance(const btCollisionObjectWrapper* body0, const btCollisionObjectWrapper* body1,
+                             btScalar timeStep) {
+  if (!(timeStep > 0) || !std::isfinite(timeStep)) return 0;
+  const btRigidBody* rigid0 = btRigidBody::upcast(body0->getCollisionObject());
+  const btRigidBody* rigid1 = btRigidBody::upcast(body1->getCollisionObject());
+  const btVector3 zero(0, 0, 0);
+  const btVector3 linear0 = rigid0 ? rigid0->getLinearVelocity() : zero;
+  const btVector3 linear1 = rigid1 ? rigid1->getLinearVelocity() : zero;
+  const btScalar spin0 = rigid0 ? rigid0->getAngularVelocity().length() : 0;
+  const btScalar spin1 = rigid1 ? rigid1->getAngularVelocity().length() : 0;
+  const btCollisionShape& shape0 = *body0->getCollisionShape();
+  const btCollisionShape& shape1 = *body1->getCollisionShape();
+  const btScalar reach0 = reachFromOrigin(shape0), reach1 = reachFromOrigin(shape1);
+  const btScalar approach = timeStep * ((linear0 - linear1).length() + spin0 * reach0 + spin1 * reach1);
+  const btScalar breaking = btMin(shape0.getContactBreakingThreshold(gContactBreakingThreshold),
+                                  shape1.getContactBreakingThreshold(gContactBreakingThreshold));
+  if (!std::isfinite(approach) || !(approach > breaking)) return 0;
+  return btMin(approach, 2 * btMin(reach0, reach1));
+}
+
 std::string pairName(const btCollisionShape* s0, const btCollisionShape* s1) {
   const auto name = [](const btCollisionShape* s) {
     return MeshShape::isMeshShape(s) ? "mesh '" + static_cast<const MeshShape*>(s)->mesh().name() + "'"
@@ -128,7 +165,8 @@ const MeshShape* MeshMeshAlgorithm::asMesh(const btCollisionShape* shape) const 
 }
 
 std::optional<MeshPairQuery> MeshMeshAlgorithm::meshPairQuery(const btCollisionObjectWrapper* body0,
-                                                              const btCollisionObjectWrapper* body1) const {
+                                                              const btCollisionObjectWrapper* body1,
+                                                              btScalar timeStep) const {
   const MeshShape* a = asMesh(body0->getCollisionShape());
   const MeshShape* b = a ? asMesh(body1->getCollisionShape()) : nullptr;
   if (b == nullptr) return std::nullopt;
@@ -137,6 +175,7 @@ std::optional<MeshPairQuery> MeshMeshAlgorithm::meshPairQuery(const btCollisionO
   query.transformA = body0->getWorldTransform();
   query.shapeB = b;
   query.transformB = body1->getWorldTransform();
+  query.speculativeDistance = speculativeDistance(body0, body1, timeStep);
   return query;
 }
 
@@ -144,12 +183,14 @@ void MeshMeshAlgorithm::setPrecomputedResult(const MeshPairQuery& query, MeshPai
   m_precomputed = std::make_unique<Precomputed>(Precomputed{query, std::move(result)});
 }
 
-void MeshMeshAlgorithm::processCollision(const btCollisionObjectWrapper* body0, const btCollisionObjectWrapper* body1,
-                                         const btDispatcherInfo& /*dispatchInfo*/, btManifoldResult* resultOut) {
+void MeshMeshAlgorithm::processCollision(const btCollisionObjectWrapper* body0,
+                                         const btCollisionObjectWrapper* body1,
+                                         const btDispatcherInfo& dispatchInfo, btManifoldResult* resultOut) {
   const btCollisionShape* s0 = body0->getCollisionShape();
   const btCollisionShape* s1 = body1->getCollisionShape();
   std::unique_ptr<Precomputed> precomputed = std::move(m_precomputed);
   std::vector<PairContact> contacts;
+  btScalar speculative = 0;
   try {
     const MeshShape* mesh0 = asMesh(s0);
     const MeshShape* mesh1 = asMesh(s1);
@@ -157,16 +198,17 @@ void MeshMeshAlgorithm::processCollision(const btCollisionObjectWrapper* body0, 
       // Only a GImpact mesh's pair comes here without a mesh: its triangles could not be read this step.
       throw std::runtime_error("the GImpact mesh's triangles cannot be read");
     }
-    if (const std::optional<MeshPairQuery> query = meshPairQuery(body0, body1)) {
+    if (const std::optional<MeshPairQuery> query = meshPairQuery(body0, body1, dispatchInfo.m_timeStep)) {
       // The batch's result is used only for the very shapes and transforms it was computed with: a compound's
       // child or a user calling processCollision again gets its own query.
       const bool batched = precomputed && precomputed->query.shapeA == query->shapeA &&
                            precomputed->query.shapeB == query->shapeB &&
                            sameTransform(precomputed->query.transformA, query->transformA) &&
-                           sameTransform(precomputed->query.transformB, query->transformB);
+                           sameTransform(precomputed->query.transformB, query->transformB) &&
+                           precomputed->query.speculativeDistance == query->speculativeDistance;
       const MeshPairResult result =
-          batched ? std::move(precomputed->result)
-                  : collideMeshes(*query->shapeA, query->transformA, *query->shapeB, query->transformB, m_config);
+          batched ? std::move(precomputed->result) : collideMeshes(*query, m_config);
+      speculative = query->speculativeDistance;
       contacts = toPairContacts(result.reducedContacts, *query->shapeA, *query->shapeB);
     } else {
       // A mesh against a plane or another concave shape: computed with the mesh as body0, then turned round if
@@ -201,7 +243,7 @@ void MeshMeshAlgorithm::processCollision(const btCollisionObjectWrapper* body0, 
     m_manifolds = std::make_unique<ContactManifoldSet>(m_dispatcher);
     return;
   }
-  m_manifolds->write(contacts, body0, body1, resultOut);
+  m_manifolds->write(contacts, body0, body1, resultOut, speculative);
 }
 
 btScalar MeshMeshAlgorithm::calculateTimeOfImpact(btCollisionObject*, btCollisionObject*, const btDispatcherInfo&,

@@ -399,12 +399,14 @@ void requireFinite(const btTransform& transformA, const btTransform& transformB)
   }
 }
 
-MeshPairResult collidePairOnCpu(const MeshShape& shapeA, const btTransform& transformA, const MeshShape& shapeB,
-                                const btTransform& transformB, const Config& config) {
-  requireFinite(transformA, transformB);
+MeshPairResult collidePairOnCpu(const MeshPairQuery& query, const Config& config) {
+  requireFinite(query.transformA, query.transformB);
+  const MeshShape& shapeA = *query.shapeA;
+  const MeshShape& shapeB = *query.shapeB;
   MeshPairResult result;
   result.stats.backendUsed = Backend::Cpu;
-  const PairFrame frame = makePairFrame(shapeA, transformA, shapeB, transformB);
+  const PairFrame frame =
+      makePairFrame(shapeA, query.transformA, shapeB, query.transformB, query.speculativeDistance);
 
   auto start = Clock::now();
   // Root boxes first: a pair whose meshes' boxes miss costs one box test (DESIGN.md, "skip what a scene does

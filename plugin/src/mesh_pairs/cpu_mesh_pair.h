@@ -14,10 +14,8 @@ namespace gpucol {
 /// Throws std::invalid_argument when either transform has a NaN or infinite component.
 void requireFinite(const btTransform& transformA, const btTransform& transformB);
 
-/// The pair (shapeA at transformA, shapeB at transformB) on the CPU: root boxes, middle phase, near phase,
-/// contacts and their reduction.
-MeshPairResult collidePairOnCpu(const MeshShape& shapeA, const btTransform& transformA, const MeshShape& shapeB,
-                                const btTransform& transformB, const Config& config);
+/// The query's pair on the CPU: root boxes, middle phase, near phase, contacts and their reduction.
+MeshPairResult collidePairOnCpu(const MeshPairQuery& query, const Config& config);
 
 /// Fills `result`'s intersecting pairs, contacts and reduced contacts from the near phase's `hits` (in
 /// candidate order, indexing result.candidatePairs), the same way for the CPU's hits and the device's

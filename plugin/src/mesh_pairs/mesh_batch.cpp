@@ -34,7 +34,7 @@ bool collideOnDevice(const std::vector<MeshPairQuery>& queries, const Config& co
   std::uint64_t triangles = 0;
   for (std::size_t i = 0; i < queries.size(); ++i) {
     const MeshPairQuery& q = queries[i];
-    frames.push_back(makePairFrame(*q.shapeA, q.transformA, *q.shapeB, q.transformB));
+    frames.push_back(makePairFrame(*q.shapeA, q.transformA, *q.shapeB, q.transformB, q.speculativeDistance));
     if (rootBoxesOverlap(q.shapeA->tree(), q.shapeB->tree(), frames.back().treeMap, frames.back().candidateReach)) {
       overlapping.push_back(i);
       triangles += q.shapeA->mesh().triangleCount() + q.shapeB->mesh().triangleCount();
@@ -137,12 +137,20 @@ bool collideOnDevice(const std::vector<MeshPairQuery>& queries, const Config& co
 
 MeshPairResult collideMeshes(const MeshShape& shapeA, const btTransform& transformA, const MeshShape& shapeB,
                              const btTransform& transformB, const Config& config) {
-  if (config.meshBackend != Backend::Cpu) {
-    std::vector<MeshPairQuery> one(1);
-    one[0] = MeshPairQuery{&shapeA, transformA, &shapeB, transformB};
-    return std::move(collideMeshesBatch(one, config)[0]);
+  MeshPairQuery query;
+  query.shapeA = &shapeA;
+  query.transformA = transformA;
+  query.shapeB = &shapeB;
+  query.transformB = transformB;
+  return collideMeshes(query, config);
+}
+
+MeshPairResult collideMeshes(const MeshPairQuery& query, const Config& config) {
+  if (config.meshBackend != Backend::Cpu) return std::move(collideMeshesBatch({query}, config)[0]);
+  if (query.shapeA == nullptr || query.shapeB == nullptr) {
+    throw std::invalid_argument("collideMeshes: the query has a null shape");
   }
-  return collidePairOnCpu(shapeA, transformA, shapeB, transformB, config);
+  return collidePairOnCpu(query, config);
 }
 
 std::vector<MeshPairResult> collideMeshesBatch(const std::vector<MeshPairQuery>& queries,
@@ -160,10 +168,8 @@ std::vector<MeshPairResult> collideMeshesBatch(const std::vector<MeshPairQuery>&
   }
   const auto start = Clock::now();
   // Pairs run in parallel; each pair's own stages are parallel too, and oneTBB balances the nesting.
-  tbb::parallel_for(std::size_t(0), queries.size(), [&](std::size_t i) {
-    const MeshPairQuery& q = queries[i];
-    results[i] = collidePairOnCpu(*q.shapeA, q.transformA, *q.shapeB, q.transformB, config);
-  });
+  tbb::parallel_for(std::size_t(0), queries.size(),
+                    [&](std::size_t i) { results[i] = collidePairOnCpu(queries[i], config); });
   if (timeCpu) {
     detail::meshAutoChoice().record(*timeCpu, MeasuredBackendChoice::Path::Cpu, millisecondsSince(start));
   }

@@ -11,20 +11,25 @@
 namespace gpucol {
 namespace {
 
-// The sum of the shapes' margins (a negative sum reaches nothing); a margin that is not finite is an error.
-float pairReach(const MeshShape& a, const MeshShape& b) {
+// The sum of the shapes' margins (a negative sum reaches nothing) and the speculative distance; a margin that
+// is not finite or a speculative distance that is negative or not finite is an error.
+float pairReach(const MeshShape& a, const MeshShape& b, btScalar speculativeDistance) {
   const double sum = double(a.getMargin()) + double(b.getMargin());
   if (!std::isfinite(sum)) {
     throw std::invalid_argument("collideMeshes: the margin of shape " +
                                 std::string(std::isfinite(a.getMargin()) ? "B" : "A") + " is not finite");
   }
-  return float(std::max(0.0, sum));
+  if (!(speculativeDistance >= 0) || !std::isfinite(speculativeDistance)) {
+    throw std::invalid_argument("collideMeshes: the speculative distance " +
+                                std::to_string(speculativeDistance) + " is not a finite distance >= 0");
+  }
+  return float(std::max(0.0, sum) + double(speculativeDistance));
 }
 
 }  // namespace
 
 PairFrame makePairFrame(const MeshShape& a, const btTransform& transformA, const MeshShape& b,
-                        const btTransform& transformB) {
+                        const btTransform& transformB, btScalar speculativeDistance) {
   Eigen::Matrix3d rotationA, rotationB;
   Eigen::Vector3d originA, originB, scaleA, scaleB;
   for (int r = 0; r < 3; ++r) {
@@ -51,7 +56,7 @@ PairFrame makePairFrame(const MeshShape& a, const btTransform& transformA, const
   frame.treeMap.linear = (inverseScaleA.asDiagonal() * bLinear).cast<float>();
   frame.treeMap.translation = inverseScaleA.cwiseProduct(relativeTranslation).cast<float>();
   frame.worldFromA = transformA;
-  frame.reach = pairReach(a, b);
+  frame.reach = pairReach(a, b, speculativeDistance);
   if (frame.reach > 0) {
     // A world distance d is at most d / |s| along a mesh axis scaled by s; the factor covers the float rounding.
     const double widen = double(frame.reach) * (1 + 1.0 / 1048576);

@@ -23,13 +23,15 @@ struct PairFrame {
   Eigen::Vector3f bTranslation = Eigen::Vector3f::Zero();  ///< ... + t_rel.
   AffineMap treeMap;            ///< B's mesh coordinates into A's unscaled mesh frame, for the traversal.
   btTransform worldFromA;       ///< A's rigid transform: from A's scaled frame to the world.
-  float reach = 0;              ///< The sum of the shapes' margins: triangles this close give contacts.
+  float reach = 0;  ///< The sum of the shapes' margins and the speculative distance: triangles this close
+                    ///< give contacts.
   CandidateReach candidateReach;  ///< `reach` along each mesh frame's axes, for the traversal's box tests.
 };
 
-/// The frame of the pair (a at transformA, b at transformB). Throws std::invalid_argument when a margin is not
-/// finite.
+/// The frame of the pair (a at transformA, b at transformB), whose triangles give contacts up to
+/// `speculativeDistance` beyond the margins. Throws std::invalid_argument when a margin is not finite or the
+/// speculative distance is negative or not finite.
 PairFrame makePairFrame(const MeshShape& a, const btTransform& transformA, const MeshShape& b,
-                        const btTransform& transformB);
+                        const btTransform& transformB, btScalar speculativeDistance = 0);
 
 }  // namespace gpucol
