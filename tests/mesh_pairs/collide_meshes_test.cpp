@@ -312,6 +312,59 @@ TEST(CollideMeshes, BadInputGetsAClearError) {
   EXPECT_THROW(shape.setLocalScaling(btVector3(1, 0, 1)), MeshError);
   EXPECT_THROW(shape.setLocalScaling(btVector3(1, std::numeric_limits<float>::infinity(), 1)), MeshError);
   EXPECT_THROW(MeshShape(nullptr), MeshError);
+  for (btScalar speculative : {btScalar(-0.1), std::numeric_limits<btScalar>::quiet_NaN(),
+                               std::numeric_limits<btScalar>::infinity()}) {
+    MeshPairQuery query{&shape, btTransform::getIdentity(), &shape, btTransform::getIdentity()};
+    query.speculativeDistance = speculative;
+    try {
+      collideMeshes(query);
+      FAIL() << "speculative distance " << speculative << " must be rejected";
+    } catch (const std::invalid_argument& e) {
+      EXPECT_NE(std::string(e.what()).find("speculative distance"), std::string::npos) << e.what();
+    }
+  }
+}
+
+// A box `gap` above a ground box, turned about the vertical: with a speculative distance beyond the gap, its
+// bottom face's corners give contacts at exactly the gap (positive: separated), along the ground's normal,
+// and no contact claims the bodies closer than that (farther features give farther contacts); with a
+// speculative distance short of the gap, or none, there are no contacts. Without margins, as for every other
+// check.
+TEST(CollideMeshes, SpeculativeContactsComeAtTheGapAlongTheFaceNormal) {
+  MeshShape top(sharedMesh(scenes::makeBox(0.5f, 0.5f, 0.5f, 2)));
+  MeshShape ground(sharedMesh(scenes::makeBox(3.0f, 3.0f, 1.0f, 1)));
+  for (float gap : {0.004f, 0.05f, 0.3f}) {
+    for (float yaw : {0.0f, 0.6f}) {
+      MeshPairQuery query{
+          &top, btTransform(btQuaternion(btVector3(0, 0, 1), yaw), btVector3(0.2f, -0.1f, 0.5f + gap)),
+          &ground, btTransform(btQuaternion::getIdentity(), btVector3(0, 0, -1.0f))};
+      EXPECT_TRUE(collideMeshes(query).contacts.empty()) << gap;
+      query.speculativeDistance = 0.9f * gap;
+      EXPECT_TRUE(collideMeshes(query).contacts.empty()) << gap;
+      query.speculativeDistance = 1.5f * gap;
+      const MeshPairResult result = collideMeshes(query);
+      ASSERT_FALSE(result.reducedContacts.empty()) << gap;
+      EXPECT_TRUE(result.intersectingPairs.empty());
+      btVector3 lo(1e9f, 1e9f, 0), hi(-1e9f, -1e9f, 0);
+      for (const MeshContact& c : result.contacts) {
+        EXPECT_GT(c.normalWorldOnB.z(), 0.5f);
+        EXPECT_GE(c.depth, gap - 1e-5f);
+        EXPECT_LT(c.depth, query.speculativeDistance);
+        if (c.normalWorldOnB.z() > 1 - 1e-5f) {
+          EXPECT_NEAR(c.depth, gap, 1e-5f);
+          EXPECT_NEAR(c.pointOnBWorld.z(), 0.0f, 1e-5f);
+          lo.setMin(c.pointOnBWorld);
+          hi.setMax(c.pointOnBWorld);
+        }
+      }
+      // The face's contacts cover the bottom face (its corners, whatever the turn).
+      EXPECT_GT(hi.x() - lo.x(), 0.99f);
+      EXPECT_GT(hi.y() - lo.y(), 0.99f);
+      // The batch and the single query agree.
+      const MeshPairResult batched = collideMeshesBatch({query})[0];
+      EXPECT_EQ(batched.contacts.size(), result.contacts.size());
+    }
+  }
 }
 
 }  // namespace

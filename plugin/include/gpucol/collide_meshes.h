@@ -66,9 +66,13 @@ struct MeshPairQuery {
   btTransform transformA = btTransform::getIdentity();  ///< World transform of shape A.
   const MeshShape* shapeB = nullptr;  ///< Second shape.
   btTransform transformB = btTransform::getIdentity();  ///< World transform of shape B.
-  /// Speculative contacts: triangles up to this much farther apart than the shapes' margins also give
-  /// contacts, at their positive distance, which Bullet's solver lets the bodies close in one step and no
-  /// more (MeshMeshAlgorithm sets it to how far the bodies can move towards each other in the step). 0: none.
+  /// Speculative contacts: triangles up to `|speculativeMotion| + speculativeDistance` farther apart than the
+  /// shapes' margins also give contacts, at their positive distance, which Bullet's solver lets the bodies
+  /// close in one step and no more. `speculativeMotion` is how far B moves relative to A in the step (world
+  /// frame): the search for such triangles widens along it only (in both directions). `speculativeDistance`
+  /// widens it every way: how far any point moves by the bodies' turns. MeshMeshAlgorithm sets both from the
+  /// bodies' velocities for pairs that close fast; 0: none.
+  btVector3 speculativeMotion = btVector3(0, 0, 0);
   btScalar speculativeDistance = 0;
 };
 

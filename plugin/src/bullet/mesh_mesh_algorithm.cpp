@@ -86,15 +86,15 @@ btScalar reachFromOrigin(const btCollisionShape& shape) {
   return center.length() + radius;
 }
 
-// How far the two bodies can move towards each other in a step of `timeStep` at their velocities: their
-// relative linear motion and each one's turn times its reach from its centre. When that is more than Bullet's
-// contact breaking threshold for the pair (what its convex shapes' speculative reach is), triangles that far
-// apart get speculative contacts (thesis §7.1: small triangles otherwise pass through each other between
-// steps), capped at the smaller body's diameter. Slower pairs get none: resting bodies touch, and the closest
-// features of touching triangles have no direction to push along.
-btScalar speculativeDistance(const btCollisionObjectWrapper* body0, const btCollisionObjectWrapper* body1,
-                             btScalar timeStep) {
-  if (!(timeStep > 0) || !std::isfinite(timeStep)) return 0;
+// The pair's speculative reach in a step of `timeStep` at the bodies' velocities: body1's motion relative to
+// body0 and how far any point moves by their turns (each one's turn times its reach from its centre). When
+// the two together are more than Bullet's contact breaking threshold for the pair (what its convex shapes'
+// speculative reach is), triangles that far apart get speculative contacts (thesis §7.1: small triangles
+// otherwise pass through each other between steps), capped at the smaller body's diameter. Slower pairs get
+// none: resting bodies touch, and the closest features of touching triangles have no direction to push along.
+void setSpeculativeReach(const btCollisionObjectWrapper* body0, const btCollisionObjectWrapper* body1,
+                         btScalar timeStep, MeshPairQuery& query) {
+  if (!(timeStep > 0) || !std::isfinite(timeStep)) return;
   const btRigidBody* rigid0 = btRigidBody::upcast(body0->getCollisionObject());
   const btRigidBody* rigid1 = btRigidBody::upcast(body1->getCollisionObject());
   const btVector3 zero(0, 0, 0);
@@ -105,11 +105,19 @@ btScalar speculativeDistance(const btCollisionObjectWrapper* body0, const btColl
   const btCollisionShape& shape0 = *body0->getCollisionShape();
   const btCollisionShape& shape1 = *body1->getCollisionShape();
   const btScalar reach0 = reachFromOrigin(shape0), reach1 = reachFromOrigin(shape1);
-  const btScalar approach = timeStep * ((linear0 - linear1).length() + spin0 * reach0 + spin1 * reach1);
+  btVector3 motion = (linear1 - linear0) * timeStep;
+  btScalar turns = timeStep * (spin0 * reach0 + spin1 * reach1);
+  const btScalar total = motion.length() + turns;
   const btScalar breaking = btMin(shape0.getContactBreakingThreshold(gContactBreakingThreshold),
                                   shape1.getContactBreakingThreshold(gContactBreakingThreshold));
-  if (!std::isfinite(approach) || !(approach > breaking)) return 0;
-  return btMin(approach, 2 * btMin(reach0, reach1));
+  if (!std::isfinite(total) || !(total > breaking)) return;
+  const btScalar cap = 2 * btMin(reach0, reach1);
+  if (total > cap) {
+    motion *= cap / total;
+    turns *= cap / total;
+  }
+  query.speculativeMotion = motion;
+  query.speculativeDistance = turns;
 }
 
 std::string pairName(const btCollisionShape* s0, const btCollisionShape* s1) {
@@ -175,7 +183,7 @@ std::optional<MeshPairQuery> MeshMeshAlgorithm::meshPairQuery(const btCollisionO
   query.transformA = body0->getWorldTransform();
   query.shapeB = b;
   query.transformB = body1->getWorldTransform();
-  query.speculativeDistance = speculativeDistance(body0, body1, timeStep);
+  setSpeculativeReach(body0, body1, timeStep, query);
   return query;
 }
 
@@ -205,10 +213,11 @@ void MeshMeshAlgorithm::processCollision(const btCollisionObjectWrapper* body0,
                            precomputed->query.shapeB == query->shapeB &&
                            sameTransform(precomputed->query.transformA, query->transformA) &&
                            sameTransform(precomputed->query.transformB, query->transformB) &&
+                           precomputed->query.speculativeMotion == query->speculativeMotion &&
                            precomputed->query.speculativeDistance == query->speculativeDistance;
       const MeshPairResult result =
           batched ? std::move(precomputed->result) : collideMeshes(*query, m_config);
-      speculative = query->speculativeDistance;
+      speculative = query->speculativeMotion.length() + query->speculativeDistance;
       contacts = toPairContacts(result.reducedContacts, *query->shapeA, *query->shapeB);
     } else {
       // A mesh against a plane or another concave shape: computed with the mesh as body0, then turned round if

@@ -405,8 +405,8 @@ MeshPairResult collidePairOnCpu(const MeshPairQuery& query, const Config& config
   const MeshShape& shapeB = *query.shapeB;
   MeshPairResult result;
   result.stats.backendUsed = Backend::Cpu;
-  const PairFrame frame =
-      makePairFrame(shapeA, query.transformA, shapeB, query.transformB, query.speculativeDistance);
+  const PairFrame frame = makePairFrame(shapeA, query.transformA, shapeB, query.transformB,
+                                        query.speculativeMotion, query.speculativeDistance);
 
   auto start = Clock::now();
   // Root boxes first: a pair whose meshes' boxes miss costs one box test (DESIGN.md, "skip what a scene does

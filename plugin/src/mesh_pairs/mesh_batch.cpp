@@ -34,7 +34,8 @@ bool collideOnDevice(const std::vector<MeshPairQuery>& queries, const Config& co
   std::uint64_t triangles = 0;
   for (std::size_t i = 0; i < queries.size(); ++i) {
     const MeshPairQuery& q = queries[i];
-    frames.push_back(makePairFrame(*q.shapeA, q.transformA, *q.shapeB, q.transformB, q.speculativeDistance));
+    frames.push_back(makePairFrame(*q.shapeA, q.transformA, *q.shapeB, q.transformB, q.speculativeMotion,
+                                   q.speculativeDistance));
     if (rootBoxesOverlap(q.shapeA->tree(), q.shapeB->tree(), frames.back().treeMap, frames.back().candidateReach)) {
       overlapping.push_back(i);
       triangles += q.shapeA->mesh().triangleCount() + q.shapeB->mesh().triangleCount();

@@ -11,25 +11,32 @@
 namespace gpucol {
 namespace {
 
-// The sum of the shapes' margins (a negative sum reaches nothing) and the speculative distance; a margin that
-// is not finite or a speculative distance that is negative or not finite is an error.
-float pairReach(const MeshShape& a, const MeshShape& b, btScalar speculativeDistance) {
+// The sum of the shapes' margins (a negative sum reaches nothing); a margin that is not finite is an error.
+double marginReach(const MeshShape& a, const MeshShape& b) {
   const double sum = double(a.getMargin()) + double(b.getMargin());
   if (!std::isfinite(sum)) {
     throw std::invalid_argument("collideMeshes: the margin of shape " +
                                 std::string(std::isfinite(a.getMargin()) ? "B" : "A") + " is not finite");
   }
-  if (!(speculativeDistance >= 0) || !std::isfinite(speculativeDistance)) {
-    throw std::invalid_argument("collideMeshes: the speculative distance " +
-                                std::to_string(speculativeDistance) + " is not a finite distance >= 0");
+  return std::max(0.0, sum);
+}
+
+void requireSpeculativeReach(const btVector3& motion, btScalar distance) {
+  if (!(distance >= 0) || !std::isfinite(distance)) {
+    throw std::invalid_argument("collideMeshes: the speculative distance " + std::to_string(distance) +
+                                " is not a finite distance >= 0");
   }
-  return float(std::max(0.0, sum) + double(speculativeDistance));
+  if (!std::isfinite(motion.x()) || !std::isfinite(motion.y()) || !std::isfinite(motion.z())) {
+    throw std::invalid_argument("collideMeshes: the speculative motion has a NaN or infinite component");
+  }
 }
 
 }  // namespace
 
 PairFrame makePairFrame(const MeshShape& a, const btTransform& transformA, const MeshShape& b,
-                        const btTransform& transformB, btScalar speculativeDistance) {
+                        const btTransform& transformB, const btVector3& speculativeMotion,
+                        btScalar speculativeDistance) {
+  requireSpeculativeReach(speculativeMotion, speculativeDistance);
   Eigen::Matrix3d rotationA, rotationB;
   Eigen::Vector3d originA, originB, scaleA, scaleB;
   for (int r = 0; r < 3; ++r) {
@@ -56,12 +63,18 @@ PairFrame makePairFrame(const MeshShape& a, const btTransform& transformA, const
   frame.treeMap.linear = (inverseScaleA.asDiagonal() * bLinear).cast<float>();
   frame.treeMap.translation = inverseScaleA.cwiseProduct(relativeTranslation).cast<float>();
   frame.worldFromA = transformA;
-  frame.reach = pairReach(a, b, speculativeDistance);
+  const Eigen::Vector3d motion(speculativeMotion.x(), speculativeMotion.y(), speculativeMotion.z());
+  const double everyWay = marginReach(a, b) + double(speculativeDistance);
+  frame.reach = float(everyWay + motion.norm());
   if (frame.reach > 0) {
     // A world distance d is at most d / |s| along a mesh axis scaled by s; the factor covers the float rounding.
-    const double widen = double(frame.reach) * (1 + 1.0 / 1048576);
-    frame.candidateReach.inA = (widen * scaleA.cwiseAbs().cwiseInverse()).cast<float>();
-    frame.candidateReach.inB = (widen * scaleB.cwiseAbs().cwiseInverse()).cast<float>();
+    const double widen = 1 + 1.0 / 1048576;
+    const auto alongAxes = [&](const Eigen::Matrix3d& rotation, const Eigen::Vector3d& scale) {
+      const Eigen::Vector3d world = (rotation.transpose() * motion).cwiseAbs().array() + everyWay;
+      return (widen * world.cwiseQuotient(scale.cwiseAbs())).cast<float>().eval();
+    };
+    frame.candidateReach.inA = alongAxes(rotationA, scaleA);
+    frame.candidateReach.inB = alongAxes(rotationB, scaleB);
   }
   return frame;
 }

@@ -28,10 +28,12 @@ struct PairFrame {
   CandidateReach candidateReach;  ///< `reach` along each mesh frame's axes, for the traversal's box tests.
 };
 
-/// The frame of the pair (a at transformA, b at transformB), whose triangles give contacts up to
-/// `speculativeDistance` beyond the margins. Throws std::invalid_argument when a margin is not finite or the
-/// speculative distance is negative or not finite.
+/// The frame of the pair (a at transformA, b at transformB), whose triangles give speculative contacts as
+/// MeshPairQuery's speculativeMotion and speculativeDistance say. Throws std::invalid_argument when a margin
+/// is not finite, the speculative distance is negative or not finite, or the motion is not finite.
 PairFrame makePairFrame(const MeshShape& a, const btTransform& transformA, const MeshShape& b,
-                        const btTransform& transformB, btScalar speculativeDistance = 0);
+                        const btTransform& transformB,
+                        const btVector3& speculativeMotion = btVector3(0, 0, 0),
+                        btScalar speculativeDistance = 0);
 
 }  // namespace gpucol
