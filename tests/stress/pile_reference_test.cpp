@@ -1,13 +1,13 @@
 // Mesh piles held to the same piles of Bullet's convex shapes (issue 57's reference, gpucol-bench piles): the
-// pile of 16 meshes and the stack of 10 boxes, with gpucol and with boxes, spheres and compounds of boxes and
+// pile of 16 meshes, the pile of 16 thin bodies and the stack of 10 boxes, with gpucol and with boxes, spheres and compounds of boxes and
 // capsules of the same masses, inertia and start poses. Asserted, medians over seeds: every body of both
 // sleeps, the mesh pile no later than 1.5 times the reference; both its deepest contact and the deepest
 // overlap of two of its bodies (measured on their solids' convex pieces, as for the reference:
 // scenes/body_overlap.h) within 1.5 times the reference's (the issue asks for no deeper; docs/limits.md says
 // where that is not met); after the reference's kinetic energy first fell below 1% of its peak, its bodies
 // overlap no deeper than the reference's by more than 5% of the smallest body's size, and (the pile only:
-// the stack's is not met, docs/measured-results.md) the mesh pile's kinetic energy never exceeds 5% of that
-// peak.
+// the stack's and the thin pile's are not met, docs/measured-results.md) the mesh pile's kinetic energy never
+// exceeds 5% of that peak.
 #include <gtest/gtest.h>
 
 #include <algorithm>
@@ -131,6 +131,15 @@ TEST(PileReference, SmallPileSettlesLikeConvexShapes) {
   std::vector<scenes::SceneDescription> piles;
   for (unsigned seed : {1u, 2u, 3u}) piles.push_back(scenes::makePileScene(16, seed));
   expectLikeTheReference(piles, "pile of 16", true);
+}
+
+// Rods, plates, thin tori and crosses 5-8 cm thick that fall 7-12 cm a step onto the bin's floor: without
+// speculative contacts one went through the floor in every seed. Its bursts are not held (3-7% of the peak,
+// the reference's 3-5%: docs/measured-results.md).
+TEST(PileReference, SmallThinPileSettlesLikeConvexShapes) {
+  std::vector<scenes::SceneDescription> piles;
+  for (unsigned seed : {1u, 2u, 3u}) piles.push_back(scenes::makeThinPileScene(16, seed));
+  expectLikeTheReference(piles, "thin pile of 16", false);
 }
 
 TEST(PileReference, StackOfTenSettlesLikeConvexBoxes) {
