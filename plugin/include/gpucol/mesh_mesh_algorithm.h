@@ -31,11 +31,13 @@ class MeshMeshAlgorithm : public btActivatingCollisionAlgorithm {
                     GImpactStandIns* standIns = nullptr);
   ~MeshMeshAlgorithm() override;
 
-  /// Collides the pair and writes the reduced contacts into the pair's manifolds. Never throws: a pair that
-  /// cannot be collided (NaN transform) is skipped with a warning printed once.
+  /// Collides the pair and writes the reduced contacts into the pair's manifolds, with speculative contacts
+  /// when two meshes close fast (meshPairQuery). Never throws: a pair that cannot be collided (NaN transform)
+  /// is skipped with a warning printed once.
   void processCollision(const btCollisionObjectWrapper* body0, const btCollisionObjectWrapper* body1,
                         const btDispatcherInfo& dispatchInfo, btManifoldResult* resultOut) override;
-  /// Continuous collision is not supported for meshes: returns 1 (no time of impact), as GImpact does.
+  /// No time of impact for meshes: returns 1, as GImpact does. Pairs that close fast get speculative contacts
+  /// from processCollision instead (docs/contacts.md).
   btScalar calculateTimeOfImpact(btCollisionObject* body0, btCollisionObject* body1,
                                  const btDispatcherInfo& dispatchInfo, btManifoldResult* resultOut) override;
   /// Appends this pair's manifolds.
@@ -51,7 +53,8 @@ class MeshMeshAlgorithm : public btActivatingCollisionAlgorithm {
   void setPrecomputedResult(const MeshPairQuery& query, MeshPairResult result);
 
   /// The query this pair would run between two mesh shapes (a GImpact mesh through its stand-in) in a step of
-  /// `timeStep` seconds; std::nullopt when it is not a mesh-mesh pair.
+  /// `timeStep` seconds, its speculative reach from the bodies' velocities; std::nullopt when it is not a
+  /// mesh-mesh pair.
   std::optional<MeshPairQuery> meshPairQuery(const btCollisionObjectWrapper* body0,
                                              const btCollisionObjectWrapper* body1, btScalar timeStep) const;
 
