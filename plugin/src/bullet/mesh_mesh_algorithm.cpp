@@ -231,11 +231,16 @@ void MeshMeshAlgorithm::processCollision(const btCollisionObjectWrapper* body0,
         contacts = meshPlaneContacts(mesh, meshBody->getWorldTransform(), *static_cast<const btStaticPlaneShape*>(other),
                                      otherBody->getWorldTransform(), m_config.reductionResolution);
       } else if (isOtherConcave(other)) {
-        if (const MeshShape* patch =
-                m_patch->update(*static_cast<const btConcaveShape*>(other), otherBody->getWorldTransform(),
-                                mesh, meshBody->getWorldTransform())) {
-          const MeshPairResult result = collideMeshes(mesh, meshBody->getWorldTransform(), *patch,
-                                                      otherBody->getWorldTransform(), m_config);
+        MeshPairQuery query;
+        query.shapeA = &mesh;
+        query.transformA = meshBody->getWorldTransform();
+        query.transformB = otherBody->getWorldTransform();
+        setSpeculativeReach(meshBody, otherBody, dispatchInfo.m_timeStep, query);
+        speculative = query.speculativeMotion.length() + query.speculativeDistance;
+        if (const MeshShape* patch = m_patch->update(*static_cast<const btConcaveShape*>(other),
+                                                     query.transformB, mesh, query.transformA, speculative)) {
+          query.shapeB = patch;
+          const MeshPairResult result = collideMeshes(query, m_config);
           contacts = toPairContacts(result.reducedContacts, mesh, *patch);
           // The patch's triangles are the other shape's: their part and index as its processAllTriangles
           // gave.

@@ -22,13 +22,14 @@ class TriangleCollector : public btTriangleCallback {
 }  // namespace
 
 const MeshShape* TriangleMeshPatch::update(const btConcaveShape& other, const btTransform& otherTransform,
-                                           const MeshShape& mesh, const btTransform& meshTransform) {
+                                           const MeshShape& mesh, const btTransform& meshTransform,
+                                           btScalar speculativeReach) {
   btVector3 lo, hi;
   mesh.getAabb(otherTransform.inverseTimes(meshTransform), lo, hi);
-  // The mesh's box holds its own margin; the other's margin reaches further still.
-  const btScalar otherMargin = std::max(btScalar(0), other.getMargin());
-  lo -= btVector3(otherMargin, otherMargin, otherMargin);
-  hi += btVector3(otherMargin, otherMargin, otherMargin);
+  // The mesh's box holds its own margin; the other's margin and the speculative contacts reach further still.
+  const btScalar widen = std::max(btScalar(0), other.getMargin()) + std::max(btScalar(0), speculativeReach);
+  lo -= btVector3(widen, widen, widen);
+  hi += btVector3(widen, widen, widen);
   TriangleCollector collector;
   other.processAllTriangles(&collector, lo, hi);
   if (collector.ids.empty()) {

@@ -16,10 +16,12 @@ namespace gpucol {
 /// mesh changes: a mesh resting on a floor reuses the same patch step after step.
 class TriangleMeshPatch {
  public:
-  /// The patch of `other`'s triangles (in `other`'s scaled local frame) whose boxes overlap `mesh`'s box; null
-  /// when there are none. `other` must stay the same shape across calls.
-  const MeshShape* update(const btConcaveShape& other, const btTransform& otherTransform, const MeshShape& mesh,
-                          const btTransform& meshTransform);
+  /// The patch of `other`'s triangles (in `other`'s scaled local frame) whose boxes overlap `mesh`'s box
+  /// widened by `speculativeReach` (the pair's speculative contacts reach that far); null when there are
+  /// none. `other` must stay the same shape across calls.
+  const MeshShape* update(const btConcaveShape& other, const btTransform& otherTransform,
+                          const MeshShape& mesh, const btTransform& meshTransform,
+                          btScalar speculativeReach = 0);
 
   /// The part and index that `other`'s processAllTriangles gave for triangle `patchTriangle` of the patch.
   void sourceTriangle(std::uint32_t patchTriangle, int& partId, int& triangleIndex) const {
