@@ -329,40 +329,41 @@ TEST(CollideMeshes, BadInputGetsAClearError) {
   EXPECT_THROW(collideMeshesBatch({nanMotion}), std::invalid_argument);
 }
 
+// The same box given a motion instead of a distance: moving towards the ground (or away: the search widens
+// both ways along the motion) by 1.5 times the gap it gets the face's contacts at the gap; moving as far
+// sideways it gets none, for the search does not widen across the motion.
+TEST(CollideMeshes, SpeculativeSearchWidensAlongTheMotion) {
+  MeshShape top(sharedMesh(scenes::makeBox(0.5f, 0.5f, 0.5f, 2)));
+  MeshShape ground(sharedMesh(scenes::makeBox(3.0f, 3.0f, 1.0f, 1)));
+  const float gap = 0.05f;
+  // B (the ground) moves relative to A (the box).
+  const btVector3 towards(0, 0, 1.5f * gap), away(0, 0, -1.5f * gap), sideways(1.5f * gap, 0, 0);
+  for (float yaw : {0.0f, 0.6f}) {
+    MeshPairQuery query{
+        &top, btTransform(btQuaternion(btVector3(0, 0, 1), yaw), btVector3(0.2f, -0.1f, 0.5f + gap)), &ground,
+        btTransform(btQuaternion::getIdentity(), btVector3(0, 0, -1.0f))};
+    for (const btVector3& motion : {towards, away}) {
+      query.speculativeMotion = motion;
+      const MeshPairResult result = collideMeshes(query);
+      ASSERT_FALSE(result.contacts.empty());
+      int atGap = 0;
+      for (const MeshContact& c : result.contacts) {
+        EXPECT_GE(c.depth, gap - 1e-5f);
+        atGap += std::fabs(c.depth - gap) < 1e-5f && c.normalWorldOnB.z() > 1 - 1e-5f;
+      }
+      EXPECT_GE(atGap, 4);
+    }
+    query.speculativeMotion = sideways;
+    EXPECT_TRUE(collideMeshes(query).contacts.empty());
+    EXPECT_TRUE(collideMeshes(query).candidatePairs.empty());
+  }
+}
+
 // A box `gap` above a ground box, turned about the vertical: with a speculative distance beyond the gap, its
 // bottom face's corners give contacts at exactly the gap (positive: separated), along the ground's normal,
 // and no contact claims the bodies closer than that (farther features give farther contacts); with a
 // speculative distance short of the gap, or none, there are no contacts. Without margins, as for every other
 // check.
-// The same box given a motion instead of a distance: moving towards the ground by 1.5 times the gap it gets
-// the face's contacts at the gap; moving as far sideways or away it gets none (they could not act in the
-// step), though the search reaches the same triangles.
-TEST(CollideMeshes, SpeculativeContactsOnlyWhereTheMotionCanCloseThem) {
-  MeshShape top(sharedMesh(scenes::makeBox(0.5f, 0.5f, 0.5f, 2)));
-  MeshShape ground(sharedMesh(scenes::makeBox(3.0f, 3.0f, 1.0f, 1)));
-  const float gap = 0.05f;
-  // B (the ground) moves relative to A (the box): up towards it, sideways, or down and away.
-  const btVector3 towards(0, 0, 1.5f * gap), sideways(1.5f * gap, 0, 0), away(0, 0, -1.5f * gap);
-  for (float yaw : {0.0f, 0.6f}) {
-    MeshPairQuery query{
-        &top, btTransform(btQuaternion(btVector3(0, 0, 1), yaw), btVector3(0.2f, -0.1f, 0.5f + gap)), &ground,
-        btTransform(btQuaternion::getIdentity(), btVector3(0, 0, -1.0f))};
-    query.speculativeMotion = towards;
-    const MeshPairResult result = collideMeshes(query);
-    ASSERT_FALSE(result.contacts.empty());
-    int atGap = 0;
-    for (const MeshContact& c : result.contacts) {
-      EXPECT_GE(c.depth, gap - 1e-5f);
-      atGap += std::fabs(c.depth - gap) < 1e-5f && c.normalWorldOnB.z() > 1 - 1e-5f;
-    }
-    EXPECT_GE(atGap, 4);
-    for (const btVector3& motion : {sideways, away}) {
-      query.speculativeMotion = motion;
-      EXPECT_TRUE(collideMeshes(query).contacts.empty()) << motion.x() << " " << motion.z();
-    }
-  }
-}
-
 TEST(CollideMeshes, SpeculativeContactsComeAtTheGapAlongTheFaceNormal) {
   MeshShape top(sharedMesh(scenes::makeBox(0.5f, 0.5f, 0.5f, 2)));
   MeshShape ground(sharedMesh(scenes::makeBox(3.0f, 3.0f, 1.0f, 1)));

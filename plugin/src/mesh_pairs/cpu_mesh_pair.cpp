@@ -308,30 +308,6 @@ struct NearbyHit {
   TriangleContact contact;
 };
 
-// False when one triangle lies wholly farther in front of the other's plane than the bodies can close along
-// that plane's normal in the step (speculativeContactCanAct): no contact of the pair could act. The heights
-// are taken in float with a slack of 1e-5 of the triangles' size; proximityContacts decides the rest in
-// double.
-bool mayComeWithinReach(const Eigen::Vector3f (&a)[3], const Eigen::Vector3f (&b)[3],
-                        const PairFrame& frame) {
-  const auto beyond = [&](const Eigen::Vector3f(&of)[3], const Eigen::Vector3f(&plane)[3], float sign) {
-    const Eigen::Vector3f e1 = plane[1] - plane[0], e2 = plane[2] - plane[0];
-    const Eigen::Vector3f n = e1.cross(e2);
-    const float length = n.norm();
-    if (!(length > 0)) return false;
-    const Eigen::Vector3f unit = n / length;
-    // The contact's normal from B to A: B's face normal, or minus A's.
-    const float reach = frame.everyWayReach + std::max(0.0f, frame.motionInA.dot(sign * unit));
-    const float slack =
-        1e-5f * std::max({e1.norm(), e2.norm(), (of[1] - of[0]).norm(), (of[2] - of[0]).norm()});
-    for (const Eigen::Vector3f& v : of) {
-      if (unit.dot(v - plane[0]) <= reach + slack) return false;
-    }
-    return true;
-  };
-  return !beyond(a, b, 1.0f) && !beyond(b, a, -1.0f);
-}
-
 // The proximity contacts of every candidate that does not cross (triangle_proximity.h), in candidate order, in
 // parallel; `crossing[i]` is set for the candidates the near phase found intersecting.
 std::vector<NearbyHit> runProximityPass(const MeshShape& shapeA, const MeshShape& shapeB, const PairFrame& frame,
@@ -345,13 +321,9 @@ std::vector<NearbyHit> runProximityPass(const MeshShape& shapeA, const MeshShape
       if (crossing[i]) continue;
       Eigen::Vector3f a[3], b[3];
       pairTriangles(shapeA, shapeB, frame, candidates[i], a, b);
-      if (!mayComeWithinReach(a, b, frame)) continue;
       TriangleContact found[kMaxProximityContacts];
       const int count = proximityContacts(a, b, frame.reach, found);
-      for (int k = 0; k < count; ++k) {
-        if (speculativeContactCanAct(frame, found[k].normalOnB, found[k].depth))
-          chunkHits[chunk].push_back({i, found[k]});
-      }
+      for (int k = 0; k < count; ++k) chunkHits[chunk].push_back({i, found[k]});
     }
   });
   std::vector<NearbyHit> joined;

@@ -6,7 +6,6 @@
 #include <LinearMath/btTransform.h>
 
 #include <Eigen/Core>
-#include <algorithm>
 
 #include "bvh/tree_traversal.h"
 
@@ -29,23 +28,10 @@ struct PairFrame {
   /// The sum of the shapes' margins and the speculative reach (the motion's length and the turns' distance):
   /// triangles this close give contacts.
   float reach = 0;
-  /// The part of `reach` every way (the margins and the turns' distance), and B's motion relative to A in A's
-  /// scaled frame: a contact along n (from B to A) at distance d can act in the step only when
-  /// d <= everyWayReach + max(0, motionInA . n) (speculativeContactCanAct).
-  float everyWayReach = 0;
-  Eigen::Vector3f motionInA = Eigen::Vector3f::Zero();
   /// How far the traversal's box tests widen along each mesh frame's axes: the margins and the turns'
   /// distance every way, the motion along itself.
   CandidateReach candidateReach;
 };
-
-/// True when a contact along `normalOnB` (unit, from B to A, in A's scaled frame) at distance `distance` can
-/// act in the step: the bodies can close that distance along it (margins and turns every way, the motion
-/// along itself). A speculative contact that cannot act would only crowd the manifolds.
-inline bool speculativeContactCanAct(const PairFrame& frame, const Eigen::Vector3f& normalOnB,
-                                     float distance) {
-  return distance <= frame.everyWayReach + std::max(0.0f, frame.motionInA.dot(normalOnB));
-}
 
 /// The frame of the pair (a at transformA, b at transformB), whose triangles give speculative contacts as
 /// MeshPairQuery's speculativeMotion and speculativeDistance say. Throws std::invalid_argument when a margin
