@@ -25,10 +25,11 @@ class MeshMeshAlgorithm : public btActivatingCollisionAlgorithm {
  public:
   /// Made by the create function registered through registerWith(), or by gpucol::CollisionDispatcher with
   /// `standIns`, through which btGImpactMeshShapes are collided as MeshShapes (not owned; null: GImpact
-  /// meshes are only ever the other concave shape of a MeshShape's pair).
+  /// meshes are only ever the other concave shape of a MeshShape's pair). `speculativeContacts` is false for
+  /// the closest-points queries (contactTest, contactPairTest): they ask what touches now.
   MeshMeshAlgorithm(const btCollisionAlgorithmConstructionInfo& info, const btCollisionObjectWrapper* body0,
                     const btCollisionObjectWrapper* body1, const Config& config,
-                    GImpactStandIns* standIns = nullptr);
+                    GImpactStandIns* standIns = nullptr, bool speculativeContacts = true);
   ~MeshMeshAlgorithm() override;
 
   /// Collides the pair and writes the reduced contacts into the pair's manifolds, with speculative contacts
@@ -53,8 +54,8 @@ class MeshMeshAlgorithm : public btActivatingCollisionAlgorithm {
   void setPrecomputedResult(const MeshPairQuery& query, MeshPairResult result);
 
   /// The query this pair would run between two mesh shapes (a GImpact mesh through its stand-in) in a step of
-  /// `timeStep` seconds, its speculative reach from the bodies' velocities; std::nullopt when it is not a
-  /// mesh-mesh pair.
+  /// `timeStep` seconds, its speculative reach from the bodies' velocities (none for a closest-points
+  /// algorithm); std::nullopt when it is not a mesh-mesh pair.
   std::optional<MeshPairQuery> meshPairQuery(const btCollisionObjectWrapper* body0,
                                              const btCollisionObjectWrapper* body1, btScalar timeStep) const;
 
@@ -65,6 +66,7 @@ class MeshMeshAlgorithm : public btActivatingCollisionAlgorithm {
 
   Config m_config;
   GImpactStandIns* m_standIns;
+  bool m_speculativeContacts;
   std::unique_ptr<ContactManifoldSet> m_manifolds;
   std::unique_ptr<Precomputed> m_precomputed;
   std::unique_ptr<TriangleMeshPatch> m_patch;  // triangles of a btBvhTriangleMeshShape near the mesh, kept

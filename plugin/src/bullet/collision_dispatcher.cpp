@@ -107,7 +107,8 @@ btCollisionAlgorithm* CollisionDispatcher::findAlgorithm(const btCollisionObject
     info.m_manifold = sharedManifold;
     if (take) {
       void* memory = allocateCollisionAlgorithm(sizeof(MeshMeshAlgorithm));
-      return new (memory) MeshMeshAlgorithm(info, body0, body1, m_config, standIns);
+      return new (memory)
+          MeshMeshAlgorithm(info, body0, body1, m_config, standIns, queryType == BT_CONTACT_POINT_ALGORITHMS);
     }
     if (m_config.collideGImpactShapes && other->isCompound()) {
       // The configuration's compound algorithm (GImpact's would collide the children itself): its child pairs

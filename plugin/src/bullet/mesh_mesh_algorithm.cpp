@@ -132,8 +132,8 @@ std::string pairName(const btCollisionShape* s0, const btCollisionShape* s1) {
 // dispatcher's collision configuration gave for that pair of shape types before.
 class MeshMeshCreateFunc : public btCollisionAlgorithmCreateFunc {
  public:
-  MeshMeshCreateFunc(const Config& config, btCollisionAlgorithmCreateFunc* fallback)
-      : m_config(config), m_fallback(fallback) {}
+  MeshMeshCreateFunc(const Config& config, btCollisionAlgorithmCreateFunc* fallback, bool speculativeContacts)
+      : m_config(config), m_fallback(fallback), m_speculativeContacts(speculativeContacts) {}
 
   btCollisionAlgorithm* CreateCollisionAlgorithm(btCollisionAlgorithmConstructionInfo& info,
                                                  const btCollisionObjectWrapper* body0,
@@ -142,12 +142,13 @@ class MeshMeshCreateFunc : public btCollisionAlgorithmCreateFunc {
       return m_fallback ? m_fallback->CreateCollisionAlgorithm(info, body0, body1) : nullptr;
     }
     void* memory = info.m_dispatcher1->allocateCollisionAlgorithm(sizeof(MeshMeshAlgorithm));
-    return new (memory) MeshMeshAlgorithm(info, body0, body1, m_config);
+    return new (memory) MeshMeshAlgorithm(info, body0, body1, m_config, nullptr, m_speculativeContacts);
   }
 
  private:
   Config m_config;
   btCollisionAlgorithmCreateFunc* m_fallback;
+  bool m_speculativeContacts;
 };
 
 }  // namespace
@@ -155,10 +156,11 @@ class MeshMeshCreateFunc : public btCollisionAlgorithmCreateFunc {
 MeshMeshAlgorithm::MeshMeshAlgorithm(const btCollisionAlgorithmConstructionInfo& info,
                                      const btCollisionObjectWrapper* body0,
                                      const btCollisionObjectWrapper* body1, const Config& config,
-                                     GImpactStandIns* standIns)
+                                     GImpactStandIns* standIns, bool speculativeContacts)
     : btActivatingCollisionAlgorithm(info, body0, body1),
       m_config(config),
       m_standIns(standIns),
+      m_speculativeContacts(speculativeContacts),
       m_manifolds(std::make_unique<ContactManifoldSet>(info.m_dispatcher1)),
       m_patch(std::make_unique<TriangleMeshPatch>()) {}
 
@@ -183,7 +185,7 @@ std::optional<MeshPairQuery> MeshMeshAlgorithm::meshPairQuery(const btCollisionO
   query.transformA = body0->getWorldTransform();
   query.shapeB = b;
   query.transformB = body1->getWorldTransform();
-  setSpeculativeReach(body0, body1, timeStep, query);
+  if (m_speculativeContacts) setSpeculativeReach(body0, body1, timeStep, query);
   return query;
 }
 
@@ -235,7 +237,7 @@ void MeshMeshAlgorithm::processCollision(const btCollisionObjectWrapper* body0,
         query.shapeA = &mesh;
         query.transformA = meshBody->getWorldTransform();
         query.transformB = otherBody->getWorldTransform();
-        setSpeculativeReach(meshBody, otherBody, dispatchInfo.m_timeStep, query);
+        if (m_speculativeContacts) setSpeculativeReach(meshBody, otherBody, dispatchInfo.m_timeStep, query);
         speculative = query.speculativeMotion.length() + query.speculativeDistance;
         if (const MeshShape* patch = m_patch->update(*static_cast<const btConcaveShape*>(other),
                                                      query.transformB, mesh, query.transformA, speculative)) {
@@ -277,9 +279,9 @@ void MeshMeshAlgorithm::registerWith(btCollisionDispatcher& dispatcher, const Co
   for (int a : kPartnerTypes) {
     for (int b : kPartnerTypes) {
       if (a != MeshShape::kMeshShapeType && b != MeshShape::kMeshShapeType) continue;
-      functions.emplace_back(config, configuration->getCollisionAlgorithmCreateFunc(a, b));
+      functions.emplace_back(config, configuration->getCollisionAlgorithmCreateFunc(a, b), true);
       dispatcher.registerCollisionCreateFunc(a, b, &functions.back());
-      functions.emplace_back(config, configuration->getClosestPointsAlgorithmCreateFunc(a, b));
+      functions.emplace_back(config, configuration->getClosestPointsAlgorithmCreateFunc(a, b), false);
       dispatcher.registerClosestPointsCreateFunc(a, b, &functions.back());
     }
   }
