@@ -123,3 +123,29 @@ TEST(SpeculativeContacts, ContactPairTestReportsNoSpeculativeContacts) {
 
 }  // namespace
 }  // namespace gpucol::test
+
+namespace gpucol::test {
+namespace {
+
+// A box sliding fast on a floor without friction: its motion makes it a speculative pair while it touches the
+// floor, and the contacts of touching triangles must not stop or turn it. Bullet's boxes slide on unchanged.
+TEST(SpeculativeContacts, BoxSlidingFastOnAFloorKeepsItsSpeed) {
+  for (bool mesh : {false, true}) {
+    TestWorld w(mesh ? DispatchKind::Gpucol : DispatchKind::Stock);
+    btRigidBody* floor = w.add(box(btVector3(20, 0.5f, 20), mesh), 0, at(0, -0.5f, 0));
+    btRigidBody* slider = w.add(box(btVector3(0.5f, 0.5f, 0.5f), mesh), 1, at(-10, 0.5f, 0));
+    floor->setFriction(0);
+    slider->setFriction(0);
+    slider->setLinearVelocity(btVector3(4, 0, 0));
+    w.step(180);
+    SCOPED_TRACE(mesh);
+    const btVector3 v = slider->getLinearVelocity();
+    EXPECT_NEAR(v.x(), 4, 0.05f);
+    EXPECT_NEAR(v.z(), 0, 0.05f);
+    EXPECT_LT(slider->getAngularVelocity().length(), 0.1f);  // Bullet's boxes: 0.088 rad/s
+    EXPECT_NEAR(slider->getWorldTransform().getOrigin().y(), 0.5f, 0.01f);
+  }
+}
+
+}  // namespace
+}  // namespace gpucol::test

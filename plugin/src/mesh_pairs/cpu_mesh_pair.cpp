@@ -322,7 +322,7 @@ std::vector<NearbyHit> runProximityPass(const MeshShape& shapeA, const MeshShape
       Eigen::Vector3f a[3], b[3];
       pairTriangles(shapeA, shapeB, frame, candidates[i], a, b);
       TriangleContact found[kMaxProximityContacts];
-      const int count = proximityContacts(a, b, frame.reach, found);
+      const int count = proximityContacts(a, b, frame.reach, found, frame.marginReach);
       for (int k = 0; k < count; ++k) chunkHits[chunk].push_back({i, found[k]});
     }
   });

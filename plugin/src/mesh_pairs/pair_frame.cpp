@@ -66,6 +66,7 @@ PairFrame makePairFrame(const MeshShape& a, const btTransform& transformA, const
   const Eigen::Vector3d motion(speculativeMotion.x(), speculativeMotion.y(), speculativeMotion.z());
   const double everyWay = marginReach(a, b) + double(speculativeDistance);
   frame.reach = float(everyWay + motion.norm());
+  frame.marginReach = float(marginReach(a, b));
   if (frame.reach > 0) {
     // A world distance d is at most d / |s| along a mesh axis scaled by s; the factor covers the float rounding.
     const double widen = 1 + 1.0 / 1048576;

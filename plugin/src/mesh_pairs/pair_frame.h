@@ -28,6 +28,8 @@ struct PairFrame {
   /// The sum of the shapes' margins and the speculative reach (the motion's length and the turns' distance):
   /// triangles this close give contacts.
   float reach = 0;
+  /// The margins' part of `reach`: contacts farther apart than this are speculative.
+  float marginReach = 0;
   /// How far the traversal's box tests widen along each mesh frame's axes: the margins and the turns'
   /// distance every way, the motion along itself.
   CandidateReach candidateReach;

@@ -113,7 +113,7 @@ TriangleContact contactFromB(const Vec& onB, const Vec& normalOnB, double distan
 }  // namespace
 
 int proximityContacts(const Eigen::Vector3f (&a)[3], const Eigen::Vector3f (&b)[3], float reach,
-                      TriangleContact (&out)[kMaxProximityContacts]) {
+                      TriangleContact (&out)[kMaxProximityContacts], float speculativeFrom) {
   if (!(reach > 0)) return 0;
   const Face fa = makeFace(a), fb = makeFace(b);
   if (!fa.valid || !fb.valid) return 0;
@@ -158,6 +158,7 @@ int proximityContacts(const Eigen::Vector3f (&a)[3], const Eigen::Vector3f (&b)[
   }
   const double distance = std::sqrt(best);
   if (!(distance < reach) || !(distance < closestOverFace * (1 - 1e-6))) return count;
+  if (distance >= speculativeFrom && distance < 1e-3 * size) return count;
   // Touching edges (the exact test may call a pair within about 1e-6 of its size either way) have no direction
   // between their points: B's face normal stands in.
   const Vec normal = distance > 1e-7 * size ? Vec((bestA - bestB) / distance) : fb.normal;

@@ -23,8 +23,17 @@ inline constexpr int kMaxProximityContacts = 7;
 /// A point behind the other's face is inside that body: a crossing (generateContact) answers for it, and a
 /// proximity contact there would push the bodies through each other.
 ///
+/// Contacts from `speculativeFrom` on (the margins' sum, below `reach`) are speculative: the bodies are not
+/// that close yet. There, the closest points of two edges give a contact only when they are at least 1e-3 of
+/// the triangles' size apart: edges that touch or nearly touch (a box sliding on a floor) have no reliable
+/// direction between them, and a sideways one would push the box aside.
+///
 /// Computed in double from the float inputs. The caller must only pass pairs that trianglesIntersect rejects.
 int proximityContacts(const Eigen::Vector3f (&a)[3], const Eigen::Vector3f (&b)[3], float reach,
-                      TriangleContact (&out)[kMaxProximityContacts]);
+                      TriangleContact (&out)[kMaxProximityContacts], float speculativeFrom);
+inline int proximityContacts(const Eigen::Vector3f (&a)[3], const Eigen::Vector3f (&b)[3], float reach,
+                             TriangleContact (&out)[kMaxProximityContacts]) {
+  return proximityContacts(a, b, reach, out, reach);
+}
 
 }  // namespace gpucol
