@@ -158,10 +158,26 @@ int proximityContacts(const Eigen::Vector3f (&a)[3], const Eigen::Vector3f (&b)[
   }
   const double distance = std::sqrt(best);
   if (!(distance < reach) || !(distance < closestOverFace * (1 - 1e-6))) return count;
-  if (distance >= speculativeFrom && distance < 1e-3 * size) return count;
-  // Touching edges (the exact test may call a pair within about 1e-6 of its size either way) have no direction
-  // between their points: B's face normal stands in.
-  const Vec normal = distance > 1e-7 * size ? Vec((bestA - bestB) / distance) : fb.normal;
+  // Touching edges (the exact test may call a pair within about 1e-6 of its size either way) have no
+  // direction between their points: B's face normal stands in. Speculative contacts of edges that nearly
+  // touch take the face whose plane has the other triangle wholly on its outer side (a box's edge at a
+  // floor's edge gets the floor's normal, not a sideways one), and none when neither face separates them.
+  Vec normal = distance > 1e-7 * size ? Vec((bestA - bestB) / distance) : fb.normal;
+  if (distance >= speculativeFrom && distance < 1e-3 * size) {
+    const auto outside = [&](const Face& of, const Face& plane) {
+      for (const Vec& v : of.v) {
+        if (plane.normal.dot(v - plane.v[0]) < -1e-6 * size) return false;
+      }
+      return true;
+    };
+    if (outside(fb, fa)) {
+      normal = -fa.normal;
+    } else if (outside(fa, fb)) {
+      normal = fb.normal;
+    } else {
+      return count;
+    }
+  }
   if (outerSides(normal)) out[count++] = contactFromA(bestA, normal, distance);
   return count;
 }

@@ -24,9 +24,10 @@ inline constexpr int kMaxProximityContacts = 7;
 /// proximity contact there would push the bodies through each other.
 ///
 /// Contacts from `speculativeFrom` on (the margins' sum, below `reach`) are speculative: the bodies are not
-/// that close yet. There, the closest points of two edges give a contact only when they are at least 1e-3 of
-/// the triangles' size apart: edges that touch or nearly touch (a box sliding on a floor) have no reliable
-/// direction between them, and a sideways one would push the box aside.
+/// that close yet. There, two edges closer than 1e-3 of the triangles' size (a box sliding on a floor) have
+/// no reliable direction between their closest points, and a sideways one would push the box aside: their
+/// contact takes the normal of the face whose plane has the other triangle wholly on its outer side, and
+/// there is none when neither does.
 ///
 /// Computed in double from the float inputs. The caller must only pass pairs that trianglesIntersect rejects.
 int proximityContacts(const Eigen::Vector3f (&a)[3], const Eigen::Vector3f (&b)[3], float reach,
