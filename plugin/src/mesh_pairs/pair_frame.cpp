@@ -64,9 +64,10 @@ PairFrame makePairFrame(const MeshShape& a, const btTransform& transformA, const
   frame.treeMap.translation = inverseScaleA.cwiseProduct(relativeTranslation).cast<float>();
   frame.worldFromA = transformA;
   const Eigen::Vector3d motion(speculativeMotion.x(), speculativeMotion.y(), speculativeMotion.z());
-  const double everyWay = marginReach(a, b) + double(speculativeDistance);
+  const double margins = marginReach(a, b);
+  const double everyWay = margins + double(speculativeDistance);
   frame.reach = float(everyWay + motion.norm());
-  frame.marginReach = float(marginReach(a, b));
+  frame.marginReach = float(margins);
   if (frame.reach > 0) {
     // A world distance d is at most d / |s| along a mesh axis scaled by s; the factor covers the float rounding.
     const double widen = 1 + 1.0 / 1048576;
