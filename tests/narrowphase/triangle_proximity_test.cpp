@@ -208,5 +208,66 @@ TEST(TriangleProximity, DegenerateTrianglesHaveNoContacts) {
   EXPECT_EQ(contactsOf(b, line, 0.05f, contacts), 0);
 }
 
+// The float pre-test of the proximity pass (proximityCertainlyEmptyBranchFree) only rejects pairs that
+// proximityContacts gives nothing for: random pairs over six orders of magnitude of scale, slivers among
+// them, with reaches just below and above their separation along either plane, and B just behind A's face. It
+// also rejects nearly every pair clearly beyond the reach, or the pass would gain nothing from it.
+TEST(TriangleProximity, FloatPreTestRejectsOnlyPairsWithoutContacts) {
+  std::mt19937_64 rng(29);
+  std::uniform_real_distribution<double> u(-1, 1), unit(0, 1);
+  // Separation of `of` in front of the plane of `plane` (unit normal), and how far it reaches behind it.
+  const auto separation = [](const Tri& plane, const Tri& of, double& front, double& back) {
+    const Vec p0 = plane[0].cast<double>();
+    const Vec n =
+        (plane[1] - plane[0]).cast<double>().cross((plane[2] - plane[0]).cast<double>()).normalized();
+    front = std::numeric_limits<double>::infinity(), back = -front;
+    for (const Eigen::Vector3f& v : of) {
+      const double d = n.dot(v.cast<double>() - p0);
+      front = std::min(front, d);
+      back = std::max(back, d);
+    }
+  };
+  int clearlyBeyond = 0, rejectedBeyond = 0, checked = 0;
+  for (int i = 0; i < 20000; ++i) {
+    const double scale = std::pow(10.0, -3 + 6 * unit(rng));
+    const Vec offset = Vec(u(rng), u(rng), u(rng)) * scale * std::pow(10.0, 3 * unit(rng));
+    Tri a = randomTriangle(rng, Vec::Zero()), b = randomTriangle(rng, Vec::Zero());
+    if (i % 5 == 0) a[2] = (0.5f * (a[0] + a[1]) + 1e-4f * (a[2] - a[0]));  // a sliver
+    // B lifted off A's plane by a random gap, sometimes a hair behind it instead.
+    const Vec n = outward(a);
+    double front, back;
+    separation(a, b, front, back);
+    const double lift = i % 3 == 0 ? -back - std::pow(10.0, -8 + 5 * unit(rng)) : -front + 0.3 * unit(rng);
+    for (Eigen::Vector3f& v : b) v += (n * lift).cast<float>();
+    for (Tri* t : {&a, &b}) {
+      for (Eigen::Vector3f& v : *t) v = (v.cast<double>() * scale + offset).cast<float>();
+    }
+    if (crosses(a, b)) continue;
+    double frontA, backA, frontB, backB;
+    separation(b, a, frontA, backA);
+    separation(a, b, frontB, backB);
+    const double apart = std::max(frontA, frontB);
+    const float reaches[] = {
+        float(apart * (1 - 1e-7)), float(apart * (1 + 1e-7)), float(apart * 0.999), float(apart * 1.001),
+        float(apart * 0.5),        float(1e-3 * scale),       float(scale)};
+    for (const float reach : reaches) {
+      if (!(reach > 0)) continue;
+      ++checked;
+      const bool empty = proximityCertainlyEmptyBranchFree(a[0], a[1], a[2], b[0], b[1], b[2], reach) != 0;
+      TriangleContact contacts[kMaxProximityContacts];
+      if (empty) {
+        ASSERT_EQ(contactsOf(a, b, reach, contacts), 0) << "pair " << i << " reach " << reach;
+      }
+      if (i % 5 != 0 && apart > 1.01 * reach) {
+        ++clearlyBeyond;
+        rejectedBeyond += empty;
+      }
+    }
+  }
+  EXPECT_GT(checked, 50000);
+  EXPECT_GT(clearlyBeyond, 10000);
+  EXPECT_GT(rejectedBeyond, 0.99 * clearlyBeyond);
+}
+
 }  // namespace
 }  // namespace gpucol

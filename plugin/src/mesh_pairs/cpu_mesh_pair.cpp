@@ -132,27 +132,16 @@ GPUCOL_AVX2_CLONES void transformRows(float* rows, std::size_t count, const Pair
   }
 }
 
-// One chunk of the near phase: the candidates from `begin` on (at most kNearChunk), their hits appended to
-// `hits`. Its passes: fetch the triangles into rows (A's once per run of equal triangleA: candidates come
-// sorted by it) and apply the pair's frame; run the float plane pre-test of triangle_plane.h over all of them
-// without branches; gather the pairs it could not reject and run the float interval pre-test over those; then
-// run the double test and the contact generation on the pairs left. The pre-tests only reject what the double
-// test rejects, so the result is the double test's; the plane test removes about two thirds of the candidates
-// of the thesis scene, and without a branch per pair (its outcome is close to a coin toss).
-// Compiled for AVX2 and baseline x86-64 (bvh/avx2_clones.h): with AVX2 the row loops below run on 8 lanes
-// instead of 4, and the results are the same bits.
-GPUCOL_AVX2_CLONES void runNearChunk(const MeshShape& shapeA, const MeshShape& shapeB, const PairFrame& frame,
-                                     const std::vector<TrianglePair>& candidates, std::size_t begin,
-                                     ChunkBuffers& buffers, std::vector<NearHit>& hits) {
-  const std::size_t count = std::min(candidates.size(), begin + kNearChunk) - begin;
-  ChunkTriangles& triangles = buffers.triangles;
-  ChunkTriangles& crossing = buffers.crossing;
+// The triangles of candidates begin .. begin + count into `rows` (ChunkTriangles' layout), in A's scaled
+// frame.
+inline void fetchChunkRows(const MeshShape& shapeA, const MeshShape& shapeB, const PairFrame& frame,
+                           const std::vector<TrianglePair>& candidates, std::size_t begin, std::size_t count,
+                           float* rows) {
   // The mesh coordinates are copied into the rows as they are, and the frame (A's scale, B's map into A's
   // frame) is applied afterwards, row by row, as vector code (transformRows): per candidate, through Eigen
   // vectors, the near phase took 5.85M instructions per query of the thesis scene (armadillo-27674, one
   // thread, valgrind), this way 4.97M. A mirroring scale swaps which rows vertices 1 and 2 go to, to keep
   // the winding outward.
-  float* const rows = triangles.values();
   constexpr std::size_t n = kNearRow;
   const std::size_t rowA[3] = {0, frame.flipA ? 2u : 1u, frame.flipA ? 1u : 2u};
   const std::size_t rowB[3] = {3, frame.flipB ? 5u : 4u, frame.flipB ? 4u : 5u};
@@ -190,6 +179,26 @@ GPUCOL_AVX2_CLONES void runNearChunk(const MeshShape& shapeA, const MeshShape& s
     }
   }
   transformRows(rows, count, frame);
+}
+
+// One chunk of the near phase: the candidates from `begin` on (at most kNearChunk), their hits appended to
+// `hits`. Its passes: fetch the triangles into rows (A's once per run of equal triangleA: candidates come
+// sorted by it) and apply the pair's frame; run the float plane pre-test of triangle_plane.h over all of them
+// without branches; gather the pairs it could not reject and run the float interval pre-test over those; then
+// run the double test and the contact generation on the pairs left. The pre-tests only reject what the double
+// test rejects, so the result is the double test's; the plane test removes about two thirds of the candidates
+// of the thesis scene, and without a branch per pair (its outcome is close to a coin toss).
+// Compiled for AVX2 and baseline x86-64 (bvh/avx2_clones.h): with AVX2 the row loops below run on 8 lanes
+// instead of 4, and the results are the same bits.
+GPUCOL_AVX2_CLONES void runNearChunk(const MeshShape& shapeA, const MeshShape& shapeB, const PairFrame& frame,
+                                     const std::vector<TrianglePair>& candidates, std::size_t begin,
+                                     ChunkBuffers& buffers, std::vector<NearHit>& hits) {
+  const std::size_t count = std::min(candidates.size(), begin + kNearChunk) - begin;
+  ChunkTriangles& triangles = buffers.triangles;
+  ChunkTriangles& crossing = buffers.crossing;
+  float* const rows = triangles.values();
+  constexpr std::size_t n = kNearRow;
+  fetchChunkRows(shapeA, shapeB, frame, candidates, begin, count, rows);
   // Plain pointers, loaded once: the stores into `apart` could alias the vector's own fields otherwise, and
   // the compiler would give up on vector code.
   const float* const v = triangles.data();
@@ -284,46 +293,46 @@ std::vector<NearHit> runNearPhase(const MeshShape& shapeA, const MeshShape& shap
   return joined;
 }
 
-// A's and B's triangles of one candidate in A's scaled frame, by the same operations as runNearChunk's rows.
-void pairTriangles(const MeshShape& shapeA, const MeshShape& shapeB, const PairFrame& frame,
-                   const TrianglePair& pair, Eigen::Vector3f (&a)[3], Eigen::Vector3f (&b)[3]) {
-  const float* pa = shapeA.triangleSoup() + 9 * std::size_t(pair.triangleA);
-  const float* pb = shapeB.triangleSoup() + 9 * std::size_t(pair.triangleB);
-  const int order[2][3] = {{0, 1, 2}, {0, 2, 1}};
-  const Eigen::Matrix3f& m = frame.bLinear;
-  const Eigen::Vector3f& t = frame.bTranslation;
-  for (int v = 0; v < 3; ++v) {
-    const float* p = pa + 3 * v;
-    a[order[frame.flipA][v]] = Eigen::Vector3f(p[0] * frame.scaleA.x(), p[1] * frame.scaleA.y(), p[2] * frame.scaleA.z());
-    const float* q = pb + 3 * v;
-    b[order[frame.flipB][v]] = Eigen::Vector3f(m(0, 0) * q[0] + (m(0, 1) * q[1] + m(0, 2) * q[2]) + t.x(),
-                                               m(1, 0) * q[0] + (m(1, 1) * q[1] + m(1, 2) * q[2]) + t.y(),
-                                               m(2, 0) * q[0] + (m(2, 1) * q[1] + m(2, 2) * q[2]) + t.z());
-  }
-}
-
 // A contact of a candidate whose triangles do not cross but come within the shapes' margins.
 struct NearbyHit {
   std::size_t candidate;
   TriangleContact contact;
 };
 
-// The proximity contacts of every candidate that does not cross (triangle_proximity.h), in candidate order, in
-// parallel; `crossing[i]` is set for the candidates the near phase found intersecting.
+// Marks in `empty` the columns of `rows` that proximityCertainlyEmptyBranchFree proves have no proximity
+// contact; a loop of vector code over the chunk, compiled for AVX2 too.
+GPUCOL_AVX2_CLONES void markProximityEmpty(const float* rows, std::size_t count, float reach,
+                                           std::uint8_t* empty) {
+  for (std::size_t j = 0; j < count; ++j) {
+    const RowTriangles t(rows, j);
+    empty[j] = static_cast<std::uint8_t>(
+        proximityCertainlyEmptyBranchFree(t.a0, t.a1, t.a2, t.b0, t.b1, t.b2, reach));
+  }
+}
+
+// The proximity contacts of every candidate that does not cross (triangle_proximity.h), in candidate order,
+// in parallel; `crossing[i]` is set for the candidates the near phase found intersecting. The float pre-test
+// leaves the double test only the candidates it cannot prove beyond the reach.
 std::vector<NearbyHit> runProximityPass(const MeshShape& shapeA, const MeshShape& shapeB, const PairFrame& frame,
                                         const std::vector<TrianglePair>& candidates,
                                         const std::vector<std::uint8_t>& crossing) {
   const std::size_t chunks = (candidates.size() + kNearChunk - 1) / kNearChunk;
   std::vector<std::vector<NearbyHit>> chunkHits(chunks);
+  tbb::enumerable_thread_specific<ChunkTriangles> threadRows;
   tbb::parallel_for(std::size_t(0), chunks, [&](std::size_t chunk) {
-    const std::size_t end = std::min(candidates.size(), (chunk + 1) * kNearChunk);
-    for (std::size_t i = chunk * kNearChunk; i < end; ++i) {
-      if (crossing[i]) continue;
+    const std::size_t begin = chunk * kNearChunk;
+    const std::size_t count = std::min(candidates.size(), begin + kNearChunk) - begin;
+    ChunkTriangles& rows = threadRows.local();
+    fetchChunkRows(shapeA, shapeB, frame, candidates, begin, count, rows.values());
+    std::uint8_t empty[kNearChunk];
+    markProximityEmpty(rows.data(), count, frame.reach, empty);
+    for (std::size_t j = 0; j < count; ++j) {
+      if (empty[j] || crossing[begin + j]) continue;
       Eigen::Vector3f a[3], b[3];
-      pairTriangles(shapeA, shapeB, frame, candidates[i], a, b);
+      rows.load(j, a, b);
       TriangleContact found[kMaxProximityContacts];
-      const int count = proximityContacts(a, b, frame.reach, found, frame.marginReach);
-      for (int k = 0; k < count; ++k) chunkHits[chunk].push_back({i, found[k]});
+      const int made = proximityContacts(a, b, frame.reach, found, frame.marginReach);
+      for (int k = 0; k < made; ++k) chunkHits[chunk].push_back({begin + j, found[k]});
     }
   });
   std::vector<NearbyHit> joined;

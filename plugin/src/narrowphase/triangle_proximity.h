@@ -3,6 +3,7 @@
 #include <Eigen/Core>
 
 #include "narrowphase/triangle_contact.h"
+#include "narrowphase/triangle_plane.h"
 
 namespace gpucol {
 
@@ -35,6 +36,66 @@ int proximityContacts(const Eigen::Vector3f (&a)[3], const Eigen::Vector3f (&b)[
 inline int proximityContacts(const Eigen::Vector3f (&a)[3], const Eigen::Vector3f (&b)[3], float reach,
                              TriangleContact (&out)[kMaxProximityContacts]) {
   return proximityContacts(a, b, reach, out, reach);
+}
+
+namespace detail {
+
+/// One plane's half of proximityCertainlyEmptyBranchFree: 1 when float arithmetic proves that every q_i lies
+/// in front of the plane of (v0, v0 + e1, v0 + e2) farther than sqrt(front2), or behind it farther than
+/// sqrt(behind2), in unit-normal distance. The unnormalised distances carry at most the plane pre-test's
+/// error m (GPUCOL_FLOAT_SIDE_MARGIN, triangle_pretest.h) and the float normal's length at most 32u E1 E2
+/// (each component within 2 gamma_4 E1 E2); squares bound sums by (x + y)^2 <= (1 + 2^-10) x^2 + 1025 y^2,
+/// and a factor 1 + 2^-18 covers the roundings of the comparison. Products that could be subnormal abstain,
+/// as do factors outside the interval stage's range (so the squares cannot overflow).
+GPUCOL_FORCE_INLINE gpucol_mask proximityPlaneApart(GpucolLanes3 v0, GpucolLanes3 e1, GpucolLanes3 e2,
+                                                    GpucolLanes3 q0, GpucolLanes3 q1, GpucolLanes3 q2,
+                                                    float front2, float behind2) {
+  const float u = 1.0f / 16777216.0f, tiny = 0x1p-120f;
+  const GpucolLanes3 n = gpucol_lanes3_cross(e1, e2);
+  const GpucolLanes3 r0 = gpucol_lanes3_sub(q0, v0), r1 = gpucol_lanes3_sub(q1, v0),
+                     r2 = gpucol_lanes3_sub(q2, v0);
+  const float d0 = gpucol_lanes3_dot(n, r0), d1 = gpucol_lanes3_dot(n, r1), d2 = gpucol_lanes3_dot(n, r2);
+  const float edge1 = gpucol_lanes3_max_abs(e1), edge2 = gpucol_lanes3_max_abs(e2);
+  const float extent = gpucol_lanes_max(
+      gpucol_lanes_max(gpucol_lanes3_max_abs(r0), gpucol_lanes3_max_abs(r1)), gpucol_lanes3_max_abs(r2));
+  const gpucol_mask inRange =
+      gpucol_interval_factor(edge1) & gpucol_interval_factor(edge2) & gpucol_interval_factor(extent);
+  const float m = GPUCOL_FLOAT_SIDE_MARGIN * edge1 * edge2 * extent;
+  const float normalError = 32.0f * u * edge1 * edge2;
+  const float normalUpper2 = (1.0f + 0x1p-9f) * gpucol_lanes3_dot(n, n) + 1025.0f * normalError * normalError;
+  const float low = gpucol_lanes_min(gpucol_lanes_min(d0, d1), d2) - m;
+  const float high = gpucol_lanes_max(gpucol_lanes_max(d0, d1), d2) + m;
+  const float frontBound = (1.0f + 0x1p-18f) * front2 * normalUpper2;
+  const float behindBound = (1.0f + 0x1p-18f) * behind2 * normalUpper2;
+  const gpucol_mask inFront = (low > 0.0f) & (low * low > frontBound) & (frontBound > tiny);
+  const gpucol_mask behind = (high < 0.0f) & (high * high > behindBound) & (behindBound > tiny);
+  return inRange & (normalUpper2 > tiny) & (inFront | behind);
+}
+
+}  // namespace detail
+
+/// 1 when float arithmetic proves that proximityContacts(a, b, reach, ...) returns no contact because one
+/// triangle lies wholly beyond `reach` in front of the other's plane or wholly behind it (its first
+/// rejection, with the same size tolerances), else 0. Branch-free, so that a loop over rows of candidates is
+/// vector code: most candidates of a pair with a margin or a speculative reach end here, before the double
+/// test.
+GPUCOL_FORCE_INLINE unsigned proximityCertainlyEmptyBranchFree(
+    const Eigen::Vector3f& a0, const Eigen::Vector3f& a1, const Eigen::Vector3f& a2,
+    const Eigen::Vector3f& b0, const Eigen::Vector3f& b1, const Eigen::Vector3f& b2, float reach) {
+  const GpucolLanes3 pa0 = detail::floatLanes(a0), pa1 = detail::floatLanes(a1), pa2 = detail::floatLanes(a2);
+  const GpucolLanes3 pb0 = detail::floatLanes(b0), pb1 = detail::floatLanes(b1), pb2 = detail::floatLanes(b2);
+  const GpucolLanes3 e1 = gpucol_lanes3_sub(pa1, pa0), e2 = gpucol_lanes3_sub(pa2, pa0);
+  const GpucolLanes3 f1 = gpucol_lanes3_sub(pb1, pb0), f2 = gpucol_lanes3_sub(pb2, pb0);
+  // The double test's size is the longest edge of the two; a third edge is at most the sum of the other two.
+  const float longest2 =
+      gpucol_lanes_max(gpucol_lanes_max(gpucol_lanes3_dot(e1, e1), gpucol_lanes3_dot(e2, e2)),
+                       gpucol_lanes_max(gpucol_lanes3_dot(f1, f1), gpucol_lanes3_dot(f2, f2)));
+  const float size2 = 4.0f * (1.0f + 0x1p-16f) * longest2;
+  // (reach + 1e-6 size)^2 and (2e-6 reach + 1e-6 size)^2, bounded as in proximityPlaneApart.
+  const float front2 = (1.0f + 0x1p-10f) * reach * reach + 1025e-12f * size2;
+  const float behind2 = 2.0f * (4e-12f * reach * reach + 1e-12f * size2);
+  return unsigned(detail::proximityPlaneApart(pb0, f1, f2, pa0, pa1, pa2, front2, behind2) |
+                  detail::proximityPlaneApart(pa0, e1, e2, pb0, pb1, pb2, front2, behind2));
 }
 
 }  // namespace gpucol
