@@ -3,10 +3,13 @@
 #include "narrowphase/triangle_proximity.h"
 
 #include <Eigen/Geometry>
-
 #include <algorithm>
 #include <cmath>
+#include <cstring>
 #include <limits>
+
+#include "bvh/avx2_clones.h"
+#include "shared_math/triangle_lanes.h"
 
 namespace gpucol {
 namespace {
@@ -17,22 +20,32 @@ using Vec = Eigen::Vector3d;
 // on), whose contact normal is perpendicular to one of them.
 constexpr double kSideTolerance = 1e-6;
 
-// A triangle in double with its unit outward normal; `valid` is false for a degenerate or non-finite one, with
-// the same threshold as trianglesIntersect (sin^2 of the angle at v0 below 1e-12).
+// A triangle in double: its vertices, edges (edge i from v[i] to v[i + 1]) and their squared lengths, its
+// unit outward normal, and per edge the normal x edge, which points into the face; `valid` is false for a
+// degenerate or non-finite one, with the same threshold as trianglesIntersect (sin^2 of the angle at v0 below
+// 1e-12).
 struct Face {
   Vec v[3];
+  Vec edge[3];
+  double edge2[3];
   Vec normal;
+  Vec inward[3];
   bool valid = false;
 };
 
 Face makeFace(const Eigen::Vector3f (&t)[3]) {
   Face f;
   for (int i = 0; i < 3; ++i) f.v[i] = t[i].cast<double>();
-  const Vec e1 = f.v[1] - f.v[0], e2 = f.v[2] - f.v[0];
-  const Vec n = e1.cross(e2);
+  for (int i = 0; i < 3; ++i) {
+    f.edge[i] = f.v[(i + 1) % 3] - f.v[i];
+    f.edge2[i] = f.edge[i].squaredNorm();
+  }
+  const Vec n = f.edge[0].cross(f.v[2] - f.v[0]);
   const double n2 = n.squaredNorm();
-  f.valid = std::isfinite(n2) && n2 > 1e-12 * e1.squaredNorm() * e2.squaredNorm();
-  if (f.valid) f.normal = n / std::sqrt(n2);
+  f.valid = std::isfinite(n2) && n2 > 1e-12 * f.edge2[0] * f.edge2[2];
+  if (!f.valid) return f;
+  f.normal = n / std::sqrt(n2);
+  for (int i = 0; i < 3; ++i) f.inward[i] = f.normal.cross(f.edge[i]);
   return f;
 }
 
@@ -40,24 +53,23 @@ Face makeFace(const Eigen::Vector3f (&t)[3]) {
 // edge belongs to both faces; the contact reduction merges what that doubles).
 bool projectsOntoFace(const Face& f, const Vec& p) {
   for (int i = 0; i < 3; ++i) {
-    const Vec edge = f.v[(i + 1) % 3] - f.v[i];
-    if (edge.cross(p - f.v[i]).dot(f.normal) < -1e-9 * edge.squaredNorm()) return false;
+    if (f.inward[i].dot(p - f.v[i]) < -1e-9 * f.edge2[i]) return false;
   }
   return true;
+}
+
+// The longer of the two triangles' longest edges.
+double pairSize(const Face& fa, const Face& fb) {
+  return std::sqrt(std::max({fa.edge2[0], fa.edge2[1], fa.edge2[2], fb.edge2[0], fb.edge2[1], fb.edge2[2]}));
 }
 
 // True when one triangle lies wholly on one side of the other's plane such that no contact below can come:
 // beyond `reach` in front of it or behind it (every contact is closer than reach), or behind it at all (a
 // contact needs a point on the other's outer side; `behind` exceeds what the outer-side test's 1e-6 and the
-// touching-edge case's 1e-7 of the size let through). Most candidates of two meshes with margins end here,
-// before the vertex and edge tests.
-bool separatedByAPlane(const Face& fa, const Face& fb, double reach) {
-  double size2 = 0;
-  for (int i = 0; i < 3; ++i) {
-    size2 = std::max(
-        {size2, (fa.v[(i + 1) % 3] - fa.v[i]).squaredNorm(), (fb.v[(i + 1) % 3] - fb.v[i]).squaredNorm()});
-  }
-  const double size = std::sqrt(size2), behind = 2e-6 * reach + 1e-6 * size;
+// touching-edge case's 1e-7 of the size let through). The float pre-test (proximityCertainlyEmptyBranchFree)
+// ends most candidates of two meshes with margins before this.
+bool separatedByAPlane(const Face& fa, const Face& fb, double reach, double size) {
+  const double behind = 2e-6 * reach + 1e-6 * size;
   const auto apart = [&](const Face& of, const Face& plane) {
     double lo = std::numeric_limits<double>::infinity(), hi = -lo;
     for (const Vec& v : of.v) {
@@ -70,22 +82,64 @@ bool separatedByAPlane(const Face& fa, const Face& fb, double reach) {
   return apart(fa, fb) || apart(fb, fa);
 }
 
-// Parameters of the closest points of the segments p0 + s u and q0 + t v, s and t in [0, 1]. The squared
-// distance is a convex quadratic in (s, t): take the unconstrained minimum's s clamped, the best t for it, and
-// if that t must be clamped, the best s for the clamped t. Parallel segments take s = 0.
-void closestOnSegments(const Vec& p0, const Vec& u, const Vec& q0, const Vec& v, double& s, double& t) {
-  const Vec w = p0 - q0;
-  const double a = u.dot(u), b = u.dot(v), c = v.dot(v), d = u.dot(w), e = v.dot(w);
-  const double denominator = a * c - b * b;
-  s = denominator > 1e-12 * a * c ? std::clamp((b * e - c * d) / denominator, 0.0, 1.0) : 0.0;
-  t = (b * s + e) / c;
-  if (t < 0) {
-    t = 0;
-    s = std::clamp(-d / a, 0.0, 1.0);
-  } else if (t > 1) {
-    t = 1;
-    s = std::clamp((b - d) / a, 0.0, 1.0);
+// The closest points of the nearest of the nine pairs of edges (edge i of A, edge j of B): returns their
+// squared distance, the first smallest in the order i, j. Per pair the squared distance of the segments
+// p0 + s u and q0 + t v, s and t in [0, 1], is a convex quadratic in (s, t): take the unconstrained minimum's
+// s clamped, the best t for it, and if that t must be clamped, the best s for the clamped t; parallel
+// segments take s = 0. The pairs run four at a time in the lanes of shared_math/triangle_lanes.h, choices by
+// masks, so the divisions of different pairs overlap instead of each pair waiting on its own and
+// mispredicting its clamps.
+GPUCOL_AVX2_CLONES double closestEdgePoints(const Face& fa, const Face& fb, Vec& bestA, Vec& bestB) {
+  // Twelve columns, the last three repeating the first pair, written as plain arrays and read as vectors.
+  constexpr int kPairs = 9, kColumns = 12;
+  alignas(32) double columns[14][kColumns];
+  for (int k = 0; k < kColumns; ++k) {
+    const int i = k < kPairs ? k / 3 : 0, j = k < kPairs ? k % 3 : 0;
+    for (int x = 0; x < 3; ++x) {
+      columns[x][k] = fa.v[i][x], columns[3 + x][k] = fa.edge[i][x];
+      columns[6 + x][k] = fb.v[j][x], columns[9 + x][k] = fb.edge[j][x];
+    }
+    columns[12][k] = fa.edge2[i], columns[13][k] = fb.edge2[j];
   }
+  alignas(32) double d2[kColumns], s[kColumns], t[kColumns];
+  const gpucol_d4 zero = gpucol_d4_splat(0.0), one = gpucol_d4_splat(1.0);
+  for (int g = 0; g < kColumns; g += 4) {
+    gpucol_d4 p[3], u[3], q[3], v[3], a, c;
+    for (int x = 0; x < 3; ++x) {
+      std::memcpy(&p[x], &columns[x][g], sizeof(gpucol_d4));
+      std::memcpy(&u[x], &columns[3 + x][g], sizeof(gpucol_d4));
+      std::memcpy(&q[x], &columns[6 + x][g], sizeof(gpucol_d4));
+      std::memcpy(&v[x], &columns[9 + x][g], sizeof(gpucol_d4));
+    }
+    std::memcpy(&a, &columns[12][g], sizeof(gpucol_d4));
+    std::memcpy(&c, &columns[13][g], sizeof(gpucol_d4));
+    const gpucol_d4 w[3] = {p[0] - q[0], p[1] - q[1], p[2] - q[2]};
+    const gpucol_d4 b = u[0] * v[0] + u[1] * v[1] + u[2] * v[2];
+    const gpucol_d4 d = u[0] * w[0] + u[1] * w[1] + u[2] * w[2];
+    const gpucol_d4 e = v[0] * w[0] + v[1] * w[1] + v[2] * w[2];
+    const gpucol_d4 denominator = a * c - b * b;
+    const gpucol_d4 free = gpucol_d4_min(gpucol_d4_max((b * e - c * d) / denominator, zero), one);
+    const gpucol_d4 sFree = gpucol_d4_pick(denominator > 1e-12 * a * c, free, zero);
+    const gpucol_d4 tFree = (b * sFree + e) / c;
+    const gpucol_d4 sLow = gpucol_d4_min(gpucol_d4_max(-d / a, zero), one);
+    const gpucol_d4 sHigh = gpucol_d4_min(gpucol_d4_max((b - d) / a, zero), one);
+    const gpucol_d4 sk = gpucol_d4_pick(tFree < zero, sLow, gpucol_d4_pick(tFree > one, sHigh, sFree));
+    const gpucol_d4 tk = gpucol_d4_min(gpucol_d4_max(tFree, zero), one);
+    gpucol_d4 squared = zero;
+    for (int x = 0; x < 3; ++x) {
+      const gpucol_d4 gap = w[x] + sk * u[x] - tk * v[x];
+      squared += gap * gap;
+    }
+    std::memcpy(&d2[g], &squared, sizeof(gpucol_d4));
+    std::memcpy(&s[g], &sk, sizeof(gpucol_d4));
+    std::memcpy(&t[g], &tk, sizeof(gpucol_d4));
+  }
+  int nearest = 0;
+  for (int k = 1; k < kPairs; ++k) nearest = d2[k] < d2[nearest] ? k : nearest;
+  const int i = nearest / 3, j = nearest % 3;
+  bestA = fa.v[i] + s[nearest] * fa.edge[i];
+  bestB = fb.v[j] + t[nearest] * fb.edge[j];
+  return d2[nearest];
 }
 
 // A contact whose point on A is `onA`, on B `onA - normal * distance`. toWorld puts Bullet's point on B at
@@ -117,7 +171,8 @@ int proximityContacts(const Eigen::Vector3f (&a)[3], const Eigen::Vector3f (&b)[
   if (!(reach > 0)) return 0;
   const Face fa = makeFace(a), fb = makeFace(b);
   if (!fa.valid || !fb.valid) return 0;
-  if (separatedByAPlane(fa, fb, reach)) return 0;
+  const double size = pairSize(fa, fb);
+  if (separatedByAPlane(fa, fb, reach, size)) return 0;
   // Each contact's point on A on B's outer side and its point on B on A's outer side: along the contact's
   // normal n (from B to A), n.nB >= 0 and n.nA <= 0 (within kSideTolerance).
   const auto outerSides = [&](const Vec& normal) {
@@ -140,23 +195,8 @@ int proximityContacts(const Eigen::Vector3f (&a)[3], const Eigen::Vector3f (&b)[
     if (d >= 0 && d < reach && outerSides(-fa.normal)) out[count++] = contactFromB(fb.v[i], -fa.normal, d);
   }
 
-  double best = std::numeric_limits<double>::infinity();
-  Vec bestA = Vec::Zero(), bestB = Vec::Zero();
-  double size = 0;
-  for (int i = 0; i < 3; ++i) {
-    const Vec u = fa.v[(i + 1) % 3] - fa.v[i];
-    size = std::max(size, u.norm());
-    for (int j = 0; j < 3; ++j) {
-      const Vec v = fb.v[(j + 1) % 3] - fb.v[j];
-      size = std::max(size, v.norm());
-      double s, t;
-      closestOnSegments(fa.v[i], u, fb.v[j], v, s, t);
-      const Vec pa = fa.v[i] + s * u, pb = fb.v[j] + t * v;
-      const double d2 = (pa - pb).squaredNorm();
-      if (d2 < best) best = d2, bestA = pa, bestB = pb;
-    }
-  }
-  const double distance = std::sqrt(best);
+  Vec bestA, bestB;
+  const double distance = std::sqrt(closestEdgePoints(fa, fb, bestA, bestB));
   if (!(distance < reach) || !(distance < closestOverFace * (1 - 1e-6))) return count;
   // Touching edges (the exact test may call a pair within about 1e-6 of its size either way) have no
   // direction between their points: B's face normal stands in. Speculative contacts of edges that nearly
