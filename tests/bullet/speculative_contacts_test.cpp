@@ -117,7 +117,9 @@ TEST(SpeculativeContacts, ContactPairTestReportsNoSpeculativeContacts) {
     SCOPED_TRACE(int(kind));
     EXPECT_EQ(count.points, 0);
     w.world().performDiscreteCollisionDetection();
-    if (mesh) EXPECT_GT(w.contactPoints(), 0);
+    if (mesh) {
+      EXPECT_GT(w.contactPoints(), 0);
+    }
   }
 }
 
