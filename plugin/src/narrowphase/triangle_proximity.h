@@ -42,29 +42,24 @@ namespace detail {
 
 /// One plane's half of proximityCertainlyEmptyBranchFree: 1 when float arithmetic proves that every q_i lies
 /// in front of the plane of (v0, v0 + e1, v0 + e2) farther than sqrt(front2), or behind it farther than
-/// sqrt(behind2), in unit-normal distance. The unnormalised distances carry at most the plane pre-test's
-/// error m (GPUCOL_FLOAT_SIDE_MARGIN, triangle_pretest.h) and the float normal's length at most 32u E1 E2
-/// (each component within 2 gamma_4 E1 E2); squares bound sums by (x + y)^2 <= (1 + 2^-10) x^2 + 1025 y^2,
-/// and a factor 1 + 2^-18 covers the roundings of the comparison. Products that could be subnormal abstain,
-/// as do factors outside the interval stage's range (so the squares cannot overflow).
+/// sqrt(behind2), in unit-normal distance. The unnormalised distances (gpucol_float_plane,
+/// triangle_pretest.h) carry at most its error margin and the float normal's length at most 32u E1 E2 (each
+/// component within 2 gamma_4 E1 E2); squares bound sums by (x + y)^2 <= (1 + 2^-10) x^2 + 1025 y^2, and a
+/// factor 1 + 2^-18 covers the roundings of the comparison. Products that could be subnormal abstain, as do
+/// factors outside the interval stage's range (so the squares cannot overflow).
 GPUCOL_FORCE_INLINE gpucol_mask proximityPlaneApart(GpucolLanes3 v0, GpucolLanes3 e1, GpucolLanes3 e2,
                                                     GpucolLanes3 q0, GpucolLanes3 q1, GpucolLanes3 q2,
                                                     float front2, float behind2) {
   const float u = 1.0f / 16777216.0f, tiny = 0x1p-120f;
-  const GpucolLanes3 n = gpucol_lanes3_cross(e1, e2);
-  const GpucolLanes3 r0 = gpucol_lanes3_sub(q0, v0), r1 = gpucol_lanes3_sub(q1, v0),
-                     r2 = gpucol_lanes3_sub(q2, v0);
-  const float d0 = gpucol_lanes3_dot(n, r0), d1 = gpucol_lanes3_dot(n, r1), d2 = gpucol_lanes3_dot(n, r2);
-  const float edge1 = gpucol_lanes3_max_abs(e1), edge2 = gpucol_lanes3_max_abs(e2);
-  const float extent = gpucol_lanes_max(
-      gpucol_lanes_max(gpucol_lanes3_max_abs(r0), gpucol_lanes3_max_abs(r1)), gpucol_lanes3_max_abs(r2));
+  const GpucolFloatPlane p = gpucol_float_plane(v0, e1, e2, q0, q1, q2);
   const gpucol_mask inRange =
-      gpucol_interval_factor(edge1) & gpucol_interval_factor(edge2) & gpucol_interval_factor(extent);
-  const float m = GPUCOL_FLOAT_SIDE_MARGIN * edge1 * edge2 * extent;
-  const float normalError = 32.0f * u * edge1 * edge2;
-  const float normalUpper2 = (1.0f + 0x1p-9f) * gpucol_lanes3_dot(n, n) + 1025.0f * normalError * normalError;
-  const float low = gpucol_lanes_min(gpucol_lanes_min(d0, d1), d2) - m;
-  const float high = gpucol_lanes_max(gpucol_lanes_max(d0, d1), d2) + m;
+      gpucol_interval_factor(p.edge1) & gpucol_interval_factor(p.edge2) & gpucol_interval_factor(p.extent);
+  const float normalError = 32.0f * u * p.edge1 * p.edge2;
+  const float normalUpper2 =
+      (1.0f + 0x1p-9f) * gpucol_lanes3_dot(p.normal, p.normal) + 1025.0f * normalError * normalError;
+  const GpucolLanes3 d = p.distance;
+  const float low = gpucol_lanes_min(gpucol_lanes_min(d.x, d.y), d.z) - p.margin;
+  const float high = gpucol_lanes_max(gpucol_lanes_max(d.x, d.y), d.z) + p.margin;
   const float frontBound = (1.0f + 0x1p-18f) * front2 * normalUpper2;
   const float behindBound = (1.0f + 0x1p-18f) * behind2 * normalUpper2;
   const gpucol_mask inFront = (low > 0.0f) & (low * low > frontBound) & (frontBound > tiny);

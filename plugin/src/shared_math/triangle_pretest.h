@@ -123,6 +123,33 @@ GPUCOL_SHARED_FORCE_INLINE gpucol_mask gpucol_interval_factor(gpucol_lanes x) {
   return (x >= GPUCOL_FLOAT_INTERVAL_MIN_FACTOR) & (x <= GPUCOL_FLOAT_INTERVAL_MAX_FACTOR);
 }
 
+/* The float distances of q0, q1, q2 from the plane through v0 spanned by e1 and e2, unnormalised (times
+   |e1 x e2|), as every float pre-test computes them, with the bound on their error (`margin`,
+   GPUCOL_FLOAT_SIDE_MARGIN times the three factors) and the factors, whose range each caller checks: the
+   same expressions everywhere, so that the margin's bound holds for all of them. */
+typedef struct GpucolFloatPlane {
+  GpucolLanes3 normal;   /* e1 x e2 */
+  GpucolLanes3 distance; /* of q0, q1, q2 */
+  gpucol_lanes edge1, edge2, extent, margin;
+} GpucolFloatPlane;
+
+GPUCOL_SHARED_FORCE_INLINE GpucolFloatPlane gpucol_float_plane(GpucolLanes3 v0, GpucolLanes3 e1,
+                                                               GpucolLanes3 e2, GpucolLanes3 q0,
+                                                               GpucolLanes3 q1, GpucolLanes3 q2) {
+  GpucolFloatPlane p;
+  p.normal = gpucol_lanes3_cross(e1, e2);
+  p.edge1 = gpucol_lanes3_max_abs(e1);
+  p.edge2 = gpucol_lanes3_max_abs(e2);
+  const GpucolLanes3 r0 = gpucol_lanes3_sub(q0, v0), r1 = gpucol_lanes3_sub(q1, v0),
+                     r2 = gpucol_lanes3_sub(q2, v0);
+  p.distance = gpucol_lanes3(gpucol_lanes3_dot(p.normal, r0), gpucol_lanes3_dot(p.normal, r1),
+                             gpucol_lanes3_dot(p.normal, r2));
+  p.extent = gpucol_lanes_max(gpucol_lanes_max(gpucol_lanes3_max_abs(r0), gpucol_lanes3_max_abs(r1)),
+                              gpucol_lanes3_max_abs(r2));
+  p.margin = GPUCOL_FLOAT_SIDE_MARGIN * p.edge1 * p.edge2 * p.extent;
+  return p;
+}
+
 /* Float pre-test of q0, q1, q2 against `plane`, conservative by GPUCOL_FLOAT_SIDE_MARGIN: it only reports
    what the double test is certain to find (`apart`: all three certainly non-zero with one sign, so
    gpucol_all_on_one_side will hold; `off`: one certainly non-zero, so gpucol_all_in_plane will not). NaN,
@@ -131,21 +158,14 @@ GPUCOL_SHARED_FORCE_INLINE gpucol_mask gpucol_interval_factor(gpucol_lanes x) {
 GPUCOL_SHARED_FORCE_INLINE void gpucol_float_plane_side(GpucolLanes3 v0, GpucolLanes3 v1, GpucolLanes3 v2,
                                                         GpucolLanes3 q0, GpucolLanes3 q1, GpucolLanes3 q2,
                                                         gpucol_mask* apart, gpucol_mask* off) {
-  const GpucolLanes3 e1 = gpucol_lanes3_sub(v1, v0), e2 = gpucol_lanes3_sub(v2, v0);
-  const GpucolLanes3 n = gpucol_lanes3_cross(e1, e2);
-  const gpucol_lanes edge1 = gpucol_lanes3_max_abs(e1), edge2 = gpucol_lanes3_max_abs(e2);
-  const GpucolLanes3 r0 = gpucol_lanes3_sub(q0, v0), r1 = gpucol_lanes3_sub(q1, v0),
-                     r2 = gpucol_lanes3_sub(q2, v0);
-  const gpucol_lanes d0 = gpucol_lanes3_dot(n, r0), d1 = gpucol_lanes3_dot(n, r1),
-                     d2 = gpucol_lanes3_dot(n, r2);
-  const gpucol_lanes extent = gpucol_lanes_max(
-      gpucol_lanes_max(gpucol_lanes3_max_abs(r0), gpucol_lanes3_max_abs(r1)), gpucol_lanes3_max_abs(r2));
+  const GpucolFloatPlane p =
+      gpucol_float_plane(v0, gpucol_lanes3_sub(v1, v0), gpucol_lanes3_sub(v2, v0), q0, q1, q2);
+  const gpucol_lanes d0 = p.distance.x, d1 = p.distance.y, d2 = p.distance.z, m = p.margin;
   /* `&` rather than `&&`: comparisons are cheaper than branches; NaN fails every one of them. */
   const gpucol_mask inRange =
-      (edge1 >= GPUCOL_FLOAT_SIDE_MIN_FACTOR) & (edge1 <= GPUCOL_FLOAT_SIDE_MAX_FACTOR) &
-      (edge2 >= GPUCOL_FLOAT_SIDE_MIN_FACTOR) & (edge2 <= GPUCOL_FLOAT_SIDE_MAX_FACTOR) &
-      (extent >= GPUCOL_FLOAT_SIDE_MIN_FACTOR) & (extent <= GPUCOL_FLOAT_SIDE_MAX_FACTOR);
-  const gpucol_lanes m = GPUCOL_FLOAT_SIDE_MARGIN * edge1 * edge2 * extent;
+      (p.edge1 >= GPUCOL_FLOAT_SIDE_MIN_FACTOR) & (p.edge1 <= GPUCOL_FLOAT_SIDE_MAX_FACTOR) &
+      (p.edge2 >= GPUCOL_FLOAT_SIDE_MIN_FACTOR) & (p.edge2 <= GPUCOL_FLOAT_SIDE_MAX_FACTOR) &
+      (p.extent >= GPUCOL_FLOAT_SIDE_MIN_FACTOR) & (p.extent <= GPUCOL_FLOAT_SIDE_MAX_FACTOR);
   const gpucol_mask above = (d0 > m) & (d1 > m) & (d2 > m);
   const gpucol_mask below = (d0 < -m) & (d1 < -m) & (d2 < -m);
   *apart = inRange & (above | below);
@@ -218,26 +238,14 @@ GPUCOL_SHARED_FORCE_INLINE GpucolLanes3 gpucol_float_interval(GpucolLanes3 p, Gp
 GPUCOL_SHARED_FORCE_INLINE gpucol_mask gpucol_float_intervals_apart(GpucolLanes3 a0, GpucolLanes3 a1,
                                                                     GpucolLanes3 a2, GpucolLanes3 b0,
                                                                     GpucolLanes3 b1, GpucolLanes3 b2) {
-  const GpucolLanes3 e1 = gpucol_lanes3_sub(a1, a0), e2 = gpucol_lanes3_sub(a2, a0);
-  const GpucolLanes3 f1 = gpucol_lanes3_sub(b1, b0), f2 = gpucol_lanes3_sub(b2, b0);
-  const GpucolLanes3 nA = gpucol_lanes3_cross(e1, e2), nB = gpucol_lanes3_cross(f1, f2);
-  const gpucol_lanes ea1 = gpucol_lanes3_max_abs(e1), ea2 = gpucol_lanes3_max_abs(e2);
-  const gpucol_lanes eb1 = gpucol_lanes3_max_abs(f1), eb2 = gpucol_lanes3_max_abs(f2);
-  /* Distances as gpucol_float_plane_side computes them (same expressions, so the margin's bound holds). */
-  const GpucolLanes3 rb0 = gpucol_lanes3_sub(b0, a0), rb1 = gpucol_lanes3_sub(b1, a0),
-                     rb2 = gpucol_lanes3_sub(b2, a0);
-  const GpucolLanes3 ra0 = gpucol_lanes3_sub(a0, b0), ra1 = gpucol_lanes3_sub(a1, b0),
-                     ra2 = gpucol_lanes3_sub(a2, b0);
-  const GpucolLanes3 dB =
-      gpucol_lanes3(gpucol_lanes3_dot(nA, rb0), gpucol_lanes3_dot(nA, rb1), gpucol_lanes3_dot(nA, rb2));
-  const GpucolLanes3 dA =
-      gpucol_lanes3(gpucol_lanes3_dot(nB, ra0), gpucol_lanes3_dot(nB, ra1), gpucol_lanes3_dot(nB, ra2));
-  const gpucol_lanes extentB = gpucol_lanes_max(
-      gpucol_lanes_max(gpucol_lanes3_max_abs(rb0), gpucol_lanes3_max_abs(rb1)), gpucol_lanes3_max_abs(rb2));
-  const gpucol_lanes extentA = gpucol_lanes_max(
-      gpucol_lanes_max(gpucol_lanes3_max_abs(ra0), gpucol_lanes3_max_abs(ra1)), gpucol_lanes3_max_abs(ra2));
-  const gpucol_lanes mB = GPUCOL_FLOAT_SIDE_MARGIN * ea1 * ea2 * extentB;
-  const gpucol_lanes mA = GPUCOL_FLOAT_SIDE_MARGIN * eb1 * eb2 * extentA;
+  /* Distances as gpucol_float_plane_side computes them (gpucol_float_plane), so the margin's bound holds. */
+  const GpucolFloatPlane planeA =
+      gpucol_float_plane(a0, gpucol_lanes3_sub(a1, a0), gpucol_lanes3_sub(a2, a0), b0, b1, b2);
+  const GpucolFloatPlane planeB =
+      gpucol_float_plane(b0, gpucol_lanes3_sub(b1, b0), gpucol_lanes3_sub(b2, b0), a0, a1, a2);
+  const GpucolLanes3 nA = planeA.normal, nB = planeB.normal, dB = planeA.distance, dA = planeB.distance;
+  const gpucol_lanes ea1 = planeA.edge1, ea2 = planeA.edge2, eb1 = planeB.edge1, eb2 = planeB.edge2;
+  const gpucol_lanes extentB = planeA.extent, extentA = planeB.extent, mB = planeA.margin, mA = planeB.margin;
   gpucol_mask valid = gpucol_interval_factor(ea1) & gpucol_interval_factor(ea2) &
                       gpucol_interval_factor(eb1) & gpucol_interval_factor(eb2) &
                       gpucol_interval_factor(extentA) & gpucol_interval_factor(extentB);
