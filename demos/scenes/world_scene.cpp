@@ -166,9 +166,10 @@ void WorldScene::step(float dt) {
 }
 
 const CollisionDispatcher* WorldScene::gpucolDispatcher() const {
-  return m_options.backend != CollisionBackend::GImpact
-             ? static_cast<const CollisionDispatcher*>(m_dispatcher.get())
-             : nullptr;
+  // Only these two backends build gpucol's dispatcher; the others hold Bullet's own.
+  const bool gpucol =
+      m_options.backend == CollisionBackend::Gpucol || m_options.backend == CollisionBackend::GImpactOnGpucol;
+  return gpucol ? static_cast<const CollisionDispatcher*>(m_dispatcher.get()) : nullptr;
 }
 
 double WorldScene::kineticEnergy() const {

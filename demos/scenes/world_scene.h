@@ -84,7 +84,8 @@ class WorldScene {
   const WorldOptions& options() const { return m_options; }
   /// The dynamic bodies, in the order of the description.
   const std::vector<btRigidBody*>& dynamicBodies() const { return m_dynamicBodies; }
-  /// gpucol's dispatcher (for its per-step statistics), or null on the GImpact backend.
+  /// gpucol's dispatcher (for its per-step statistics), or null on the backends with Bullet's own (GImpact,
+  /// primitives).
   const CollisionDispatcher* gpucolDispatcher() const;
 
   /// Kinetic energy of the dynamic bodies (joules): linear plus rotational, in double.

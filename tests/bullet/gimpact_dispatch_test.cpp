@@ -324,5 +324,22 @@ TEST(GImpactDispatch, StandInIsBuiltAgainWhenTheVerticesChange) {
   EXPECT_NEAR(box->getWorldTransform().getOrigin().y(), 1.0f, 0.03f) << "the crate rests on the raised top";
 }
 
+TEST(GImpactDispatch, OnlyWorldsOnGpucolsDispatcherReportItsStatistics) {
+  // The demo prints the dispatcher's statistics for the backends that have one; Bullet's own dispatcher (the
+  // GImpact and primitives worlds) is not gpucol's and must not be read as one.
+  const scenes::SceneDescription stack = scenes::makeStackScene();
+  for (const auto backend : {scenes::CollisionBackend::Gpucol, scenes::CollisionBackend::GImpactOnGpucol,
+                             scenes::CollisionBackend::GImpact, scenes::CollisionBackend::Primitives}) {
+    SCOPED_TRACE(scenes::backendName(backend));
+    scenes::WorldOptions options;
+    options.backend = backend;
+    scenes::WorldScene world(stack, options);
+    const bool ownsGpucolDispatcher = dynamic_cast<const CollisionDispatcher*>(world.world().getDispatcher());
+    EXPECT_EQ(world.gpucolDispatcher() != nullptr, ownsGpucolDispatcher);
+    EXPECT_EQ(ownsGpucolDispatcher, backend == scenes::CollisionBackend::Gpucol ||
+                                        backend == scenes::CollisionBackend::GImpactOnGpucol);
+  }
+}
+
 }  // namespace
 }  // namespace gpucol
