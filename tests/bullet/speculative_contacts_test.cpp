@@ -143,5 +143,27 @@ TEST(SpeculativeContacts, BoxSlidingFastOnAFloorKeepsItsSpeed) {
   }
 }
 
+// A rod (0.8 m x 8 cm x 8 cm, zero gravity) 6 cm above a slab, spinning at 60 rad/s: about its own length its
+// points move 0.06 x 60 / 60 = 5.7 cm at most in a step, short of the slab, so there is nothing to speculate
+// on; tumbling end over end its ends move 40 cm, and the slab is within reach of them.
+TEST(SpeculativeContacts, TurnReachIsTheShapesReachFromTheTurnsAxis) {
+  const btVector3 rodHalf(0.4f, 0.04f, 0.04f);
+  for (const bool endOverEnd : {false, true}) {
+    TestWorld w(DispatchKind::Gpucol);
+    w.world().setGravity(btVector3(0, 0, 0));
+    w.add(box(kSlab, true), 0, at(0, -kSlab.y(), 0));
+    btRigidBody* rod = w.add(box(rodHalf, true), 1, at(0, rodHalf.y() + 0.06f, 0));
+    rod->setAngularVelocity(endOverEnd ? btVector3(0, 0, 60) : btVector3(60, 0, 0));
+    w.world().getDispatchInfo().m_timeStep = btScalar(1) / 60;
+    w.world().performDiscreteCollisionDetection();
+    SCOPED_TRACE(endOverEnd);
+    if (endOverEnd) {
+      EXPECT_GT(w.contactPoints(), 0);
+    } else {
+      EXPECT_EQ(w.contactPoints(), 0);
+    }
+  }
+}
+
 }  // namespace
 }  // namespace gpucol::test

@@ -86,8 +86,36 @@ btScalar reachFromOrigin(const btCollisionShape& shape) {
   return center.length() + radius;
 }
 
+// How far any point of the body's shape moves in `timeStep` by the body's turn: its spin times the farthest
+// the shape's box (in the shape's frame) reaches from the turn's axis through the centre of mass. A rod
+// spinning about its own length moves its points by its thickness, not its length, as reachFromOrigin would
+// have it.
+btScalar turnReach(const btCollisionObjectWrapper& body, const btRigidBody* rigid, btScalar timeStep) {
+  if (rigid == nullptr) return 0;
+  const btVector3 spin = rigid->getAngularVelocity();
+  const btScalar rate = spin.length();
+  if (!(rate > 0)) return 0;
+  const btCollisionShape& shape = *body.getCollisionShape();
+  if (!std::isfinite(rate)) return rate;
+  const btVector3 axis = spin / rate;
+  btVector3 lo, hi;
+  shape.getAabb(btTransform::getIdentity(), lo, hi);
+  if (!(lo.x() <= hi.x() && lo.y() <= hi.y() && lo.z() <= hi.z()) || !std::isfinite((hi - lo).length2())) {
+    return timeStep * rate * reachFromOrigin(shape);
+  }
+  const btTransform& pose = body.getWorldTransform();
+  const btVector3 offset = pose.getOrigin() - rigid->getCenterOfMassPosition();
+  btScalar farthest2 = 0;
+  for (int corner = 0; corner < 8; ++corner) {
+    const btVector3 local((corner & 1) ? hi.x() : lo.x(), (corner & 2) ? hi.y() : lo.y(),
+                          (corner & 4) ? hi.z() : lo.z());
+    farthest2 = btMax(farthest2, axis.cross(pose.getBasis() * local + offset).length2());
+  }
+  return timeStep * rate * btSqrt(farthest2);
+}
+
 // The pair's speculative reach in a step of `timeStep` at the bodies' velocities: body1's motion relative to
-// body0 and how far any point moves by their turns (each one's turn times its reach from its centre). When
+// body0 and how far any point moves by their turns (turnReach of each). When
 // the two together are more than Bullet's contact breaking threshold for the pair (what its convex shapes'
 // speculative reach is), triangles that far apart get speculative contacts (thesis §7.1: small triangles
 // otherwise pass through each other between steps), capped at the smaller body's diameter. Slower pairs get
@@ -100,13 +128,11 @@ void setSpeculativeReach(const btCollisionObjectWrapper* body0, const btCollisio
   const btVector3 zero(0, 0, 0);
   const btVector3 linear0 = rigid0 ? rigid0->getLinearVelocity() : zero;
   const btVector3 linear1 = rigid1 ? rigid1->getLinearVelocity() : zero;
-  const btScalar spin0 = rigid0 ? rigid0->getAngularVelocity().length() : 0;
-  const btScalar spin1 = rigid1 ? rigid1->getAngularVelocity().length() : 0;
   const btCollisionShape& shape0 = *body0->getCollisionShape();
   const btCollisionShape& shape1 = *body1->getCollisionShape();
   const btScalar reach0 = reachFromOrigin(shape0), reach1 = reachFromOrigin(shape1);
   btVector3 motion = (linear1 - linear0) * timeStep;
-  btScalar turns = timeStep * (spin0 * reach0 + spin1 * reach1);
+  btScalar turns = turnReach(*body0, rigid0, timeStep) + turnReach(*body1, rigid1, timeStep);
   const btScalar total = motion.length() + turns;
   const btScalar breaking = btMin(shape0.getContactBreakingThreshold(gContactBreakingThreshold),
                                   shape1.getContactBreakingThreshold(gContactBreakingThreshold));
