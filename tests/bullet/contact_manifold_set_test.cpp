@@ -1,6 +1,7 @@
 // ContactManifoldSet, the pair's persistent manifolds, on Bullet's own btPersistentManifold: a face's corners
-// stay in their points from step to step, of a dozen contacts on a face the widest support goes in, and
-// contacts whose normals point other ways get manifolds of their own.
+// stay in their points from step to step, of a dozen contacts on a face the widest support goes in, the
+// nearest of a fast pair's speculative contacts is held, and contacts whose normals point other ways get
+// manifolds of their own.
 #include <gtest/gtest.h>
 
 #include <BulletCollision/CollisionDispatch/btCollisionDispatcher.h>
@@ -44,9 +45,9 @@ class RestingPair : public ::testing::Test {
     return c;
   }
 
-  void write(const std::vector<PairContact>& contacts) {
+  void write(const std::vector<PairContact>& contacts, btScalar speculativeDistance = 0) {
     btManifoldResult result(&boxWrap, &slabWrap);
-    manifolds.write(contacts, &boxWrap, &slabWrap, &result);
+    manifolds.write(contacts, &boxWrap, &slabWrap, &result, speculativeDistance);
   }
 
   std::vector<btPersistentManifold*> held() const {
@@ -117,6 +118,22 @@ TEST_F(RestingPair, OfManyContactsOnAFaceTheCornersGoIn) {
   const std::vector<Point> ps = points();
   ASSERT_EQ(ps.size(), 4u);
   EXPECT_TRUE(has(ps, -0.5f, -0.5f) && has(ps, 0.5f, -0.5f) && has(ps, 0.5f, 0.5f) && has(ps, -0.5f, 0.5f));
+}
+
+TEST_F(RestingPair, NearestSpeculativeContactOfAFastPairIsHeld) {
+  // A fast pair's manifold keeps points up to the step's reach (here 0.1 m) apart, and Bullet takes a new
+  // point for a held one within that reach: contacts a few centimetres apart overwrite each other as they go
+  // in. The nearest (2 cm) bounds how far the box may close this step; with it lost, the solver would let the
+  // box move 5 cm into the slab.
+  write({onTop(-0.5f, -0.5f, 0.02f), onTop(-0.45f, -0.5f, 0.05f), onTop(-0.5f, -0.45f, 0.06f),
+         onTop(-0.46f, -0.46f, 0.07f)},
+        0.1f);
+  const std::vector<btPersistentManifold*> m = held();
+  ASSERT_EQ(m.size(), 1u);
+  btScalar nearest = BT_LARGE_FLOAT;
+  for (int k = 0; k < m[0]->getNumContacts(); ++k)
+    nearest = btMin(nearest, m[0]->getContactPoint(k).getDistance());
+  EXPECT_NEAR(nearest, 0.02f, 1e-5f);
 }
 
 TEST_F(RestingPair, ContactsOfAnotherDirectionGetTheirOwnManifold) {

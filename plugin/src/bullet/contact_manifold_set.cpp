@@ -100,8 +100,24 @@ void ContactManifoldSet::write(const std::vector<PairContact>& contacts,
     m_groups[g].manifold->setContactBreakingThreshold(
         btMax(m_groups[g].breakingThreshold, speculativeDistance));
     result->setPersistentManifold(m_groups[g].manifold);
-    for (std::size_t i : chooseSupport(byGroup[g], body1Basis * m_groups[g].normalInBody1)) {
+    const std::vector<std::size_t> chosen = chooseSupport(byGroup[g], body1Basis * m_groups[g].normalInBody1);
+    // Bullet takes an added point for the held point nearest to it within the breaking threshold and
+    // overwrites it. With a speculative pair's threshold raised to its reach (centimetres to decimetres), a
+    // chosen contact would overwrite one chosen before it, the deepest first among them: one that close to a
+    // contact already added is left out, so that the deepest, which bounds how far the bodies may close,
+    // stays.
+    const btScalar threshold = m_groups[g].manifold->getContactBreakingThreshold();
+    const bool raised = threshold > m_groups[g].breakingThreshold;
+    std::vector<btVector3> added;
+    for (std::size_t i : chosen) {
       const PairContact& contact = byGroup[g][i];
+      const btVector3 onA = contact.pointOnB + contact.normalOnB * contact.distance;
+      if (raised && std::any_of(added.begin(), added.end(), [&](const btVector3& p) {
+            return (p - onA).length2() < threshold * threshold;
+          })) {
+        continue;
+      }
+      added.push_back(onA);
       // The triangles go into the point and gContactAddedCallback (Bullet swaps them with the bodies).
       result->setShapeIdentifiersA(contact.partId0, contact.index0);
       result->setShapeIdentifiersB(contact.partId1, contact.index1);
