@@ -105,7 +105,7 @@ void ContactManifoldSet::write(const std::vector<PairContact>& contacts,
     // overwrites it. With a speculative pair's threshold raised to its reach (centimetres to decimetres), a
     // chosen contact would overwrite one chosen before it, the deepest first among them: one that close to a
     // contact already added is left out, so that the deepest, which bounds how far the bodies may close,
-    // stays.
+    // stays. At Bullet's own threshold (resting pairs) every chosen contact goes in, as before.
     const btScalar threshold = m_groups[g].manifold->getContactBreakingThreshold();
     const bool raised = threshold > m_groups[g].breakingThreshold;
     std::vector<btVector3> added;
