@@ -144,8 +144,9 @@ TEST(SpeculativeContacts, BoxSlidingFastOnAFloorKeepsItsSpeed) {
 }
 
 // A rod (0.8 m x 8 cm x 8 cm, zero gravity) 6 cm above a slab, spinning at 60 rad/s: about its own length its
-// points move 0.06 x 60 / 60 = 5.7 cm at most in a step, short of the slab, so there is nothing to speculate
-// on; tumbling end over end its ends move 40 cm, and the slab is within reach of them.
+// points move 0.057 x 60 / 60 = 5.7 cm at most in a step (the half diagonal of its 8 cm square), short of the
+// slab, so there is nothing to speculate on; tumbling end over end its ends move 40 cm, and the slab is
+// within reach of them.
 TEST(SpeculativeContacts, TurnReachIsTheShapesReachFromTheTurnsAxis) {
   const btVector3 rodHalf(0.4f, 0.04f, 0.04f);
   for (const bool endOverEnd : {false, true}) {

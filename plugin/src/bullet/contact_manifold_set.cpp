@@ -117,7 +117,7 @@ void ContactManifoldSet::write(const std::vector<PairContact>& contacts,
           })) {
         continue;
       }
-      added.push_back(onA);
+      if (raised) added.push_back(onA);
       // The triangles go into the point and gContactAddedCallback (Bullet swaps them with the bodies).
       result->setShapeIdentifiersA(contact.partId0, contact.index0);
       result->setShapeIdentifiersB(contact.partId1, contact.index1);

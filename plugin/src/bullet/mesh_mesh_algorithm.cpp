@@ -94,9 +94,10 @@ btScalar turnReach(const btCollisionObjectWrapper& body, const btRigidBody* rigi
   if (rigid == nullptr) return 0;
   const btVector3 spin = rigid->getAngularVelocity();
   const btScalar rate = spin.length();
-  if (!(rate > 0)) return 0;
-  const btCollisionShape& shape = *body.getCollisionShape();
+  if (rate == 0) return 0;
+  // A NaN or infinite spin makes the pair's reach non-finite, and setSpeculativeReach gives it none.
   if (!std::isfinite(rate)) return rate;
+  const btCollisionShape& shape = *body.getCollisionShape();
   const btVector3 axis = spin / rate;
   btVector3 lo, hi;
   shape.getAabb(btTransform::getIdentity(), lo, hi);
