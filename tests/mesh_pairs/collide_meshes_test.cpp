@@ -2,14 +2,16 @@
 // random poses, non-uniform scaling), analytic answers (box resting on box, two spheres), and the scaled-copy
 // equivalence of local scaling.
 #include <gtest/gtest.h>
-
 #include <tbb/global_control.h>
 
 #include <cmath>
 #include <iostream>
+#include <map>
 #include <set>
 
 #include "bullet/mesh_pair_test_util.h"
+#include "mesh_pairs/pair_frame.h"
+#include "narrowphase/triangle_proximity.h"
 #include "scenes/gimpact_peer.h"
 #include "scenes/procedural_meshes.h"
 #include "support/test_paths.h"
@@ -399,6 +401,66 @@ TEST(CollideMeshes, SpeculativeContactsComeAtTheGapAlongTheFaceNormal) {
       EXPECT_EQ(batched.contacts.size(), result.contacts.size());
     }
   }
+}
+
+// The contacts of pairs that do not cross, each candidate against proximityContacts of its two triangles on
+// their own (here in the world frame, from the double reference's triangles): every clear contact of one is a
+// contact of the other, with the same depth and normal. The pipeline finds them in chunks of rows, one face
+// of A made per run of candidates sharing A's triangle.
+TEST(CollideMeshes, SpeculativeContactsAreEachPairsProximityContacts) {
+  MeshShape torus(sharedMesh(scenes::makeTorus(1.0f, 0.35f, 40, 16)));
+  MeshShape sphere(sharedMesh(scenes::makeIcosphere(0.6f, 3)));
+  torus.setLocalScaling(btVector3(1.3f, 0.8f, 1.1f));
+  std::mt19937 rng(5);
+  std::size_t compared = 0;
+  for (int pose = 0; pose < 4; ++pose) {
+    MeshPairQuery query{&torus, randomPose(rng, btVector3(0, 0, 0), 0), &sphere,
+                        randomPose(rng, btVector3(0, 0, 0), 1.3f)};
+    query.speculativeDistance = 0.04f + 0.02f * float(pose);
+    query.speculativeMotion = btVector3(0.02f, -0.06f, 0.03f);
+    const MeshPairResult result = collideMeshes(query);
+    const PairFrame frame = makePairFrame(torus, query.transformA, sphere, query.transformB,
+                                          query.speculativeMotion, query.speculativeDistance);
+    const std::set<TrianglePair> crossing(result.intersectingPairs.begin(), result.intersectingPairs.end());
+    // (pair) -> depths and normals, of the pipeline and of the reference; clear: not within 1e-4 of the
+    // reach.
+    const auto clear = [&](float depth) { return depth < frame.reach - 1e-4f; };
+    std::map<TrianglePair, std::vector<std::pair<float, btVector3>>> pipeline;
+    for (const MeshContact& c : result.contacts) {
+      const TrianglePair pair{c.triangleA, c.triangleB};
+      if (!crossing.count(pair)) pipeline[pair].push_back({c.depth, c.normalWorldOnB});
+    }
+    std::size_t referenceContacts = 0;
+    for (const TrianglePair& pair : result.candidatePairs) {
+      if (crossing.count(pair)) continue;
+      const TriangleD da = worldTriangle(torus, query.transformA, pair.triangleA);
+      const TriangleD db = worldTriangle(sphere, query.transformB, pair.triangleB);
+      Eigen::Vector3f a[3], b[3];
+      for (int v = 0; v < 3; ++v) a[v] = da[v].cast<float>(), b[v] = db[v].cast<float>();
+      TriangleContact out[kMaxProximityContacts];
+      const int made = proximityContacts(a, b, frame.reach, out, frame.marginReach);
+      const auto& got = pipeline[pair];
+      for (int k = 0; k < made; ++k) {
+        if (!clear(out[k].depth)) continue;
+        ++referenceContacts;
+        const bool found = std::any_of(got.begin(), got.end(), [&](const auto& g) {
+          const btVector3 n(out[k].normalOnB.x(), out[k].normalOnB.y(), out[k].normalOnB.z());
+          return std::fabs(g.first - out[k].depth) < 1e-5f && (g.second - n).length() < 1e-4f;
+        });
+        EXPECT_TRUE(found) << "pair " << pair.triangleA << ", " << pair.triangleB << " depth "
+                           << out[k].depth;
+      }
+      for (const auto& g : got) {
+        if (!clear(g.first)) continue;
+        const bool found = std::any_of(
+            out, out + made, [&](const TriangleContact& c) { return std::fabs(g.first - c.depth) < 1e-5f; });
+        EXPECT_TRUE(found) << "pair " << pair.triangleA << ", " << pair.triangleB << " depth " << g.first;
+      }
+    }
+    compared += referenceContacts;
+  }
+  // Not vacuous: hundreds of contacts, over more than one chunk of candidates (512) per pose.
+  EXPECT_GT(compared, 400u);
 }
 
 }  // namespace

@@ -369,6 +369,29 @@ TEST(MeshPipeline, ShapesWithMarginsGiveTheCpusProximityContacts) {
   EXPECT_FALSE(hovering.contacts.empty());
 }
 
+// Speculative reaches (a distance every way and a motion) over pairs of many candidates: on the CPU the
+// proximity contacts come from the near phase's own chunks of rows, on the device's path from a pass of their
+// own after the device's near phase; both give the same contacts, chunk after chunk, crossing pairs left out.
+TEST(MeshPipeline, SpeculativeReachGivesTheCpusContactsOverManyChunks) {
+  GPUCOL_REQUIRE_OPENCL(context);
+  MeshShape torus(sharedMesh(scenes::makeTorus(1.0f, 0.35f, 40, 16)));
+  MeshShape sphere(sharedMesh(scenes::makeIcosphere(0.6f, 3)));
+  std::mt19937 rng(11);
+  std::vector<MeshPairQuery> queries;
+  for (int pose = 0; pose < 6; ++pose) {
+    MeshPairQuery q = query(torus, randomPose(rng, btVector3(0, 0, 0), 0), sphere,
+                            randomPose(rng, btVector3(0, 0, 0), 1.2f + 0.1f * float(pose % 3)));
+    q.speculativeDistance = 0.05f + 0.02f * float(pose);
+    q.speculativeMotion = btVector3(0.03f, -0.08f, 0.02f);
+    queries.push_back(q);
+  }
+  const Compared seen = expectSameAsCpu(queries, 3.0f);
+  // Not vacuous: several chunks of candidates (512 each), pairs that cross and pairs that only come near.
+  EXPECT_GT(seen.candidates, 6u * 1024u);
+  EXPECT_GT(seen.intersecting, 0u);
+  EXPECT_GT(seen.contacts, seen.intersecting + 100u);
+}
+
 TEST(MeshPipeline, LeavesOfSeveralTriangles) {
   GPUCOL_REQUIRE_OPENCL(context);
   Config four;

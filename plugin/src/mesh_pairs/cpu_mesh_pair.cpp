@@ -8,6 +8,7 @@
 #include <Eigen/Core>
 #include <algorithm>
 #include <cmath>
+#include <limits>
 #include <memory>
 #include <optional>
 #include <stdexcept>
@@ -45,6 +46,13 @@ bool isFinite(const btTransform& t) {
 struct NearHit {
   std::size_t candidate;
   bool hasContact;
+  TriangleContact contact;
+};
+
+// A contact of a candidate whose triangles do not cross but come within the pair's reach (the shapes' margins
+// and the speculative reach).
+struct NearbyHit {
+  std::size_t candidate;
   TriangleContact contact;
 };
 
@@ -96,10 +104,12 @@ class ChunkTriangles {
   std::unique_ptr<float[]> m_values;
 };
 
-// The rows one thread works in: the chunk's triangles, and the survivors of the plane test.
+// The rows one thread works in: the chunk's triangles, the survivors of the plane test, and the candidates
+// the proximity pre-test leaves.
 struct ChunkBuffers {
   ChunkTriangles triangles;
   ChunkTriangles crossing;
+  ChunkTriangles nearby;
   // The contacts of the pairs the pre-tests left (detail::generateContactRows), and their outcomes.
   std::unique_ptr<float[]> contacts{new float[detail::kContactRowValues * kNearRow]};
   std::unique_ptr<std::uint32_t[]> outcome{new std::uint32_t[kNearChunk]};
@@ -181,24 +191,85 @@ inline void fetchChunkRows(const MeshShape& shapeA, const MeshShape& shapeB, con
   transformRows(rows, count, frame);
 }
 
+// Marks in `empty` the columns of `rows` that proximityCertainlyEmptyBranchFree proves have no proximity
+// contact; a loop of vector code over the chunk, compiled for AVX2 too.
+GPUCOL_AVX2_CLONES void markProximityEmpty(const float* rows, std::size_t count, float reach,
+                                           std::uint8_t* empty) {
+  for (std::size_t j = 0; j < count; ++j) {
+    const RowTriangles t(rows, j);
+    empty[j] = static_cast<std::uint8_t>(
+        proximityCertainlyEmptyBranchFree(t.a0, t.a1, t.a2, t.b0, t.b1, t.b2, reach));
+  }
+}
+
+// Copies the columns of `rows` that the proximity pre-test leaves into `kept`'s first columns; their indices
+// go to `index`. Returns how many.
+std::size_t keepProximityCandidates(const float* rows, std::size_t count, float reach, float* kept,
+                                    std::uint16_t* index) {
+  constexpr std::size_t n = kNearRow;
+  std::uint8_t empty[kNearChunk];
+  markProximityEmpty(rows, count, reach, empty);
+  std::size_t left = 0;
+  for (std::size_t j = 0; j < count; ++j) {
+    if (empty[j]) continue;
+    index[left] = static_cast<std::uint16_t>(j);
+    for (std::size_t k = 0; k < 18; ++k) kept[k * n + left] = rows[k * n + j];
+    ++left;
+  }
+  return left;
+}
+
+// The proximity contacts of the kept candidates (keepProximityCandidates) whose triangles do not cross, in
+// their order, appended to `out`; candidate index(i) is kept column i. Candidates come sorted by triangleA,
+// so A's face is made once per run of equal triangleA.
+template <class CandidateOf, class Crosses>
+void proximityOfKept(const ChunkTriangles& kept, std::size_t count, CandidateOf candidateOf, Crosses crosses,
+                     const std::vector<TrianglePair>& candidates, const PairFrame& frame,
+                     std::vector<NearbyHit>& out) {
+  ProximityFace faceA;
+  std::size_t faceOf = std::numeric_limits<std::size_t>::max();
+  for (std::size_t i = 0; i < count; ++i) {
+    const std::size_t candidate = candidateOf(i);
+    if (crosses(i)) continue;
+    Eigen::Vector3f a[3], b[3];
+    kept.load(i, a, b);
+    if (faceOf == std::numeric_limits<std::size_t>::max() ||
+        candidates[faceOf].triangleA != candidates[candidate].triangleA) {
+      faceA = proximityFace(a);
+      faceOf = candidate;
+    }
+    TriangleContact found[kMaxProximityContacts];
+    const int made = proximityContacts(faceA, proximityFace(b), frame.reach, found, frame.marginReach);
+    for (int k = 0; k < made; ++k) out.push_back({candidate, found[k]});
+  }
+}
+
 // One chunk of the near phase: the candidates from `begin` on (at most kNearChunk), their hits appended to
-// `hits`. Its passes: fetch the triangles into rows (A's once per run of equal triangleA: candidates come
-// sorted by it) and apply the pair's frame; run the float plane pre-test of triangle_plane.h over all of them
-// without branches; gather the pairs it could not reject and run the float interval pre-test over those; then
-// run the double test and the contact generation on the pairs left. The pre-tests only reject what the double
-// test rejects, so the result is the double test's; the plane test removes about two thirds of the candidates
-// of the thesis scene, and without a branch per pair (its outcome is close to a coin toss).
-// Compiled for AVX2 and baseline x86-64 (bvh/avx2_clones.h): with AVX2 the row loops below run on 8 lanes
-// instead of 4, and the results are the same bits.
+// `hits` and, when the pair has a reach, the proximity contacts of those that do not cross to `nearby`. Its
+// passes: fetch the triangles into rows (A's once per run of equal triangleA: candidates come sorted by it)
+// and apply the pair's frame; keep aside the candidates the proximity pre-test cannot rule out; run the float
+// plane pre-test of triangle_plane.h over all of them without branches; gather the pairs it could not reject
+// and run the float interval pre-test over those; then run the double test and the contact generation on the
+// pairs left; last, the proximity contacts of the kept candidates that do not cross. The pre-tests only
+// reject what the double tests reject, so the result is the double tests'; the plane test removes about two
+// thirds of the candidates of the thesis scene, and without a branch per pair (its outcome is close to a
+// coin toss). Compiled for AVX2 and baseline x86-64 (bvh/avx2_clones.h): with AVX2 the row loops below run
+// on 8 lanes instead of 4, and the results are the same bits.
 GPUCOL_AVX2_CLONES void runNearChunk(const MeshShape& shapeA, const MeshShape& shapeB, const PairFrame& frame,
                                      const std::vector<TrianglePair>& candidates, std::size_t begin,
-                                     ChunkBuffers& buffers, std::vector<NearHit>& hits) {
+                                     ChunkBuffers& buffers, std::vector<NearHit>& hits,
+                                     std::vector<NearbyHit>& nearby) {
   const std::size_t count = std::min(candidates.size(), begin + kNearChunk) - begin;
   ChunkTriangles& triangles = buffers.triangles;
   ChunkTriangles& crossing = buffers.crossing;
   float* const rows = triangles.values();
   constexpr std::size_t n = kNearRow;
   fetchChunkRows(shapeA, shapeB, frame, candidates, begin, count, rows);
+  // Kept before the passes below overwrite the rows with their survivors.
+  std::uint16_t nearIndex[kNearChunk];
+  const std::size_t nearCount =
+      frame.reach > 0 ? keepProximityCandidates(rows, count, frame.reach, buffers.nearby.values(), nearIndex)
+                      : 0;
   // Plain pointers, loaded once: the stores into `apart` could alias the vector's own fields otherwise, and
   // the compiler would give up on vector code.
   const float* const v = triangles.data();
@@ -240,6 +311,7 @@ GPUCOL_AVX2_CLONES void runNearChunk(const MeshShape& shapeA, const MeshShape& s
   float* const c = buffers.contacts.get();
   std::uint32_t* const outcome = buffers.outcome.get();
   detail::generateContactRows(rows, n, testedCount, c, outcome);
+  const std::size_t firstHit = hits.size();
   for (std::size_t t = 0; t < testedCount; ++t) {
     const std::size_t j = tested[t];
     switch (outcome[t] & detail::kRowOutcomeMask) {
@@ -269,75 +341,72 @@ GPUCOL_AVX2_CLONES void runNearChunk(const MeshShape& shapeA, const MeshShape& s
       }
     }
   }
+  if (nearCount == 0) return;
+  std::uint8_t crosses[kNearChunk] = {};
+  for (std::size_t h = firstHit; h < hits.size(); ++h) crosses[hits[h].candidate - begin] = 1;
+  proximityOfKept(
+      buffers.nearby, nearCount, [&](std::size_t i) { return begin + nearIndex[i]; },
+      [&](std::size_t i) { return crosses[nearIndex[i]] != 0; }, candidates, frame, nearby);
+}
+
+// The near phase's hits and the proximity contacts of one pair.
+struct NearPhaseResult {
+  std::vector<NearHit> hits;
+  std::vector<NearbyHit> nearby;
+};
+
+// Joins per-chunk lists in chunk order.
+template <class T>
+std::vector<T> joinChunks(const std::vector<std::vector<T>>& chunks) {
+  std::size_t total = 0;
+  for (const std::vector<T>& chunk : chunks) total += chunk.size();
+  std::vector<T> joined;
+  joined.reserve(total);
+  for (const std::vector<T>& chunk : chunks) joined.insert(joined.end(), chunk.begin(), chunk.end());
+  return joined;
 }
 
 // Exact test and contact generation for every candidate (thesis §5.3.4: the cheap test first, contacts only
-// for intersecting pairs), in parallel. Each chunk of candidates keeps its own hits, and the chunks are
-// joined in order, so the output follows the candidates' order whatever the threads do. The work of a chunk
-// is runNearChunk's.
-std::vector<NearHit> runNearPhase(const MeshShape& shapeA, const MeshShape& shapeB, const PairFrame& frame,
-                                  const std::vector<TrianglePair>& candidates) {
+// for intersecting pairs), and the proximity contacts of those that do not cross, in parallel. Each chunk of
+// candidates keeps its own hits, and the chunks are joined in order, so the output follows the candidates'
+// order whatever the threads do. The work of a chunk is runNearChunk's.
+NearPhaseResult runNearPhase(const MeshShape& shapeA, const MeshShape& shapeB, const PairFrame& frame,
+                             const std::vector<TrianglePair>& candidates) {
   const std::size_t chunks = (candidates.size() + kNearChunk - 1) / kNearChunk;
   std::vector<std::vector<NearHit>> chunkHits(chunks);
+  std::vector<std::vector<NearbyHit>> chunkNearby(chunks);
   tbb::enumerable_thread_specific<ChunkBuffers> threadBuffers;
   tbb::parallel_for(std::size_t(0), chunks, [&](std::size_t chunk) {
     // Per thread, not per chunk: a chunk's rows are written before they are read.
     runNearChunk(shapeA, shapeB, frame, candidates, chunk * kNearChunk, threadBuffers.local(),
-                 chunkHits[chunk]);
+                 chunkHits[chunk], chunkNearby[chunk]);
   });
-  std::vector<NearHit> joined;
-  std::size_t total = 0;
-  for (const std::vector<NearHit>& hits : chunkHits) total += hits.size();
-  joined.reserve(total);
-  for (const std::vector<NearHit>& hits : chunkHits) joined.insert(joined.end(), hits.begin(), hits.end());
-  return joined;
+  return {joinChunks(chunkHits), joinChunks(chunkNearby)};
 }
 
-// A contact of a candidate whose triangles do not cross but come within the shapes' margins.
-struct NearbyHit {
-  std::size_t candidate;
-  TriangleContact contact;
-};
-
-// Marks in `empty` the columns of `rows` that proximityCertainlyEmptyBranchFree proves have no proximity
-// contact; a loop of vector code over the chunk, compiled for AVX2 too.
-GPUCOL_AVX2_CLONES void markProximityEmpty(const float* rows, std::size_t count, float reach,
-                                           std::uint8_t* empty) {
-  for (std::size_t j = 0; j < count; ++j) {
-    const RowTriangles t(rows, j);
-    empty[j] = static_cast<std::uint8_t>(
-        proximityCertainlyEmptyBranchFree(t.a0, t.a1, t.a2, t.b0, t.b1, t.b2, reach));
-  }
-}
-
-// The proximity contacts of every candidate that does not cross (triangle_proximity.h), in candidate order,
-// in parallel; `crossing[i]` is set for the candidates the near phase found intersecting. The float pre-test
-// leaves the double test only the candidates it cannot prove beyond the reach.
+// The proximity contacts of every candidate that does not cross, in candidate order, in parallel, for the
+// device's near phase (the CPU's finds them in runNearChunk); `crossing[i]` is set for the candidates the
+// near phase found intersecting.
 std::vector<NearbyHit> runProximityPass(const MeshShape& shapeA, const MeshShape& shapeB, const PairFrame& frame,
                                         const std::vector<TrianglePair>& candidates,
                                         const std::vector<std::uint8_t>& crossing) {
   const std::size_t chunks = (candidates.size() + kNearChunk - 1) / kNearChunk;
   std::vector<std::vector<NearbyHit>> chunkHits(chunks);
-  tbb::enumerable_thread_specific<ChunkTriangles> threadRows;
+  tbb::enumerable_thread_specific<ChunkBuffers> threadBuffers;
   tbb::parallel_for(std::size_t(0), chunks, [&](std::size_t chunk) {
     const std::size_t begin = chunk * kNearChunk;
     const std::size_t count = std::min(candidates.size(), begin + kNearChunk) - begin;
-    ChunkTriangles& rows = threadRows.local();
-    fetchChunkRows(shapeA, shapeB, frame, candidates, begin, count, rows.values());
-    std::uint8_t empty[kNearChunk];
-    markProximityEmpty(rows.data(), count, frame.reach, empty);
-    for (std::size_t j = 0; j < count; ++j) {
-      if (empty[j] || crossing[begin + j]) continue;
-      Eigen::Vector3f a[3], b[3];
-      rows.load(j, a, b);
-      TriangleContact found[kMaxProximityContacts];
-      const int made = proximityContacts(a, b, frame.reach, found, frame.marginReach);
-      for (int k = 0; k < made; ++k) chunkHits[chunk].push_back({begin + j, found[k]});
-    }
+    ChunkBuffers& buffers = threadBuffers.local();
+    fetchChunkRows(shapeA, shapeB, frame, candidates, begin, count, buffers.triangles.values());
+    std::uint16_t nearIndex[kNearChunk];
+    const std::size_t nearCount = keepProximityCandidates(buffers.triangles.data(), count, frame.reach,
+                                                          buffers.nearby.values(), nearIndex);
+    proximityOfKept(
+        buffers.nearby, nearCount, [&](std::size_t i) { return begin + nearIndex[i]; },
+        [&](std::size_t i) { return crossing[begin + nearIndex[i]] != 0; }, candidates, frame,
+        chunkHits[chunk]);
   });
-  std::vector<NearbyHit> joined;
-  for (const std::vector<NearbyHit>& hits : chunkHits) joined.insert(joined.end(), hits.begin(), hits.end());
-  return joined;
+  return joinChunks(chunkHits);
 }
 
 MeshContact toWorld(const TrianglePair& pair, const TriangleContact& contact, const btTransform& worldFromA) {
@@ -356,22 +425,14 @@ MeshContact toWorld(const TrianglePair& pair, const TriangleContact& contact, co
   return out;
 }
 
-}  // namespace
-
 // The near phase's hits (NearHit here, DeviceNearHit from the device; both in candidate order) into the
-// result's intersecting pairs and contacts, then, for shapes with margins, the contacts of the candidates that
-// come within them, then the contact reduction. Shared by both paths, so the same-facing rule, the proximity
-// contacts, the world conversion and the reduction cannot drift apart.
+// result's intersecting pairs and contacts, then the proximity contacts (`nearby`, in candidate order), then
+// the contact reduction. Shared by both paths, so the same-facing rule, the world conversion and the
+// reduction cannot drift apart.
 template <class Hit>
-void collectHits(const std::vector<Hit>& hits, const MeshShape& shapeA, const MeshShape& shapeB,
-                 const PairFrame& frame, const Config& config, MeshPairResult& result) {
+void assembleResult(const std::vector<Hit>& hits, const std::vector<NearbyHit>& nearby,
+                    const PairFrame& frame, const Config& config, MeshPairResult& result) {
   result.stats.triangleTests = result.candidatePairs.size();
-  std::vector<NearbyHit> nearby;
-  if (frame.reach > 0) {
-    std::vector<std::uint8_t> crossing(result.candidatePairs.size(), 0);
-    for (const Hit& hit : hits) crossing[hit.candidate] = 1;
-    nearby = runProximityPass(shapeA, shapeB, frame, result.candidatePairs, crossing);
-  }
   std::vector<ReductionInput> localContacts;
   result.intersectingPairs.reserve(hits.size());
   result.contacts.reserve(hits.size());
@@ -398,6 +459,22 @@ void collectHits(const std::vector<Hit>& hits, const MeshShape& shapeA, const Me
     result.reducedContacts.push_back(result.contacts[kept]);
   }
   result.stats.reductionMs = millisecondsSince(start);
+}
+
+}  // namespace
+
+// The device's hits, and the proximity contacts of the candidates that do not cross (found here, on the CPU),
+// as the CPU path's own.
+template <class Hit>
+void collectHits(const std::vector<Hit>& hits, const MeshShape& shapeA, const MeshShape& shapeB,
+                 const PairFrame& frame, const Config& config, MeshPairResult& result) {
+  std::vector<NearbyHit> nearby;
+  if (frame.reach > 0) {
+    std::vector<std::uint8_t> crossing(result.candidatePairs.size(), 0);
+    for (const Hit& hit : hits) crossing[hit.candidate] = 1;
+    nearby = runProximityPass(shapeA, shapeB, frame, result.candidatePairs, crossing);
+  }
+  assembleResult(hits, nearby, frame, config, result);
 }
 
 void requireFinite(const btTransform& transformA, const btTransform& transformB) {
@@ -433,8 +510,8 @@ MeshPairResult collidePairOnCpu(const MeshPairQuery& query, const Config& config
   result.stats.middlePhaseMs = millisecondsSince(start);
 
   start = Clock::now();
-  const std::vector<NearHit> hits = runNearPhase(shapeA, shapeB, frame, result.candidatePairs);
-  collectHits(hits, shapeA, shapeB, frame, config, result);
+  const NearPhaseResult near = runNearPhase(shapeA, shapeB, frame, result.candidatePairs);
+  assembleResult(near.hits, near.nearby, frame, config, result);
   result.stats.nearPhaseMs = millisecondsSince(start) - result.stats.reductionMs;
   return result;
 }

@@ -20,34 +20,7 @@ using Vec = Eigen::Vector3d;
 // on), whose contact normal is perpendicular to one of them.
 constexpr double kSideTolerance = 1e-6;
 
-// A triangle in double: its vertices, edges (edge i from v[i] to v[i + 1]) and their squared lengths, its
-// unit outward normal, and per edge the normal x edge, which points into the face; `valid` is false for a
-// degenerate or non-finite one, with the same threshold as trianglesIntersect (sin^2 of the angle at v0 below
-// 1e-12).
-struct Face {
-  Vec v[3];
-  Vec edge[3];
-  double edge2[3];
-  Vec normal;
-  Vec inward[3];
-  bool valid = false;
-};
-
-Face makeFace(const Eigen::Vector3f (&t)[3]) {
-  Face f;
-  for (int i = 0; i < 3; ++i) f.v[i] = t[i].cast<double>();
-  for (int i = 0; i < 3; ++i) {
-    f.edge[i] = f.v[(i + 1) % 3] - f.v[i];
-    f.edge2[i] = f.edge[i].squaredNorm();
-  }
-  const Vec n = f.edge[0].cross(f.v[2] - f.v[0]);
-  const double n2 = n.squaredNorm();
-  f.valid = std::isfinite(n2) && n2 > 1e-12 * f.edge2[0] * f.edge2[2];
-  if (!f.valid) return f;
-  f.normal = n / std::sqrt(n2);
-  for (int i = 0; i < 3; ++i) f.inward[i] = f.normal.cross(f.edge[i]);
-  return f;
-}
+using Face = ProximityFace;
 
 // True when p's projection along the face's normal falls on the face, its edges included (a vertex on a shared
 // edge belongs to both faces; the contact reduction merges what that doubles).
@@ -166,10 +139,31 @@ TriangleContact contactFromB(const Vec& onB, const Vec& normalOnB, double distan
 
 }  // namespace
 
+ProximityFace proximityFace(const Eigen::Vector3f (&t)[3]) {
+  ProximityFace f;
+  for (int i = 0; i < 3; ++i) f.v[i] = t[i].cast<double>();
+  for (int i = 0; i < 3; ++i) {
+    f.edge[i] = f.v[(i + 1) % 3] - f.v[i];
+    f.edge2[i] = f.edge[i].squaredNorm();
+  }
+  const Vec n = f.edge[0].cross(f.v[2] - f.v[0]);
+  const double n2 = n.squaredNorm();
+  f.valid = std::isfinite(n2) && n2 > 1e-12 * f.edge2[0] * f.edge2[2];
+  if (!f.valid) return f;
+  f.normal = n / std::sqrt(n2);
+  for (int i = 0; i < 3; ++i) f.inward[i] = f.normal.cross(f.edge[i]);
+  return f;
+}
+
 int proximityContacts(const Eigen::Vector3f (&a)[3], const Eigen::Vector3f (&b)[3], float reach,
                       TriangleContact (&out)[kMaxProximityContacts], float speculativeFrom) {
   if (!(reach > 0)) return 0;
-  const Face fa = makeFace(a), fb = makeFace(b);
+  return proximityContacts(proximityFace(a), proximityFace(b), reach, out, speculativeFrom);
+}
+
+int proximityContacts(const ProximityFace& fa, const ProximityFace& fb, float reach,
+                      TriangleContact (&out)[kMaxProximityContacts], float speculativeFrom) {
+  if (!(reach > 0)) return 0;
   if (!fa.valid || !fb.valid) return 0;
   const double size = pairSize(fa, fb);
   if (separatedByAPlane(fa, fb, reach, size)) return 0;

@@ -11,6 +11,22 @@ namespace gpucol {
 /// one edge-edge pair.
 inline constexpr int kMaxProximityContacts = 7;
 
+/// A triangle as proximityContacts works on it, in double: its vertices, edges (edge i from v[i] to v[i + 1])
+/// and their squared lengths, its unit outward normal, and per edge the normal x edge, which points into the
+/// face; `valid` is false for a degenerate or non-finite one, with the same threshold as trianglesIntersect
+/// (sin^2 of the angle at v0 below 1e-12). Made once per triangle, it serves every candidate pair the
+/// triangle is in.
+struct ProximityFace {
+  Eigen::Vector3d v[3];
+  Eigen::Vector3d edge[3];
+  double edge2[3];
+  Eigen::Vector3d normal;
+  Eigen::Vector3d inward[3];
+  bool valid = false;
+};
+
+ProximityFace proximityFace(const Eigen::Vector3f (&t)[3]);
+
 /// Contacts of two triangles that do not cross but come within `reach` of each other (the sum of the two
 /// shapes' collision margins), so that bodies with margins rest `reach` apart instead of falling through the
 /// gap. Written to `out`; returns how many (0 when `reach` <= 0 or either triangle is degenerate).
@@ -32,6 +48,10 @@ inline constexpr int kMaxProximityContacts = 7;
 ///
 /// Computed in double from the float inputs. The caller must only pass pairs that trianglesIntersect rejects.
 int proximityContacts(const Eigen::Vector3f (&a)[3], const Eigen::Vector3f (&b)[3], float reach,
+                      TriangleContact (&out)[kMaxProximityContacts], float speculativeFrom);
+/// The same for triangles already made into faces (proximityFace), so that a triangle in many candidate
+/// pairs is made once.
+int proximityContacts(const ProximityFace& a, const ProximityFace& b, float reach,
                       TriangleContact (&out)[kMaxProximityContacts], float speculativeFrom);
 inline int proximityContacts(const Eigen::Vector3f (&a)[3], const Eigen::Vector3f (&b)[3], float reach,
                              TriangleContact (&out)[kMaxProximityContacts]) {
