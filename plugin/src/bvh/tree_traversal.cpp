@@ -544,7 +544,14 @@ constexpr std::size_t kRadixMinimum = 256;
 void sortPairs(std::vector<TrianglePair>& pairs, std::size_t trianglesA, std::size_t trianglesB) {
   const std::size_t n = pairs.size();
   if (n < kRadixMinimum) {
-    std::sort(pairs.begin(), pairs.end());
+    // Sorted as packed integers on the stack: one comparison of two words instead of two branches per pair.
+    std::uint64_t keys[kRadixMinimum];
+    for (std::size_t i = 0; i < n; ++i)
+      keys[i] = (std::uint64_t{pairs[i].triangleA} << 32) | pairs[i].triangleB;
+    std::sort(keys, keys + n);
+    for (std::size_t i = 0; i < n; ++i) {
+      pairs[i] = {static_cast<std::uint32_t>(keys[i] >> 32), static_cast<std::uint32_t>(keys[i])};
+    }
     return;
   }
   const int bitsB = indexBits(trianglesB);
