@@ -63,29 +63,26 @@ bool separatedByAPlane(const Face& fa, const Face& fb, double reach, double size
 // masks, so the divisions of different pairs overlap instead of each pair waiting on its own and
 // mispredicting its clamps.
 GPUCOL_AVX2_CLONES double closestEdgePoints(const Face& fa, const Face& fb, Vec& bestA, Vec& bestB) {
-  // Twelve columns, the last three repeating the first pair, written as plain arrays and read as vectors.
-  constexpr int kPairs = 9, kColumns = 12;
-  alignas(32) double columns[14][kColumns];
-  for (int k = 0; k < kColumns; ++k) {
-    const int i = k < kPairs ? k / 3 : 0, j = k < kPairs ? k % 3 : 0;
-    for (int x = 0; x < 3; ++x) {
-      columns[x][k] = fa.v[i][x], columns[3 + x][k] = fa.edge[i][x];
-      columns[6 + x][k] = fb.v[j][x], columns[9 + x][k] = fb.edge[j][x];
-    }
-    columns[12][k] = fa.edge2[i], columns[13][k] = fb.edge2[j];
-  }
-  alignas(32) double d2[kColumns], s[kColumns], t[kColumns];
+  // Twelve lanes, the last three repeating the first pair; lane k holds edge kEdgeA[k] of A and kEdgeB[k]
+  // of B. Each vector is put together from the faces' values directly: written to memory lane by lane and
+  // read back as vectors, the loads waited on the stores.
+  constexpr int kPairs = 9, kLanes = 12;
+  constexpr int kEdgeA[kLanes] = {0, 0, 0, 1, 1, 1, 2, 2, 2, 0, 0, 0};
+  constexpr int kEdgeB[kLanes] = {0, 1, 2, 0, 1, 2, 0, 1, 2, 0, 0, 0};
+  alignas(32) double d2[kLanes], s[kLanes], t[kLanes];
   const gpucol_d4 zero = gpucol_d4_splat(0.0), one = gpucol_d4_splat(1.0);
-  for (int g = 0; g < kColumns; g += 4) {
-    gpucol_d4 p[3], u[3], q[3], v[3], a, c;
+  for (int g = 0; g < kLanes; g += 4) {
+    const int a0 = kEdgeA[g], a1 = kEdgeA[g + 1], a2 = kEdgeA[g + 2], a3 = kEdgeA[g + 3];
+    const int b0 = kEdgeB[g], b1 = kEdgeB[g + 1], b2 = kEdgeB[g + 2], b3 = kEdgeB[g + 3];
+    gpucol_d4 p[3], u[3], q[3], v[3];
     for (int x = 0; x < 3; ++x) {
-      std::memcpy(&p[x], &columns[x][g], sizeof(gpucol_d4));
-      std::memcpy(&u[x], &columns[3 + x][g], sizeof(gpucol_d4));
-      std::memcpy(&q[x], &columns[6 + x][g], sizeof(gpucol_d4));
-      std::memcpy(&v[x], &columns[9 + x][g], sizeof(gpucol_d4));
+      p[x] = gpucol_d4{fa.v[a0][x], fa.v[a1][x], fa.v[a2][x], fa.v[a3][x]};
+      u[x] = gpucol_d4{fa.edge[a0][x], fa.edge[a1][x], fa.edge[a2][x], fa.edge[a3][x]};
+      q[x] = gpucol_d4{fb.v[b0][x], fb.v[b1][x], fb.v[b2][x], fb.v[b3][x]};
+      v[x] = gpucol_d4{fb.edge[b0][x], fb.edge[b1][x], fb.edge[b2][x], fb.edge[b3][x]};
     }
-    std::memcpy(&a, &columns[12][g], sizeof(gpucol_d4));
-    std::memcpy(&c, &columns[13][g], sizeof(gpucol_d4));
+    const gpucol_d4 a = {fa.edge2[a0], fa.edge2[a1], fa.edge2[a2], fa.edge2[a3]};
+    const gpucol_d4 c = {fb.edge2[b0], fb.edge2[b1], fb.edge2[b2], fb.edge2[b3]};
     const gpucol_d4 w[3] = {p[0] - q[0], p[1] - q[1], p[2] - q[2]};
     const gpucol_d4 b = u[0] * v[0] + u[1] * v[1] + u[2] * v[2];
     const gpucol_d4 d = u[0] * w[0] + u[1] * w[1] + u[2] * w[2];
