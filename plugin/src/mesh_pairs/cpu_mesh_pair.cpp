@@ -219,15 +219,40 @@ std::size_t keepProximityCandidates(const float* rows, std::size_t count, float 
   return left;
 }
 
+// B's faces of one chunk's proximity tests, by B's triangle, in a small direct-mapped cache: after the first
+// run of candidates sharing A's triangle, the next runs meet mostly the same triangles of B.
+class RecentFacesB {
+ public:
+  const ProximityFace& face(std::uint32_t triangle, const Eigen::Vector3f (&vertices)[3]) {
+    Slot& slot = m_slots[triangle % kSlots];
+    if (!slot.filled || slot.triangle != triangle) {
+      slot.face = proximityFace(vertices);
+      slot.triangle = triangle;
+      slot.filled = true;
+    }
+    return slot.face;
+  }
+
+ private:
+  static constexpr std::uint32_t kSlots = 64;
+  struct Slot {
+    ProximityFace face;
+    std::uint32_t triangle = 0;
+    bool filled = false;
+  };
+  Slot m_slots[kSlots];
+};
+
 // The proximity contacts of the kept candidates (keepProximityCandidates) whose triangles do not cross, in
 // their order, appended to `out`; candidate index(i) is kept column i. Candidates come sorted by triangleA,
-// so A's face is made once per run of equal triangleA.
+// so A's face is made once per run of equal triangleA; B's come from RecentFacesB.
 template <class CandidateOf, class Crosses>
 void proximityOfKept(const ChunkTriangles& kept, std::size_t count, CandidateOf candidateOf, Crosses crosses,
                      const std::vector<TrianglePair>& candidates, const PairFrame& frame,
                      std::vector<NearbyHit>& out) {
   ProximityFace faceA;
   std::size_t faceOf = std::numeric_limits<std::size_t>::max();
+  RecentFacesB facesB;
   for (std::size_t i = 0; i < count; ++i) {
     const std::size_t candidate = candidateOf(i);
     if (crosses(i)) continue;
@@ -239,7 +264,8 @@ void proximityOfKept(const ChunkTriangles& kept, std::size_t count, CandidateOf 
       faceOf = candidate;
     }
     TriangleContact found[kMaxProximityContacts];
-    const int made = proximityContacts(faceA, proximityFace(b), frame.reach, found, frame.marginReach);
+    const int made = proximityContacts(faceA, facesB.face(candidates[candidate].triangleB, b), frame.reach,
+                                       found, frame.marginReach);
     for (int k = 0; k < made; ++k) out.push_back({candidate, found[k]});
   }
 }
