@@ -13,6 +13,7 @@
 #include <optional>
 #include <stdexcept>
 #include <string>
+#include <utility>
 
 #include "bvh/aabb_tree.h"
 #include "bvh/avx2_clones.h"
@@ -418,17 +419,18 @@ std::vector<NearbyHit> runProximityPass(const MeshShape& shapeA, const MeshShape
                                         const std::vector<std::uint8_t>& crossing) {
   const std::size_t chunks = (candidates.size() + kNearChunk - 1) / kNearChunk;
   std::vector<std::vector<NearbyHit>> chunkHits(chunks);
-  tbb::enumerable_thread_specific<ChunkBuffers> threadBuffers;
+  // Per thread: the chunk's triangles, and those the proximity pre-test leaves.
+  tbb::enumerable_thread_specific<std::pair<ChunkTriangles, ChunkTriangles>> threadRows;
   tbb::parallel_for(std::size_t(0), chunks, [&](std::size_t chunk) {
     const std::size_t begin = chunk * kNearChunk;
     const std::size_t count = std::min(candidates.size(), begin + kNearChunk) - begin;
-    ChunkBuffers& buffers = threadBuffers.local();
-    fetchChunkRows(shapeA, shapeB, frame, candidates, begin, count, buffers.triangles.values());
+    auto& [rows, kept] = threadRows.local();
+    fetchChunkRows(shapeA, shapeB, frame, candidates, begin, count, rows.values());
     std::uint16_t nearIndex[kNearChunk];
-    const std::size_t nearCount = keepProximityCandidates(buffers.triangles.data(), count, frame.reach,
-                                                          buffers.nearby.values(), nearIndex);
+    const std::size_t nearCount =
+        keepProximityCandidates(rows.data(), count, frame.reach, kept.values(), nearIndex);
     proximityOfKept(
-        buffers.nearby, nearCount, [&](std::size_t i) { return begin + nearIndex[i]; },
+        kept, nearCount, [&](std::size_t i) { return begin + nearIndex[i]; },
         [&](std::size_t i) { return crossing[begin + nearIndex[i]] != 0; }, candidates, frame,
         chunkHits[chunk]);
   });

@@ -17,9 +17,9 @@ void requireFinite(const btTransform& transformA, const btTransform& transformB)
 /// The query's pair on the CPU: root boxes, middle phase, near phase, contacts and their reduction.
 MeshPairResult collidePairOnCpu(const MeshPairQuery& query, const Config& config);
 
-/// Fills `result`'s intersecting pairs, contacts and reduced contacts from the near phase's `hits` (in
-/// candidate order, indexing result.candidatePairs), the same way for the CPU's hits and the device's
-/// (DeviceNearHit, the one instantiation outside cpu_mesh_pair.cpp).
+/// Fills `result`'s intersecting pairs, contacts and reduced contacts from the device's near phase's `hits`
+/// (DeviceNearHit, in candidate order, indexing result.candidatePairs), with the proximity contacts of the
+/// candidates that do not cross found on the CPU: the same result, by the same code, as collidePairOnCpu's.
 template <class Hit>
 void collectHits(const std::vector<Hit>& hits, const MeshShape& shapeA, const MeshShape& shapeB,
                  const PairFrame& frame, const Config& config, MeshPairResult& result);
