@@ -403,10 +403,21 @@ TEST(CollideMeshes, SpeculativeContactsComeAtTheGapAlongTheFaceNormal) {
   }
 }
 
+// Triangle t's edge wings (MeshShape::edgeWings) in the world: transform * (scaling ∘ wing).
+EdgeWings worldWings(const MeshShape& shape, const btTransform& transform, std::uint32_t t) {
+  EdgeWings out;
+  for (int k = 0; k < 3; ++k) {
+    const float* w = shape.edgeWings() + 9 * std::size_t(t) + 3 * k;
+    const btVector3 p = transform(btVector3(w[0], w[1], w[2]) * shape.getLocalScaling());
+    out.across[k] = Eigen::Vector3f(p.x(), p.y(), p.z());
+  }
+  return out;
+}
+
 // The contacts of pairs that do not cross, each candidate against proximityContacts of its two triangles on
-// their own (here in the world frame, from the double reference's triangles): every clear contact of one is a
-// contact of the other, with the same depth and normal. The pipeline finds them in chunks of rows, one face
-// of A made per run of candidates sharing A's triangle.
+// their own (here in the world frame, from the double reference's triangles, with their edge wings): every
+// clear contact of one is a contact of the other, with the same depth and normal. The pipeline finds them in
+// chunks of rows, one face of A made per run of candidates sharing A's triangle.
 TEST(CollideMeshes, SpeculativeContactsAreEachPairsProximityContacts) {
   MeshShape torus(sharedMesh(scenes::makeTorus(1.0f, 0.35f, 40, 16)));
   MeshShape sphere(sharedMesh(scenes::makeIcosphere(0.6f, 3)));
@@ -437,8 +448,11 @@ TEST(CollideMeshes, SpeculativeContactsAreEachPairsProximityContacts) {
       const TriangleD db = worldTriangle(sphere, query.transformB, pair.triangleB);
       Eigen::Vector3f a[3], b[3];
       for (int v = 0; v < 3; ++v) a[v] = da[v].cast<float>(), b[v] = db[v].cast<float>();
+      const EdgeWings wa = worldWings(torus, query.transformA, pair.triangleA);
+      const EdgeWings wb = worldWings(sphere, query.transformB, pair.triangleB);
       TriangleContact out[kMaxProximityContacts];
-      const int made = proximityContacts(a, b, frame.reach, out, frame.marginReach);
+      const int made = proximityContacts(proximityFace(a), proximityFace(b), frame.reach, out,
+                                         frame.marginReach, &wa, &wb);
       const auto& got = pipeline[pair];
       for (int k = 0; k < made; ++k) {
         if (!clear(out[k].depth)) continue;

@@ -190,6 +190,29 @@ TEST(TriangleProximity, EdgesAcrossEdges) {
   EXPECT_NEAR(pointOnB(contacts[0]).norm(), 0.0, 1e-5);
 }
 
+// The same crossing edges with what lies across B's edge (its wing): the contact along the gap stays where
+// the surface folds away from it (a ridge), and goes where B's edge is flat or concave (the surface there
+// leaves an edge no direction of its own) but stays when the wing is unknown.
+TEST(TriangleProximity, EdgeContactsOnlyAlongDirectionsTheirFacesLeave) {
+  const Eigen::Vector3f b[3] = {Eigen::Vector3f(-1, 0, 0), Eigen::Vector3f(0, -0.3f, -1),
+                                Eigen::Vector3f(1, 0, 0)};
+  const Eigen::Vector3f a[3] = {Eigen::Vector3f(0.1f, -1, 0.05f), Eigen::Vector3f(-0.1f, 1, 0.05f),
+                                Eigen::Vector3f(0, 0.2f, 1)};
+  const float nan = std::numeric_limits<float>::quiet_NaN();
+  const Eigen::Vector3f unknown(nan, nan, nan);
+  const EdgeWings noneA{{unknown, unknown, unknown}};
+  // B's top edge is its edge 2, from (1, 0, 0) to (-1, 0, 0).
+  const auto count = [&](const Eigen::Vector3f& wing) {
+    const EdgeWings wingsB{{unknown, unknown, wing}};
+    TriangleContact out[kMaxProximityContacts];
+    return proximityContacts(proximityFace(a), proximityFace(b), 0.1f, out, 0.1f, &noneA, &wingsB);
+  };
+  EXPECT_EQ(count(Eigen::Vector3f(0, 1, -0.3f)), 1);  // a ridge
+  EXPECT_EQ(count(Eigen::Vector3f(0, 0.3f, 1)), 0);   // flat: the face goes on
+  EXPECT_EQ(count(Eigen::Vector3f(0, -0.5f, 1)), 0);  // a valley
+  EXPECT_EQ(count(unknown), 1);
+}
+
 // A point behind the other's face is inside that body: no proximity contact pulls it through.
 TEST(TriangleProximity, NothingFromBehindAFace) {
   const Tri b = {Eigen::Vector3f(-2, -2, 0), Eigen::Vector3f(2, -2, 0), Eigen::Vector3f(0, 2, 0)};  // facing up

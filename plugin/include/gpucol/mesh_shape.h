@@ -53,6 +53,13 @@ ATTRIBUTE_ALIGNED16(class) MeshShape : public btConcaveShape {
   /// bytes per triangle held by each shape (14.4 MB for 400,000 triangles), on huge pages where the system
   /// gives them.
   const float* triangleSoup() const { return m_soup.get(); }
+  /// Per edge of each triangle, the far vertex of the triangle across it (unscaled; NaN for an edge without
+  /// exactly one such triangle): 9 floats per triangle t at [9 t, 9 t + 9), edge k (vertex k to k + 1) at
+  /// 9 t + 3 k. An edge's contact may only push along the directions its two faces leave it (none at a
+  /// concave or flat edge); 36 bytes per triangle.
+  const float* edgeWings() const {
+    return m_wings.data();
+  }
 
   /// The largest ratio between the magnitudes of two local scaling components: beyond it the float transforms
   /// of the mesh pair query round the short axis so much that intersecting pairs are lost or made up.
@@ -112,6 +119,7 @@ ATTRIBUTE_ALIGNED16(class) MeshShape : public btConcaveShape {
   std::shared_ptr<const TriangleMesh> m_mesh;
   std::shared_ptr<const AabbTree> m_tree;
   std::shared_ptr<const float[]> m_soup;
+  std::vector<float> m_wings;
   btVector3 m_localScaling{1, 1, 1};
 };
 

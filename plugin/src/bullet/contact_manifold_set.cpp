@@ -106,23 +106,32 @@ void ContactManifoldSet::write(const std::vector<PairContact>& contacts,
     // chosen contact would overwrite one chosen before it, the deepest first among them: one that close to a
     // contact already added is left out, so that the deepest, which bounds how far the bodies may close,
     // stays. At Bullet's own threshold (resting pairs) every chosen contact goes in, as before.
-    const btScalar threshold = m_groups[g].manifold->getContactBreakingThreshold();
-    const bool raised = threshold > m_groups[g].breakingThreshold;
+    btPersistentManifold* const manifold = m_groups[g].manifold;
+    const btScalar threshold = manifold->getContactBreakingThreshold();
+    const btScalar own = m_groups[g].breakingThreshold;
+    const bool raised = threshold > own;
     std::vector<btVector3> added;
     for (std::size_t i : chosen) {
       const PairContact& contact = byGroup[g][i];
       const btVector3 onA = contact.pointOnB + contact.normalOnB * contact.distance;
-      if (raised && std::any_of(added.begin(), added.end(), [&](const btVector3& p) {
-            return (p - onA).length2() < threshold * threshold;
-          })) {
+      // Per contact, the threshold only as far as its own distance: Bullet also takes it as the radius within
+      // which an added point is the held point it overwrites, and a fast pair's whole reach would merge a
+      // rod end's corners into one point, about which the rod then turns into the other body.
+      const btScalar radius = btMax(own, contact.distance);
+      if (raised && std::any_of(added.begin(), added.end(),
+                                [&](const btVector3& p) { return (p - onA).length2() < radius * radius; })) {
         continue;
       }
-      if (raised) added.push_back(onA);
+      if (raised) {
+        added.push_back(onA);
+        manifold->setContactBreakingThreshold(radius);
+      }
       // The triangles go into the point and gContactAddedCallback (Bullet swaps them with the bodies).
       result->setShapeIdentifiersA(contact.partId0, contact.index0);
       result->setShapeIdentifiersB(contact.partId1, contact.index1);
       result->addContactPoint(contact.normalOnB, contact.pointOnB, contact.distance);
     }
+    manifold->setContactBreakingThreshold(threshold);
   }
   result->setShapeIdentifiersA(-1, -1);
   result->setShapeIdentifiersB(-1, -1);

@@ -220,27 +220,47 @@ std::size_t keepProximityCandidates(const float* rows, std::size_t count, float 
   return left;
 }
 
-// B's faces of one chunk's proximity tests, by B's triangle, in a small direct-mapped cache: after the first
-// run of candidates sharing A's triangle, the next runs meet mostly the same triangles of B.
+// The edge wings (MeshShape::edgeWings) of a triangle whose vertices went into the rows as fetchChunkRows
+// puts them, in the pair's frame: A's scaled, B's carried into A's. A mirroring scale swaps vertices 1 and 2,
+// so the rows' edge i is the mesh's edge 2 - i.
+EdgeWings pairFrameWings(const MeshShape& shape, std::uint32_t triangle, bool isA, const PairFrame& frame) {
+  const float* w = shape.edgeWings() + 9 * std::size_t(triangle);
+  const bool flip = isA ? frame.flipA : frame.flipB;
+  EdgeWings out;
+  for (int i = 0; i < 3; ++i) {
+    const int k = flip ? 2 - i : i;
+    const Eigen::Vector3f p(w[3 * k], w[3 * k + 1], w[3 * k + 2]);
+    out.across[i] = isA ? Eigen::Vector3f(p.cwiseProduct(frame.scaleA))
+                        : Eigen::Vector3f(frame.bLinear * p + frame.bTranslation);
+  }
+  return out;
+}
+
+// B's faces and edge wings of one chunk's proximity tests, by B's triangle, in a small direct-mapped cache:
+// after the first run of candidates sharing A's triangle, the next runs meet mostly the same triangles of B.
 class RecentFacesB {
  public:
-  const ProximityFace& face(std::uint32_t triangle, const Eigen::Vector3f (&vertices)[3]) {
+  struct Slot {
+    ProximityFace face;
+    EdgeWings wings;
+    std::uint32_t triangle = 0;
+    bool filled = false;
+  };
+
+  const Slot& slot(const MeshShape& shapeB, std::uint32_t triangle, const Eigen::Vector3f (&vertices)[3],
+                   const PairFrame& frame) {
     Slot& slot = m_slots[triangle % kSlots];
     if (!slot.filled || slot.triangle != triangle) {
       slot.face = proximityFace(vertices);
+      slot.wings = pairFrameWings(shapeB, triangle, false, frame);
       slot.triangle = triangle;
       slot.filled = true;
     }
-    return slot.face;
+    return slot;
   }
 
  private:
   static constexpr std::uint32_t kSlots = 64;
-  struct Slot {
-    ProximityFace face;
-    std::uint32_t triangle = 0;
-    bool filled = false;
-  };
   Slot m_slots[kSlots];
 };
 
@@ -248,10 +268,12 @@ class RecentFacesB {
 // their order, appended to `out`; candidate index(i) is kept column i. Candidates come sorted by triangleA,
 // so A's face is made once per run of equal triangleA; B's come from RecentFacesB.
 template <class CandidateOf, class Crosses>
-void proximityOfKept(const ChunkTriangles& kept, std::size_t count, CandidateOf candidateOf, Crosses crosses,
+void proximityOfKept(const MeshShape& shapeA, const MeshShape& shapeB, const ChunkTriangles& kept,
+                     std::size_t count, CandidateOf candidateOf, Crosses crosses,
                      const std::vector<TrianglePair>& candidates, const PairFrame& frame,
                      std::vector<NearbyHit>& out) {
   ProximityFace faceA;
+  EdgeWings wingsA;
   std::size_t faceOf = std::numeric_limits<std::size_t>::max();
   RecentFacesB facesB;
   for (std::size_t i = 0; i < count; ++i) {
@@ -262,11 +284,13 @@ void proximityOfKept(const ChunkTriangles& kept, std::size_t count, CandidateOf 
     if (faceOf == std::numeric_limits<std::size_t>::max() ||
         candidates[faceOf].triangleA != candidates[candidate].triangleA) {
       faceA = proximityFace(a);
+      wingsA = pairFrameWings(shapeA, candidates[candidate].triangleA, true, frame);
       faceOf = candidate;
     }
+    const RecentFacesB::Slot& slotB = facesB.slot(shapeB, candidates[candidate].triangleB, b, frame);
     TriangleContact found[kMaxProximityContacts];
-    const int made = proximityContacts(faceA, facesB.face(candidates[candidate].triangleB, b), frame.reach,
-                                       found, frame.marginReach);
+    const int made =
+        proximityContacts(faceA, slotB.face, frame.reach, found, frame.marginReach, &wingsA, &slotB.wings);
     for (int k = 0; k < made; ++k) out.push_back({candidate, found[k]});
   }
 }
@@ -372,7 +396,7 @@ GPUCOL_AVX2_CLONES void runNearChunk(const MeshShape& shapeA, const MeshShape& s
   std::uint8_t crosses[kNearChunk] = {};
   for (std::size_t h = firstHit; h < hits.size(); ++h) crosses[hits[h].candidate - begin] = 1;
   proximityOfKept(
-      buffers.nearby, nearCount, [&](std::size_t i) { return begin + nearIndex[i]; },
+      shapeA, shapeB, buffers.nearby, nearCount, [&](std::size_t i) { return begin + nearIndex[i]; },
       [&](std::size_t i) { return crosses[nearIndex[i]] != 0; }, candidates, frame, nearby);
 }
 
@@ -430,7 +454,7 @@ std::vector<NearbyHit> runProximityPass(const MeshShape& shapeA, const MeshShape
     const std::size_t nearCount =
         keepProximityCandidates(rows.data(), count, frame.reach, kept.values(), nearIndex);
     proximityOfKept(
-        kept, nearCount, [&](std::size_t i) { return begin + nearIndex[i]; },
+        shapeA, shapeB, kept, nearCount, [&](std::size_t i) { return begin + nearIndex[i]; },
         [&](std::size_t i) { return crossing[begin + nearIndex[i]] != 0; }, candidates, frame,
         chunkHits[chunk]);
   });

@@ -62,7 +62,8 @@ bool separatedByAPlane(const Face& fa, const Face& fb, double reach, double size
 // segments take s = 0. The pairs run four at a time in the lanes of shared_math/triangle_lanes.h, choices by
 // masks, so the divisions of different pairs overlap instead of each pair waiting on its own and
 // mispredicting its clamps.
-GPUCOL_AVX2_CLONES double closestEdgePoints(const Face& fa, const Face& fb, Vec& bestA, Vec& bestB) {
+GPUCOL_AVX2_CLONES double closestEdgePoints(const Face& fa, const Face& fb, Vec& bestA, Vec& bestB,
+                                            int& edgeA, int& edgeB) {
   // Twelve lanes, the last three repeating the first pair; lane k holds edge kEdgeA[k] of A and kEdgeB[k]
   // of B. Each vector is put together from the faces' values directly: written to memory lane by lane and
   // read back as vectors, the loads waited on the stores.
@@ -109,7 +110,20 @@ GPUCOL_AVX2_CLONES double closestEdgePoints(const Face& fa, const Face& fb, Vec&
   const int i = nearest / 3, j = nearest % 3;
   bestA = fa.v[i] + s[nearest] * fa.edge[i];
   bestB = fb.v[j] + t[nearest] * fb.edge[j];
+  edgeA = i;
+  edgeB = j;
   return d2[nearest];
+}
+
+// True when `away` (from the edge's side of the contact towards the other body) lies in the region edge i's
+// two faces leave it: not into this face nor into the one across (whose far vertex is `wing`). None is left
+// at a concave edge, only the face's normal at a flat one. An edge without a known wing is not checked.
+bool withinEdgeRegion(const Face& f, int i, const Eigen::Vector3f& wing, const Vec& away) {
+  if (!wing.allFinite()) return true;
+  const Vec toWing = wing.cast<double>() - f.v[i];
+  const Vec intoOther = toWing - f.edge[i] * (toWing.dot(f.edge[i]) / f.edge2[i]);
+  return away.dot(f.inward[i]) <= kSideTolerance * f.inward[i].norm() &&
+         away.dot(intoOther) <= kSideTolerance * intoOther.norm();
 }
 
 // A contact whose point on A is `onA`, on B `onA - normal * distance`. toWorld puts Bullet's point on B at
@@ -159,7 +173,8 @@ int proximityContacts(const Eigen::Vector3f (&a)[3], const Eigen::Vector3f (&b)[
 }
 
 int proximityContacts(const ProximityFace& fa, const ProximityFace& fb, float reach,
-                      TriangleContact (&out)[kMaxProximityContacts], float speculativeFrom) {
+                      TriangleContact (&out)[kMaxProximityContacts], float speculativeFrom,
+                      const EdgeWings* wingsA, const EdgeWings* wingsB) {
   if (!(reach > 0)) return 0;
   if (!fa.valid || !fb.valid) return 0;
   const double size = pairSize(fa, fb);
@@ -187,13 +202,28 @@ int proximityContacts(const ProximityFace& fa, const ProximityFace& fb, float re
   }
 
   Vec bestA, bestB;
-  const double distance = std::sqrt(closestEdgePoints(fa, fb, bestA, bestB));
+  int edgeA = 0, edgeB = 0;
+  const double distance = std::sqrt(closestEdgePoints(fa, fb, bestA, bestB, edgeA, edgeB));
   if (!(distance < reach) || !(distance < closestOverFace * (1 - 1e-6))) return count;
   // Touching edges (the exact test may call a pair within about 1e-6 of its size either way) have no
   // direction between their points: B's face normal stands in. Speculative contacts of edges that nearly
   // touch take the face whose plane has the other triangle wholly on its outer side (a box's edge at a
   // floor's edge gets the floor's normal, not a sideways one), and none when neither face separates them.
-  Vec normal = distance > 1e-7 * size ? Vec((bestA - bestB) / distance) : fb.normal;
+  const bool apart = distance > 1e-7 * size;
+  Vec normal = apart ? Vec((bestA - bestB) / distance) : fb.normal;
+  // The edges' own direction only where the surface around each edge allows it (a box's edge in the inner
+  // corner of an L, or over the diagonal of a flat face, would lean off the faces). Checked on a side whose
+  // closest point lies inside its edge: at an end the feature is a vertex, whose region all the faces around
+  // it make.
+  const auto inside = [](const Face& f, int i, const Vec& p) {
+    const double s = (p - f.v[i]).dot(f.edge[i]) / f.edge2[i];
+    return s > 1e-6 && s < 1 - 1e-6;
+  };
+  if (apart && distance >= 1e-3 * size &&
+      ((wingsA && inside(fa, edgeA, bestA) && !withinEdgeRegion(fa, edgeA, wingsA->across[edgeA], -normal)) ||
+       (wingsB && inside(fb, edgeB, bestB) && !withinEdgeRegion(fb, edgeB, wingsB->across[edgeB], normal)))) {
+    return count;
+  }
   if (distance >= speculativeFrom && distance < 1e-3 * size) {
     const auto outside = [&](const Face& of, const Face& plane) {
       for (const Vec& v : of.v) {

@@ -27,6 +27,12 @@ struct ProximityFace {
 
 ProximityFace proximityFace(const Eigen::Vector3f (&t)[3]);
 
+/// The far vertices of the triangles across a face's edges (edge i from v[i] to v[i + 1]), in the faces'
+/// frame; a non-finite one (no single triangle across) leaves its edge unchecked.
+struct EdgeWings {
+  Eigen::Vector3f across[3];
+};
+
 /// Contacts of two triangles that do not cross but come within `reach` of each other (the sum of the two
 /// shapes' collision margins), so that bodies with margins rest `reach` apart instead of falling through the
 /// gap. Written to `out`; returns how many (0 when `reach` <= 0 or either triangle is degenerate).
@@ -51,8 +57,11 @@ int proximityContacts(const Eigen::Vector3f (&a)[3], const Eigen::Vector3f (&b)[
                       TriangleContact (&out)[kMaxProximityContacts], float speculativeFrom);
 /// The same for triangles already made into faces (proximityFace), so that a triangle in many candidate
 /// pairs is made once.
+/// With the faces' edge wings, an edge-against-edge contact whose direction one of its edges' two faces does
+/// not leave it (into either face, or any at a concave edge) is left out: a vertex over a face answers there.
 int proximityContacts(const ProximityFace& a, const ProximityFace& b, float reach,
-                      TriangleContact (&out)[kMaxProximityContacts], float speculativeFrom);
+                      TriangleContact (&out)[kMaxProximityContacts], float speculativeFrom,
+                      const EdgeWings* wingsA = nullptr, const EdgeWings* wingsB = nullptr);
 inline int proximityContacts(const Eigen::Vector3f (&a)[3], const Eigen::Vector3f (&b)[3], float reach,
                              TriangleContact (&out)[kMaxProximityContacts]) {
   return proximityContacts(a, b, reach, out, reach);

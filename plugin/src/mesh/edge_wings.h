@@ -1,0 +1,17 @@
+#pragma once
+
+#include <vector>
+
+namespace gpucol {
+
+class TriangleMesh;
+
+/// For each edge of each triangle, the far vertex of the one triangle across it (the edge's "wing"): 9 floats
+/// per triangle t at [9 t, 9 t + 9), edge k (from vertex k to vertex k + 1 in index order) at 9 t + 3 k. NaN
+/// where no other triangle, or more than one, shares the edge, or where the triangle across it runs the edge
+/// the same way (its winding disagrees). Vertices are matched by position, so meshes whose faces carry
+/// vertices of their own are matched too. With its wing an edge knows the angle of the surface around it:
+/// convex, flat or concave.
+std::vector<float> buildEdgeWings(const TriangleMesh& mesh);
+
+}  // namespace gpucol

@@ -1,0 +1,73 @@
+// buildEdgeWings: for each triangle edge, the far vertex of the one triangle across it, matched by position.
+#include "mesh/edge_wings.h"
+
+#include <gtest/gtest.h>
+
+#include <cmath>
+#include <vector>
+
+#include "gpucol/triangle_mesh.h"
+#include "scenes/procedural_meshes.h"
+
+namespace gpucol {
+namespace {
+
+bool known(const std::vector<float>& wings, std::size_t t, int k) { return !std::isnan(wings[9 * t + 3 * k]); }
+
+// A closed box: every edge has exactly one triangle across it, and the wing is a vertex of that triangle, not on
+// the edge itself.
+TEST(EdgeWings, EveryEdgeOfAClosedBoxHasItsWing) {
+  const TriangleMesh box = scenes::makeBox(1, 2, 3);
+  const std::vector<float> wings = buildEdgeWings(box);
+  ASSERT_EQ(wings.size(), 9 * box.triangleCount());
+  for (std::size_t t = 0; t < box.triangleCount(); ++t) {
+    for (int k = 0; k < 3; ++k) {
+      ASSERT_TRUE(known(wings, t, k)) << t << ' ' << k;
+      const float* w = &wings[9 * t + 3 * k];
+      // Every vertex of the box is a corner: the wing is one too.
+      EXPECT_EQ(std::fabs(w[0]), 1.0f);
+      EXPECT_EQ(std::fabs(w[1]), 2.0f);
+      EXPECT_EQ(std::fabs(w[2]), 3.0f);
+      // Not an end of the edge.
+      for (int end : {k, (k + 1) % 3}) {
+        const std::uint32_t v = box.indices()[3 * t + end];
+        const bool same = box.positions()[3 * v] == w[0] && box.positions()[3 * v + 1] == w[1] &&
+                          box.positions()[3 * v + 2] == w[2];
+        EXPECT_FALSE(same) << t << ' ' << k;
+      }
+    }
+  }
+}
+
+// Two triangles sharing an edge, given as separate vertices (a face's own): matched by position. The outer
+// edges have none.
+TEST(EdgeWings, SharedEdgeOfUnweldedTriangles) {
+  std::vector<float> xyz = {0, 0, 0, 1, 0, 0, 0, 1, 0,   // triangle 0: edge 1 from (1,0,0) to (0,1,0)
+                            0, 1, 0, 1, 0, 0, 1, 1, 0.5f};  // triangle 1: runs it back, far vertex (1,1,0.5)
+  const TriangleMesh mesh = TriangleMesh::fromArrays(xyz, {0, 1, 2, 3, 4, 5}, "two triangles");
+  const std::vector<float> wings = buildEdgeWings(mesh);
+  EXPECT_EQ(wings[9 * 0 + 3 * 1 + 0], 1.0f);
+  EXPECT_EQ(wings[9 * 0 + 3 * 1 + 1], 1.0f);
+  EXPECT_EQ(wings[9 * 0 + 3 * 1 + 2], 0.5f);
+  EXPECT_EQ(wings[9 * 1 + 3 * 0 + 0], 0.0f);  // triangle 1's edge 0 ((0,1,0) to (1,0,0)): far vertex (0,0,0)
+  EXPECT_EQ(wings[9 * 1 + 3 * 0 + 1], 0.0f);
+  for (auto [t, k] : {std::pair{0, 0}, {0, 2}, {1, 1}, {1, 2}}) EXPECT_FALSE(known(wings, t, k)) << t << ' ' << k;
+}
+
+// A triangle across that runs the edge the same way (its winding disagrees), and an edge of three triangles:
+// no wing.
+TEST(EdgeWings, NoWingAcrossDisagreeingOrNonManifoldEdges) {
+  std::vector<float> xyz = {0, 0, 0, 1, 0, 0, 0, 1, 0, 1, 1, 0, 0.5f, 0.5f, 1};
+  const TriangleMesh flipped = TriangleMesh::fromArrays(xyz, {0, 1, 2, 1, 2, 3}, "disagreeing");
+  std::vector<float> wings = buildEdgeWings(flipped);
+  EXPECT_FALSE(known(wings, 0, 1));
+  EXPECT_FALSE(known(wings, 1, 0));
+  const TriangleMesh three = TriangleMesh::fromArrays(xyz, {0, 1, 2, 2, 1, 3, 2, 1, 4}, "three on an edge");
+  wings = buildEdgeWings(three);
+  EXPECT_FALSE(known(wings, 0, 1));
+  EXPECT_FALSE(known(wings, 1, 0));
+  EXPECT_FALSE(known(wings, 2, 0));
+}
+
+}  // namespace
+}  // namespace gpucol
