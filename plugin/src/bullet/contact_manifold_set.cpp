@@ -102,10 +102,12 @@ void ContactManifoldSet::write(const std::vector<PairContact>& contacts,
     result->setPersistentManifold(m_groups[g].manifold);
     const std::vector<std::size_t> chosen = chooseSupport(byGroup[g], body1Basis * m_groups[g].normalInBody1);
     // Bullet takes an added point for the held point nearest to it within the breaking threshold and
-    // overwrites it. With a speculative pair's threshold raised to its reach (centimetres to decimetres), a
-    // chosen contact would overwrite one chosen before it, the deepest first among them: one that close to a
-    // contact already added is left out, so that the deepest, which bounds how far the bodies may close,
-    // stays. At Bullet's own threshold (resting pairs) every chosen contact goes in, as before.
+    // overwrites it. With a speculative pair's threshold raised to its whole reach (centimetres to
+    // decimetres), chosen contacts would overwrite each other (the deepest, which bounds how far the bodies
+    // may close, among them) and a rod end's corners would merge into one point, about which the rod then
+    // turns into the other body. So each goes in with the threshold raised only to its own distance (Bullet's
+    // own at least), and one within that distance of a contact already added is left out; the whole reach is
+    // restored for the refresh below. At Bullet's own threshold (resting pairs) every chosen contact goes in.
     btPersistentManifold* const manifold = m_groups[g].manifold;
     const btScalar threshold = manifold->getContactBreakingThreshold();
     const btScalar own = m_groups[g].breakingThreshold;
@@ -114,9 +116,6 @@ void ContactManifoldSet::write(const std::vector<PairContact>& contacts,
     for (std::size_t i : chosen) {
       const PairContact& contact = byGroup[g][i];
       const btVector3 onA = contact.pointOnB + contact.normalOnB * contact.distance;
-      // Per contact, the threshold only as far as its own distance: Bullet also takes it as the radius within
-      // which an added point is the held point it overwrites, and a fast pair's whole reach would merge a
-      // rod end's corners into one point, about which the rod then turns into the other body.
       const btScalar radius = btMax(own, contact.distance);
       if (raised && std::any_of(added.begin(), added.end(),
                                 [&](const btVector3& p) { return (p - onA).length2() < radius * radius; })) {
