@@ -12,10 +12,12 @@
 namespace gpucol {
 namespace {
 
-bool known(const std::vector<float>& wings, std::size_t t, int k) { return !std::isnan(wings[9 * t + 3 * k]); }
+bool known(const std::vector<float>& wings, std::size_t t, int k) {
+  return !std::isnan(wings[9 * t + 3 * k]);
+}
 
-// A closed box: every edge has exactly one triangle across it, and the wing is a vertex of that triangle, not on
-// the edge itself.
+// A closed box: every edge has exactly one triangle across it, and the wing is a vertex of that triangle, not
+// on the edge itself.
 TEST(EdgeWings, EveryEdgeOfAClosedBoxHasItsWing) {
   const TriangleMesh box = scenes::makeBox(1, 2, 3);
   const std::vector<float> wings = buildEdgeWings(box);
@@ -42,7 +44,7 @@ TEST(EdgeWings, EveryEdgeOfAClosedBoxHasItsWing) {
 // Two triangles sharing an edge, given as separate vertices (a face's own): matched by position. The outer
 // edges have none.
 TEST(EdgeWings, SharedEdgeOfUnweldedTriangles) {
-  std::vector<float> xyz = {0, 0, 0, 1, 0, 0, 0, 1, 0,   // triangle 0: edge 1 from (1,0,0) to (0,1,0)
+  std::vector<float> xyz = {0, 0, 0, 1, 0, 0, 0, 1, 0,      // triangle 0: edge 1 from (1,0,0) to (0,1,0)
                             0, 1, 0, 1, 0, 0, 1, 1, 0.5f};  // triangle 1: runs it back, far vertex (1,1,0.5)
   const TriangleMesh mesh = TriangleMesh::fromArrays(xyz, {0, 1, 2, 3, 4, 5}, "two triangles");
   const std::vector<float> wings = buildEdgeWings(mesh);
@@ -51,7 +53,8 @@ TEST(EdgeWings, SharedEdgeOfUnweldedTriangles) {
   EXPECT_EQ(wings[9 * 0 + 3 * 1 + 2], 0.5f);
   EXPECT_EQ(wings[9 * 1 + 3 * 0 + 0], 0.0f);  // triangle 1's edge 0 ((0,1,0) to (1,0,0)): far vertex (0,0,0)
   EXPECT_EQ(wings[9 * 1 + 3 * 0 + 1], 0.0f);
-  for (auto [t, k] : {std::pair{0, 0}, {0, 2}, {1, 1}, {1, 2}}) EXPECT_FALSE(known(wings, t, k)) << t << ' ' << k;
+  for (auto [t, k] : {std::pair{0, 0}, {0, 2}, {1, 1}, {1, 2}})
+    EXPECT_FALSE(known(wings, t, k)) << t << ' ' << k;
 }
 
 // A triangle across that runs the edge the same way (its winding disagrees), and an edge of three triangles:

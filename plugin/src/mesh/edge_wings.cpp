@@ -35,11 +35,14 @@ std::vector<float> buildEdgeWings(const TriangleMesh& mesh) {
     }
   }
   std::sort(entries.begin(), entries.end(), [](const Entry& l, const Entry& r) {
-    return l.key != r.key ? l.key < r.key : l.triangle != r.triangle ? l.triangle < r.triangle : l.edge < r.edge;
+    return l.key != r.key             ? l.key < r.key
+           : l.triangle != r.triangle ? l.triangle < r.triangle
+                                      : l.edge < r.edge;
   });
   const auto setWing = [&](const Entry& of, const Entry& across) {
     const std::uint32_t far = indices[3 * std::size_t(across.triangle) + (across.edge + 2) % 3];
-    for (int c = 0; c < 3; ++c) wings[9 * std::size_t(of.triangle) + 3 * of.edge + c] = positions[3 * std::size_t(far) + c];
+    for (int c = 0; c < 3; ++c)
+      wings[9 * std::size_t(of.triangle) + 3 * of.edge + c] = positions[3 * std::size_t(far) + c];
   };
   for (std::size_t i = 0; i < entries.size();) {
     std::size_t j = i;

@@ -143,6 +143,12 @@ GPUCOL_AVX2_CLONES void transformRows(float* rows, std::size_t count, const Pair
   }
 }
 
+// Copies column `fromColumn` of rows `from` (a candidate's 18 values, ChunkTriangles' layout) to column
+// `toColumn` of rows `to`: how the passes below gather the candidates they keep.
+inline void copyColumn(const float* from, std::size_t fromColumn, float* to, std::size_t toColumn) {
+  for (std::size_t k = 0; k < 18; ++k) to[k * kNearRow + toColumn] = from[k * kNearRow + fromColumn];
+}
+
 // The triangles of candidates begin .. begin + count into `rows` (ChunkTriangles' layout), in A's scaled
 // frame.
 inline void fetchChunkRows(const MeshShape& shapeA, const MeshShape& shapeB, const PairFrame& frame,
@@ -207,14 +213,13 @@ GPUCOL_AVX2_CLONES void markProximityEmpty(const float* rows, std::size_t count,
 // go to `index`. Returns how many.
 std::size_t keepProximityCandidates(const float* rows, std::size_t count, float reach, float* kept,
                                     std::uint16_t* index) {
-  constexpr std::size_t n = kNearRow;
   std::uint8_t empty[kNearChunk];
   markProximityEmpty(rows, count, reach, empty);
   std::size_t left = 0;
   for (std::size_t j = 0; j < count; ++j) {
     if (empty[j]) continue;
     index[left] = static_cast<std::uint16_t>(j);
-    for (std::size_t k = 0; k < 18; ++k) kept[k * n + left] = rows[k * n + j];
+    copyColumn(rows, j, kept, left);
     ++left;
   }
   return left;
@@ -341,7 +346,7 @@ GPUCOL_AVX2_CLONES void runNearChunk(const MeshShape& shapeA, const MeshShape& s
   }
   float* const w = crossing.values();
   for (std::size_t s = 0; s < survivors; ++s) {
-    for (std::size_t k = 0; k < 18; ++k) w[k * n + s] = v[k * n + survivor[s]];
+    copyColumn(v, survivor[s], w, s);
   }
   for (std::size_t s = 0; s < survivors; ++s) {
     const RowTriangles t(w, s);
@@ -356,7 +361,7 @@ GPUCOL_AVX2_CLONES void runNearChunk(const MeshShape& shapeA, const MeshShape& s
   for (std::size_t s = 0; s < survivors; ++s) {
     if (apart[s]) continue;
     tested[testedCount] = survivor[s];
-    for (std::size_t k = 0; k < 18; ++k) rows[k * n + testedCount] = w[k * n + s];
+    copyColumn(w, s, rows, testedCount);
     ++testedCount;
   }
   float* const c = buffers.contacts.get();
