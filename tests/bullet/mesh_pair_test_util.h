@@ -90,4 +90,18 @@ inline float largestSide(const TriangleMesh& mesh) {
   return (hi - lo).maxCoeff();
 }
 
+/// The deepest contact of each triangle pair (a pair gives one contact per corner of its overlap that dips
+/// in, the deepest first; the others follow it), in the contacts' order.
+inline std::vector<MeshContact> deepestContactPerPair(const std::vector<MeshContact>& contacts) {
+  std::vector<MeshContact> out;
+  for (const MeshContact& c : contacts) {
+    if (!out.empty() && out.back().triangleA == c.triangleA && out.back().triangleB == c.triangleB) {
+      if (c.depth < out.back().depth) out.back() = c;
+      continue;
+    }
+    out.push_back(c);
+  }
+  return out;
+}
+
 }  // namespace gpucol::test

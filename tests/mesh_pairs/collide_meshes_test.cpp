@@ -135,7 +135,9 @@ TEST(CollideMeshes, BoxRestingOnBoxGivesTheFaceNormalAndTheSinkDepth) {
       for (const MeshContact& c : result.contacts) {
         EXPECT_NEAR(c.normalWorldOnB.z(), 1.0f, 1e-5f);
         EXPECT_NEAR(c.depth, -sink, 1e-5f);
-        EXPECT_NEAR(c.pointWorld.z(), 0.0f, 1e-5f);
+        // On the ground's face (the middle of a crossing), or a corner of the box's side halfway out.
+        EXPECT_TRUE(std::abs(c.pointWorld.z()) < 1e-5f || std::abs(c.pointWorld.z() + 0.5f * sink) < 1e-5f)
+            << c.pointWorld.z();
       }
       // The reduction keeps the footprint's corners: contacts spread over the whole box side.
       btVector3 lo(1e9f, 1e9f, 0), hi(-1e9f, -1e9f, 0);
@@ -228,8 +230,11 @@ TEST(CollideMeshes, LocalScalingEqualsAScaledCopyOfTheMesh) {
                                   std::back_inserter(difference));
     EXPECT_LE(difference.size(), 2u);
     std::size_t compared = 0;
-    for (const MeshContact& c : scaled.contacts) {
-      for (const MeshContact& d : copied.contacts) {
+    // The deepest contact of each pair: a mirroring scale clips the triangles' corners in another order.
+    const std::vector<MeshContact> scaledDeepest = deepestContactPerPair(scaled.contacts);
+    const std::vector<MeshContact> copiedDeepest = deepestContactPerPair(copied.contacts);
+    for (const MeshContact& c : scaledDeepest) {
+      for (const MeshContact& d : copiedDeepest) {
         if (c.triangleA != d.triangleA || c.triangleB != d.triangleB) continue;
         ++compared;
         EXPECT_LT((c.pointWorld - d.pointWorld).length(), 1e-4f);
@@ -237,7 +242,7 @@ TEST(CollideMeshes, LocalScalingEqualsAScaledCopyOfTheMesh) {
         EXPECT_NEAR(c.depth, d.depth, 1e-4f);
       }
     }
-    EXPECT_GE(compared + 2, copied.contacts.size());
+    EXPECT_GE(compared + 2, copiedDeepest.size());
   }
 }
 

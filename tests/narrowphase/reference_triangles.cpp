@@ -4,6 +4,7 @@
 #include <algorithm>
 #include <cmath>
 #include <limits>
+#include <vector>
 
 namespace gpucol::test {
 namespace {
@@ -126,6 +127,78 @@ double pairScale(const TriangleD& a, const TriangleD& b) {
     }
   }
   return (upper - lower).norm();
+}
+
+std::vector<OverlapCorner> referenceOverlapCorners(const TriangleD& moving, const TriangleD& fixed,
+                                                   const Eigen::Vector3d& out, const FlatWings& fixedWings) {
+  const double size =
+      std::max({(fixed[1] - fixed[0]).norm(), (fixed[2] - fixed[1]).norm(), (fixed[0] - fixed[2]).norm()});
+  struct Plane {
+    Eigen::Vector3d origin, inward;  // unit inward normal
+  };
+  std::vector<Plane> planes;
+  const auto add = [&](const Eigen::Vector3d& from, const Eigen::Vector3d& to, const Eigen::Vector3d& inner) {
+    Eigen::Vector3d n = out.cross(to - from).normalized();
+    if (n.dot(inner - from) < 0) n = -n;
+    planes.push_back({from - n * (1e-5 * size), n});
+  };
+  for (int k = 0; k < 3; ++k) {
+    const Eigen::Vector3d& from = fixed[k];
+    const Eigen::Vector3d& to = fixed[(k + 1) % 3];
+    if (fixedWings[k]) {
+      add(from, *fixedWings[k], to);
+      add(*fixedWings[k], to, from);
+    } else {
+      add(from, to, fixed[(k + 2) % 3]);
+    }
+  }
+  std::vector<Eigen::Vector3d> corners(moving.begin(), moving.end());
+  for (const Plane& plane : planes) {
+    for (int e = 0; e < 3; ++e) {
+      const Eigen::Vector3d& p = moving[e];
+      const Eigen::Vector3d& q = moving[(e + 1) % 3];
+      const double sp = plane.inward.dot(p - plane.origin), sq = plane.inward.dot(q - plane.origin);
+      if ((sp < 0) != (sq < 0)) corners.push_back(p + (q - p) * (sp / (sp - sq)));
+    }
+  }
+  const Eigen::Vector3d nMoving = (moving[1] - moving[0]).cross(moving[2] - moving[0]).normalized();
+  for (std::size_t i = 0; i < planes.size(); ++i) {
+    for (std::size_t j = i + 1; j < planes.size(); ++j) {
+      // The line along `out` where planes i and j meet: solve within the plane normal to `out`.
+      const Eigen::Vector3d& ni = planes[i].inward;
+      const Eigen::Vector3d& nj = planes[j].inward;
+      const double di = ni.dot(planes[i].origin), dj = nj.dot(planes[j].origin);
+      const double det = ni.cross(nj).dot(out);
+      if (std::abs(det) < 1e-12) continue;
+      // A point x with ni.x = di, nj.x = dj, out.x = 0, then moved along `out` onto moving's plane.
+      const Eigen::Vector3d x = (di * nj.cross(out) + dj * out.cross(ni)) / det;
+      const double along = nMoving.dot(out);
+      if (std::abs(along) < 1e-12) continue;
+      corners.push_back(x + out * (nMoving.dot(moving[0] - x) / along));
+    }
+  }
+  const double tolerance = 1e-9 * size;
+  std::vector<OverlapCorner> inside;
+  for (const Eigen::Vector3d& c : corners) {
+    bool in = std::all_of(planes.begin(), planes.end(), [&](const Plane& plane) {
+      return plane.inward.dot(c - plane.origin) >= -tolerance;
+    });
+    // Inside the moving triangle: on the inner side of each of its edges within its plane.
+    for (int e = 0; e < 3 && in; ++e) {
+      const Eigen::Vector3d edge = moving[(e + 1) % 3] - moving[e];
+      in = nMoving.cross(edge).dot(c - moving[e]) >= -tolerance * edge.norm();
+    }
+    if (in) inside.push_back({c, -out.dot(c - fixed[0])});
+  }
+  return inside;
+}
+
+double referenceClippedMove(const TriangleD& moving, const TriangleD& fixed, const Eigen::Vector3d& out,
+                            const FlatWings& fixedWings) {
+  double deepest = 0;
+  for (const OverlapCorner& c : referenceOverlapCorners(moving, fixed, out, fixedWings))
+    deepest = std::max(deepest, c.below);
+  return deepest;
 }
 
 }  // namespace gpucol::test

@@ -1,10 +1,13 @@
 #pragma once
 
 // Double-precision references for the near phase tests: an independent separating-axis triangle test,
-// the exact distance between two triangles, and a signed "how far from touching" measure.
+// the exact distance between two triangles, a signed "how far from touching" measure, and the depth of a
+// contact taken over the triangles' overlap.
 
 #include <Eigen/Core>
 #include <array>
+#include <optional>
+#include <vector>
 
 namespace gpucol::test {
 
@@ -40,6 +43,33 @@ double separatingAxisPenetration(const TriangleD& a, const TriangleD& b);
 /// Signed closeness to touching: the distance between separated triangles, minus the separating-axis
 /// penetration of intersecting ones. Near 0 means "almost touching".
 double signedSeparation(const TriangleD& a, const TriangleD& b);
+
+/// For each edge k of a triangle (corner k to k + 1), the far vertex of the triangle across it when the edge
+/// is a diagonal of a flat face; empty elsewhere.
+using FlatWings = std::array<std::optional<Eigen::Vector3d>, 3>;
+
+/// A corner of the overlap of a moving triangle with the region over a fixed one, and how far it lies below
+/// the fixed triangle's plane (along -out).
+struct OverlapCorner {
+  Eigen::Vector3d point;
+  double below = 0;
+};
+
+/// The corners of the part of `moving` over `fixed` (the documented rule of clipContactToOverlap,
+/// triangle_contact.h, written again as an enumeration): the region over the fixed triangle is bounded by a
+/// plane through each edge that contains the unit direction `out`, or, at a flat diagonal (a wing in
+/// `fixedWings`), by the two far edges of the triangle across it; each moved out by 1e-5 of the fixed
+/// triangle's size. The corners of moving ∩ region are among: moving's vertices, its edges crossing a plane,
+/// and the lines where two planes meet crossing its plane; those inside both are returned (a corner may come
+/// more than once).
+std::vector<OverlapCorner> referenceOverlapCorners(const TriangleD& moving, const TriangleD& fixed,
+                                                   const Eigen::Vector3d& out,
+                                                   const FlatWings& fixedWings = {});
+
+/// How far the part of `moving` over `fixed` must move along `out` to leave fixed's plane: the deepest of
+/// referenceOverlapCorners (0 when none is below the plane).
+double referenceClippedMove(const TriangleD& moving, const TriangleD& fixed, const Eigen::Vector3d& out,
+                            const FlatWings& fixedWings = {});
 
 /// Diagonal of the bounding box of both triangles: the length scale of a pair.
 double pairScale(const TriangleD& a, const TriangleD& b);

@@ -5,12 +5,15 @@
 #include <Eigen/Geometry>
 #include <algorithm>
 #include <cmath>
+#include <cstdio>
 #include <iostream>
+#include <limits>
 #include <optional>
 #include <random>
 
 #include "narrowphase/triangle_intersection.h"
 #include "narrowphase/triangle_plane.h"
+#include "narrowphase/triangle_proximity.h"
 #include "random_triangles.h"
 #include "reference_triangles.h"
 
@@ -136,6 +139,130 @@ TEST(TriangleContact, BoxTopFacePenetratedByDepthD) {
     EXPECT_NEAR((swapped->normalOnB - Eigen::Vector3f(0, 0, -1)).norm(), 0.0f, 1e-6f);
     EXPECT_NEAR((swapped->point - c->point).norm(), 0.0f, 1e-6f);
   }
+}
+
+EdgeWings noWings() {
+  EdgeWings wings;
+  for (Eigen::Vector3f& wing : wings.across) wing.setConstant(std::numeric_limits<float>::quiet_NaN());
+  return wings;
+}
+
+/// The faces of two crossed rods: A's top face triangle runs along x (0.8 by 0.08), B's bottom face triangle
+/// along z (0.08 wide in x), sloping down through A's plane over A. A moves less; the thesis's rule takes A's
+/// corner at x = 0.4, far beyond B's side, 0.015 deep; over B, A is only about 0.005 deep, and the clipped
+/// contact says so, at a point of A over B.
+TEST(TriangleContact, CrossedRodFacesMeetWhereTheyOverlap) {
+  const Eigen::Vector3f top[3] = {{-0.4f, 0, -0.04f}, {0.4f, 0, 0.04f}, {0.4f, 0, -0.04f}};
+  // B's plane: y = -0.25 (z + 0.02), facing down.
+  const Eigen::Vector3f bottom[3] = {
+      {-0.04f, 0.095f, -0.4f}, {0.04f, -0.005f, 0.0f}, {-0.04f, -0.105f, 0.4f}};
+  const std::optional<TriangleContact> c = generateContact(top, bottom);
+  ASSERT_TRUE(c.has_value());
+  ASSERT_TRUE(c->onFaceOfB);
+  EXPECT_NEAR(c->deepestPoint.x(), 0.4f, 1e-6f);
+  TriangleContact clipped = *c;
+  TriangleContact corners[kMaxOverlapCorners];
+  const int more = clipContactToOverlap(top, bottom, noWings(), noWings(), clipped, corners);
+  EXPECT_EQ(clipped.normalOnB, c->normalOnB);
+  EXPECT_EQ(clipped.point, c->point);
+  // Every corner of the overlap that dips in is held, over B.
+  ASSERT_GE(more, 1);
+  for (int k = 0; k < more; ++k) {
+    EXPECT_LT(corners[k].depth, 0);
+    EXPECT_GE(corners[k].depth, clipped.depth);
+    EXPECT_LE(std::abs(corners[k].deepestPoint.x()), 0.04f + 1e-5f);
+  }
+  EXPECT_GT(clipped.depth, c->depth + 0.005f);
+  EXPECT_LT(clipped.depth, 0);
+  const TriangleD da = test::toDouble({top[0], top[1], top[2]});
+  const TriangleD db = test::toDouble({bottom[0], bottom[1], bottom[2]});
+  EXPECT_LT(test::pointTriangleDistance(clipped.deepestPoint.cast<double>(), da), 1e-6);
+  EXPECT_NEAR(clipped.depth, -test::referenceClippedMove(da, db, clipped.normalOnB.cast<double>()), 1e-6);
+  EXPECT_LE(std::abs(clipped.deepestPoint.x()), 0.04f + 1e-5f);
+}
+
+/// Random crossing pairs: the contact and the corners' contacts are the double reference's corners of the
+/// overlap below the plane (every one of them, the deepest in the contact), on the moving triangle, between
+/// the unclipped depth and 0; with a flat neighbour across an edge of the fixed triangle the region goes on
+/// over it.
+TEST(TriangleContact, ClippedToOverlapMatchesTheDoubleReference) {
+  std::mt19937_64 rng(11);
+  int compared = 0, changed = 0, flatCompared = 0, cornerContacts = 0;
+  for (int i = 0; i < 20000; ++i) {
+    TriangleF a, b;
+    test::randomPair(PairFamily::General, rng, a, b);
+    const Eigen::Vector3f pa[3] = {a[0], a[1], a[2]}, pb[3] = {b[0], b[1], b[2]};
+    const std::optional<TriangleContact> c = generateContact(pa, pb);
+    if (!c || !(c->depth < 0)) continue;
+    const TriangleD da = test::toDouble(a), db = test::toDouble(b);
+    const double scale = test::pairScale(da, db);
+    const double tolerance = 1e-5 * scale;
+    // Half the pairs get a flat neighbour across edge 0 of each triangle: the edge's mirror image of the
+    // third vertex, in the plane.
+    const bool flat = i % 2 == 1;
+    EdgeWings wingsA = noWings(), wingsB = noWings();
+    test::FlatWings flatA, flatB;
+    if (flat) {
+      const auto mirror = [](const TriangleF& t) {
+        const Eigen::Vector3f mid = 0.5f * (t[0] + t[1]);
+        return Eigen::Vector3f(2.0f * mid - t[2]);
+      };
+      wingsA.across[0] = mirror(a);
+      wingsB.across[0] = mirror(b);
+      flatA[0] = wingsA.across[0].cast<double>();
+      flatB[0] = wingsB.across[0].cast<double>();
+    }
+    TriangleContact clipped = *c;
+    TriangleContact corners[kMaxOverlapCorners];
+    const int more = clipContactToOverlap(pa, pb, wingsA, wingsB, clipped, corners);
+    const TriangleD& moving = c->onFaceOfB ? da : db;
+    const TriangleD& fixed = c->onFaceOfB ? db : da;
+    const Eigen::Vector3d out = (c->onFaceOfB ? c->normalOnB : Eigen::Vector3f(-c->normalOnB)).cast<double>();
+    const std::vector<test::OverlapCorner> reference =
+        test::referenceOverlapCorners(moving, fixed, out, c->onFaceOfB ? flatB : flatA);
+    ++compared;
+    flatCompared += flat;
+    changed += clipped.depth != c->depth;
+    cornerContacts += more;
+    EXPECT_NEAR(clipped.depth, -test::referenceClippedMove(moving, fixed, out, c->onFaceOfB ? flatB : flatA),
+                tolerance)
+        << "pair " << i;
+    EXPECT_GE(clipped.depth, c->depth - 1e-6f * float(scale)) << "pair " << i;
+    // Each contact at a reference corner, at its depth.
+    const auto atACorner = [&](const TriangleContact& contact) {
+      return std::any_of(reference.begin(), reference.end(), [&](const test::OverlapCorner& corner) {
+        return (contact.deepestPoint.cast<double>() - corner.point).norm() <= tolerance &&
+               std::abs(double(contact.depth) + corner.below) <= tolerance;
+      });
+    };
+    EXPECT_TRUE(atACorner(clipped)) << "pair " << i;
+    for (int k = 0; k < more; ++k) {
+      EXPECT_TRUE(atACorner(corners[k])) << "pair " << i << " corner " << k;
+      EXPECT_LT(corners[k].depth, 0) << "pair " << i;
+      EXPECT_GE(corners[k].depth, clipped.depth) << "pair " << i;
+      EXPECT_EQ(corners[k].normalOnB, c->normalOnB);
+      EXPECT_LT(test::pointTriangleDistance(corners[k].deepestPoint.cast<double>(), moving), tolerance);
+    }
+    // Each reference corner clearly below the plane, held by a contact.
+    for (const test::OverlapCorner& corner : reference) {
+      if (corner.below <= tolerance) continue;
+      bool held = (clipped.deepestPoint.cast<double>() - corner.point).norm() <= tolerance;
+      for (int k = 0; k < more && !held; ++k)
+        held = (corners[k].deepestPoint.cast<double>() - corner.point).norm() <= tolerance;
+      EXPECT_TRUE(held) << "pair " << i << ": a corner " << corner.below << " below the plane has no contact";
+    }
+    EXPECT_LE(clipped.depth, 0) << "pair " << i;
+    EXPECT_LT(test::pointTriangleDistance(clipped.deepestPoint.cast<double>(), moving), tolerance)
+        << "pair " << i;
+    EXPECT_EQ(clipped.normalOnB, c->normalOnB);
+  }
+  std::printf(
+      "%d contacts clipped (%d with a flat neighbour), %d of them less deep than the whole triangle's; %d "
+      "contacts at other corners\n",
+      compared, flatCompared, changed, cornerContacts);
+  EXPECT_GT(compared, 1000);
+  EXPECT_GT(changed, compared / 10);
+  EXPECT_GT(cornerContacts, compared / 10);
 }
 
 /// The sides of two stacked boxes when the upper one tilts a little: the faces face the same way and cross in a

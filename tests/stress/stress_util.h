@@ -11,7 +11,9 @@
 #include <Eigen/Core>
 #include <Eigen/Geometry>
 #include <algorithm>
+#include <array>
 #include <cmath>
+#include <map>
 #include <memory>
 #include <optional>
 #include <set>
@@ -85,6 +87,47 @@ inline ReferenceContact referenceContact(const TriangleD& a, const TriangleD& b)
   return r;
 }
 
+/// For each edge k of triangle `t` (corner k to k + 1) that is a diagonal of a flat face, the far vertex (in
+/// the world) of the one triangle of the shape that runs the same edge the other way, by brute force over the
+/// mesh (equal positions). None when no triangle or more than one shares the edge, one runs it the same way,
+/// or the far vertex lies off the triangle's plane by more than 1e-4 of the edge's length in the mesh's own
+/// coordinates.
+inline FlatWings referenceFlatWings(const MeshShape& shape, const btTransform& transform, std::uint32_t t) {
+  const TriangleMesh& mesh = shape.mesh();
+  const auto vertex = [&](std::uint32_t triangle, int corner) {
+    const float* p =
+        mesh.positions().data() + 3 * std::size_t(mesh.indices()[3 * std::size_t(triangle) + corner]);
+    return Eigen::Vector3d(p[0], p[1], p[2]);
+  };
+  const Eigen::Vector3d own[3] = {vertex(t, 0), vertex(t, 1), vertex(t, 2)};
+  const Eigen::Vector3d normal = (own[1] - own[0]).cross(own[2] - own[0]).normalized();
+  std::array<std::optional<Eigen::Vector3d>, 3> wings;
+  for (int k = 0; k < 3; ++k) {
+    const Eigen::Vector3d& p = own[k];
+    const Eigen::Vector3d& q = own[(k + 1) % 3];
+    int sharing = 0;
+    bool reversed = false;
+    std::uint32_t farTriangle = 0;
+    int farCorner = 0;
+    for (std::uint32_t j = 0; j < mesh.triangleCount(); ++j) {
+      if (j == t) continue;
+      for (int e = 0; e < 3; ++e) {
+        const Eigen::Vector3d a = vertex(j, e), b = vertex(j, (e + 1) % 3);
+        if ((a == p && b == q) || (a == q && b == p)) {
+          ++sharing;
+          reversed = a == q;
+          farTriangle = j;
+          farCorner = (e + 2) % 3;
+        }
+      }
+    }
+    if (sharing != 1 || !reversed) continue;
+    if (std::abs(normal.dot(vertex(farTriangle, farCorner) - p)) > 1e-4 * (q - p).norm()) continue;
+    wings[k] = worldTriangle(shape, transform, farTriangle)[farCorner];
+  }
+  return wings;
+}
+
 /// What checkQuery counted.
 struct QueryCheck {
   std::size_t clearlyIntersecting = 0;  ///< Brute-force pairs penetrating by more than the band.
@@ -99,10 +142,12 @@ struct QueryCheck {
 
 /// Checks `result` (collideMeshes of the same arguments) against the double brute force: candidates hold
 /// every touching or intersecting pair, intersecting pairs agree outside the relative band `band`, and every
-/// contact agrees with the reference rule: its point on both triangles, its depth and normal those of the
-/// winning move. `absolutePoint` is added to the point tolerance (the float rounding of world coordinates far
-/// from the origin). Tolerances: depth and point `contactTolerance` of the pair's size, normal
-/// `contactTolerance` (unit vectors); pairs whose two moves tie within the tolerance may take either normal.
+/// contact agrees with the reference rule: its normal that of the winning move, its depth between 0 and the
+/// deepest corner of the winner's overlap (referenceClippedMove) and each pair's deepest contact at that
+/// corner's depth, its point on both triangles or a corner of the moving triangle moved halfway out.
+/// `absolutePoint` is added to the point tolerance (the float rounding of world coordinates far from the
+/// origin). Tolerances: depth and point `contactTolerance` of the pair's size, normal `contactTolerance`
+/// (unit vectors); pairs whose two moves tie within the tolerance may take either normal.
 inline QueryCheck checkQuery(const MeshShape& a, const btTransform& ta, const MeshShape& b,
                              const btTransform& tb, const MeshPairResult& result, double band,
                              double contactTolerance, double absolutePoint = 0) {
@@ -120,29 +165,64 @@ inline QueryCheck checkQuery(const MeshShape& a, const btTransform& ta, const Me
   }
   for (const TrianglePair& p : result.intersectingPairs) check.falseIntersecting += nearPairs.count(p) == 0;
 
+  std::map<TrianglePair, double> deepestOfPair;
   for (const MeshContact& c : result.contacts) {
     const TriangleD triA = worldTriangle(a, ta, c.triangleA), triB = worldTriangle(b, tb, c.triangleB);
     const double scale = pairScale(triA, triB);
     const Eigen::Vector3d point(c.pointWorld.x(), c.pointWorld.y(), c.pointWorld.z());
     const Eigen::Vector3d normal(c.normalWorldOnB.x(), c.normalWorldOnB.y(), c.normalWorldOnB.z());
-    check.worstPointDistance = std::max(
-        {check.worstPointDistance, std::max(0.0, pointTriangleDistance(point, triA) - absolutePoint) / scale,
-         std::max(0.0, pointTriangleDistance(point, triB) - absolutePoint) / scale});
     const ReferenceContact ref = referenceContact(triA, triB);
     const double tie = contactTolerance * scale;
     const bool aMayMove = ref.moveA <= ref.moveB + tie, bMayMove = ref.moveB <= ref.moveA + tie;
+    // The winner's contacts are at the corners of the part of it over the other triangle that dip in: the
+    // deepest at the middle of the pair's common segment (on both triangles), the others at their corner
+    // moved halfway out.
+    double pointDistance = std::max(pointTriangleDistance(point, triA), pointTriangleDistance(point, triB));
     double depthError = 1e300, normalError = 1e300;
+    const auto byCorners = [&](const TriangleD& moving, const TriangleD& fixed, const Eigen::Vector3d& out,
+                               const FlatWings& wings) {
+      // No deeper than the overlap's deepest corner, and not above the plane. (A corner where the moving
+      // triangle's edge meets a side at a grazing angle is ill-conditioned: its own depth is not compared.)
+      const double deepest = referenceClippedMove(moving, fixed, out, wings);
+      depthError = std::min(depthError, std::max({0.0, -double(c.depth) - deepest, double(c.depth)}));
+      const Eigen::Vector3d corner = point + out * (0.5 * double(c.depth));
+      pointDistance = std::min(pointDistance, pointTriangleDistance(corner, moving));
+    };
     if (aMayMove) {
-      depthError = std::min(depthError, std::abs(double(c.depth) + ref.moveA));
+      byCorners(triA, triB, ref.nB, referenceFlatWings(b, tb, c.triangleB));
       normalError = std::min(normalError, (normal - ref.nB).norm());
     }
     if (bMayMove) {
-      depthError = std::min(depthError, std::abs(double(c.depth) + ref.moveB));
+      byCorners(triB, triA, ref.nA, referenceFlatWings(a, ta, c.triangleA));
       normalError = std::min(normalError, (normal + ref.nA).norm());
     }
+    check.worstPointDistance =
+        std::max(check.worstPointDistance, std::max(0.0, pointDistance - absolutePoint) / scale);
     check.worstDepthError = std::max(check.worstDepthError, depthError / scale);
     check.worstNormalError = std::max(check.worstNormalError, normalError);
     ++check.contactsChecked;
+    const TrianglePair pair{c.triangleA, c.triangleB};
+    const auto held = deepestOfPair.find(pair);
+    if (held == deepestOfPair.end() || c.depth < held->second) deepestOfPair[pair] = c.depth;
+  }
+  // Each pair's deepest contact at its overlap's deepest corner.
+  for (const auto& [pair, depth] : deepestOfPair) {
+    const TriangleD triA = worldTriangle(a, ta, pair.triangleA), triB = worldTriangle(b, tb, pair.triangleB);
+    const double scale = pairScale(triA, triB);
+    const ReferenceContact ref = referenceContact(triA, triB);
+    const double tie = contactTolerance * scale;
+    double error = 1e300;
+    if (ref.moveA <= ref.moveB + tie) {
+      error =
+          std::min(error, std::abs(depth + referenceClippedMove(triA, triB, ref.nB,
+                                                                referenceFlatWings(b, tb, pair.triangleB))));
+    }
+    if (ref.moveB <= ref.moveA + tie) {
+      error =
+          std::min(error, std::abs(depth + referenceClippedMove(triB, triA, ref.nA,
+                                                                referenceFlatWings(a, ta, pair.triangleA))));
+    }
+    check.worstDepthError = std::max(check.worstDepthError, error / scale);
   }
   return check;
 }

@@ -3,6 +3,7 @@
 #include <BulletCollision/CollisionShapes/btConcaveShape.h>
 #include <LinearMath/btVector3.h>
 
+#include <cstdint>
 #include <memory>
 #include <vector>
 
@@ -59,6 +60,11 @@ ATTRIBUTE_ALIGNED16(class) MeshShape : public btConcaveShape {
   /// concave or flat edge); 36 bytes per triangle.
   const float* edgeWings() const {
     return m_wings.data();
+  }
+  /// Per triangle, bit k set when edge k is a diagonal of a flat face (its wing lies in the triangle's plane,
+  /// within 1e-4 of the edge's length): a contact over the triangle may lie over the triangle across it too.
+  const std::uint8_t* flatDiagonals() const {
+    return m_flatDiagonals.data();
   }
 
   /// The largest ratio between the magnitudes of two local scaling components: beyond it the float transforms
@@ -120,6 +126,7 @@ ATTRIBUTE_ALIGNED16(class) MeshShape : public btConcaveShape {
   std::shared_ptr<const AabbTree> m_tree;
   std::shared_ptr<const float[]> m_soup;
   std::vector<float> m_wings;
+  std::vector<std::uint8_t> m_flatDiagonals;
   btVector3 m_localScaling{1, 1, 1};
 };
 

@@ -39,6 +39,7 @@ MeshShape::MeshShape(std::shared_ptr<const TriangleMesh> mesh, const Config& con
   m_tree = std::make_shared<const AabbTree>(AabbTree::build(*m_mesh, config.trianglesPerLeaf));
   m_soup = buildTriangleSoup(*m_mesh);
   m_wings = buildEdgeWings(*m_mesh);
+  m_flatDiagonals = findFlatDiagonals(*m_mesh, m_wings);
   // Not CUSTOM_CONCAVE_SHAPE_TYPE: Bullet 3 gives that value to SDF_SHAPE_PROXYTYPE too, and its convex-concave
   // algorithm treats every shape of that type as a btSdfCollisionShape (boxes would fall through a mesh).
   // FAST_CONCAVE_MESH_PROXYTYPE is a concave type that nothing in Bullet special-cases, so Bullet's generic

@@ -1,6 +1,9 @@
 #include "mesh/edge_wings.h"
 
+#include <Eigen/Core>
+#include <Eigen/Geometry>
 #include <algorithm>
+#include <cmath>
 #include <cstdint>
 #include <limits>
 
@@ -54,6 +57,30 @@ std::vector<float> buildEdgeWings(const TriangleMesh& mesh) {
     i = j;
   }
   return wings;
+}
+
+std::vector<std::uint8_t> findFlatDiagonals(const TriangleMesh& mesh, const std::vector<float>& wings) {
+  const std::vector<float>& positions = mesh.positions();
+  const std::vector<std::uint32_t>& indices = mesh.indices();
+  const std::size_t triangles = indices.size() / 3;
+  std::vector<std::uint8_t> flat(triangles, 0);
+  for (std::size_t t = 0; t < triangles; ++t) {
+    Eigen::Vector3d v[3];
+    for (int k = 0; k < 3; ++k) {
+      const float* p = positions.data() + 3 * std::size_t(indices[3 * t + k]);
+      v[k] = Eigen::Vector3d(p[0], p[1], p[2]);
+    }
+    const Eigen::Vector3d normal = (v[1] - v[0]).cross(v[2] - v[0]).normalized();
+    for (int k = 0; k < 3; ++k) {
+      const float* w = wings.data() + 9 * t + 3 * k;
+      const Eigen::Vector3d wing(w[0], w[1], w[2]);
+      if (wing.allFinite() && normal.allFinite() &&
+          std::abs(normal.dot(wing - v[k])) <= 1e-4 * (v[(k + 1) % 3] - v[k]).norm()) {
+        flat[t] |= std::uint8_t(1u << k);
+      }
+    }
+  }
+  return flat;
 }
 
 }  // namespace gpucol

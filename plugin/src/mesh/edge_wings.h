@@ -1,5 +1,6 @@
 #pragma once
 
+#include <cstdint>
 #include <vector>
 
 namespace gpucol {
@@ -13,5 +14,10 @@ class TriangleMesh;
 /// vertices of their own are matched too. With its wing an edge knows the angle of the surface around it:
 /// convex, flat or concave.
 std::vector<float> buildEdgeWings(const TriangleMesh& mesh);
+
+/// Per triangle, bit k set when edge k is a diagonal of a flat face: its wing (`wings`, buildEdgeWings) lies
+/// in the triangle's plane within 1e-4 of the edge's length. Decided in the mesh's own coordinates, in
+/// double: a scaling keeps a flat face flat.
+std::vector<std::uint8_t> findFlatDiagonals(const TriangleMesh& mesh, const std::vector<float>& wings);
 
 }  // namespace gpucol

@@ -241,6 +241,39 @@ EdgeWings pairFrameWings(const MeshShape& shape, std::uint32_t triangle, bool is
   return out;
 }
 
+// The wings (pairFrameWings) of a triangle's edges that are diagonals of a flat face
+// (MeshShape::flatDiagonals), NaN at the others.
+EdgeWings flatDiagonalWings(const MeshShape& shape, std::uint32_t triangle, bool isA,
+                            const PairFrame& frame) {
+  const std::uint8_t flat = shape.flatDiagonals()[triangle];
+  EdgeWings out;
+  for (Eigen::Vector3f& wing : out.across) wing.setConstant(std::numeric_limits<float>::quiet_NaN());
+  if (flat == 0) return out;
+  const float* w = shape.edgeWings() + 9 * std::size_t(triangle);
+  const bool flip = isA ? frame.flipA : frame.flipB;
+  for (int i = 0; i < 3; ++i) {
+    const int k = flip ? 2 - i : i;
+    if (!(flat & (1u << k))) continue;
+    const Eigen::Vector3f p(w[3 * k], w[3 * k + 1], w[3 * k + 2]);
+    out.across[i] = isA ? Eigen::Vector3f(p.cwiseProduct(frame.scaleA))
+                        : Eigen::Vector3f(frame.bLinear * p + frame.bTranslation);
+  }
+  return out;
+}
+
+// clipContactToOverlap of a candidate's contact (a and b: its triangles in the pair's frame); returns how
+// many contacts at the overlap's other corners it wrote to `corners`.
+int clipToOverlap(const MeshShape& shapeA, const MeshShape& shapeB, const PairFrame& frame,
+                  const TrianglePair& pair, const Eigen::Vector3f (&a)[3], const Eigen::Vector3f (&b)[3],
+                  TriangleContact& contact, TriangleContact (&corners)[kMaxOverlapCorners]) {
+  if (!(contact.depth < 0)) return 0;
+  EdgeWings none;
+  for (Eigen::Vector3f& wing : none.across) wing.setConstant(std::numeric_limits<float>::quiet_NaN());
+  return clipContactToOverlap(
+      a, b, contact.onFaceOfB ? none : flatDiagonalWings(shapeA, pair.triangleA, true, frame),
+      contact.onFaceOfB ? flatDiagonalWings(shapeB, pair.triangleB, false, frame) : none, contact, corners);
+}
+
 // B's faces and edge wings of one chunk's proximity tests, by B's triangle, in a small direct-mapped cache:
 // after the first run of candidates sharing A's triangle, the next runs meet mostly the same triangles of B.
 class RecentFacesB {
@@ -384,16 +417,26 @@ GPUCOL_AVX2_CLONES void runNearChunk(const MeshShape& shapeA, const MeshShape& s
         contact.onFaceOfB = (outcome[t] & detail::kRowOnFaceOfB) != 0;
         contact.sameFacing = (outcome[t] & detail::kRowSameFacing) != 0;
         contact.deepestPoint = Eigen::Vector3f(c[7 * n + t], c[8 * n + t], c[9 * n + t]);
+        Eigen::Vector3f a[3], b[3];
+        triangles.load(t, a, b);
+        TriangleContact corners[kMaxOverlapCorners];
+        const int more = clipToOverlap(shapeA, shapeB, frame, candidates[begin + j], a, b, contact, corners);
         hits.push_back({begin + j, true, contact});
+        for (int k = 0; k < more; ++k) hits.push_back({begin + j, true, corners[k]});
         break;
       }
       default: {
         Eigen::Vector3f a[3], b[3];
         triangles.load(t, a, b);
         bool intersects = false;
-        const std::optional<TriangleContact> contact = detail::generateContactAndTest(a, b, intersects);
+        std::optional<TriangleContact> contact = detail::generateContactAndTest(a, b, intersects);
+        TriangleContact corners[kMaxOverlapCorners];
+        const int more =
+            contact ? clipToOverlap(shapeA, shapeB, frame, candidates[begin + j], a, b, *contact, corners)
+                    : 0;
         if (intersects)
           hits.push_back({begin + j, contact.has_value(), contact ? *contact : TriangleContact{}});
+        for (int k = 0; k < more; ++k) hits.push_back({begin + j, true, corners[k]});
       }
     }
   }
@@ -497,9 +540,11 @@ void assembleResult(const std::vector<Hit>& hits, const std::vector<NearbyHit>& 
   // Same-facing contacts count only when the pair has no other (TriangleContact::sameFacing).
   const bool anyFacingEachOther = std::any_of(
       hits.begin(), hits.end(), [](const Hit& hit) { return hit.hasContact && !hit.contact.sameFacing; });
-  for (const Hit& hit : hits) {
+  for (std::size_t h = 0; h < hits.size(); ++h) {
+    const Hit& hit = hits[h];
     const TrianglePair& pair = result.candidatePairs[hit.candidate];
-    result.intersectingPairs.push_back(pair);
+    // A pair's contacts at the other corners of its overlap follow its first hit.
+    if (h == 0 || hits[h - 1].candidate != hit.candidate) result.intersectingPairs.push_back(pair);
     if (!hit.hasContact || (anyFacingEachOther && hit.contact.sameFacing)) continue;
     result.contacts.push_back(toWorld(pair, hit.contact, frame.worldFromA));
     localContacts.push_back({hit.contact.point, hit.contact.normalOnB, hit.contact.depth});
@@ -520,11 +565,47 @@ void assembleResult(const std::vector<Hit>& hits, const std::vector<NearbyHit>& 
 
 }  // namespace
 
-// The device's hits, and the proximity contacts of the candidates that do not cross (found here, on the CPU),
-// as the CPU path's own.
+namespace {
+
+// The triangles of one candidate in A's scaled frame, bit for bit as fetchChunkRows puts them in its rows.
+void loadPairTriangles(const MeshShape& shapeA, const MeshShape& shapeB, const PairFrame& frame,
+                       const TrianglePair& pair, Eigen::Vector3f (&a)[3], Eigen::Vector3f (&b)[3]) {
+  const float* pa = shapeA.triangleSoup() + 9 * std::size_t(pair.triangleA);
+  const float* pb = shapeB.triangleSoup() + 9 * std::size_t(pair.triangleB);
+  const int rowA[3] = {0, frame.flipA ? 2 : 1, frame.flipA ? 1 : 2};
+  const int rowB[3] = {0, frame.flipB ? 2 : 1, frame.flipB ? 1 : 2};
+  const Eigen::Matrix3f& m = frame.bLinear;
+  const Eigen::Vector3f& t = frame.bTranslation;
+  for (int v = 0; v < 3; ++v) {
+    for (int c = 0; c < 3; ++c) a[rowA[v]][c] = pa[3 * v + c] * frame.scaleA[c];
+    const float x = pb[3 * v], y = pb[3 * v + 1], z = pb[3 * v + 2];
+    for (int r = 0; r < 3; ++r) b[rowB[v]][r] = gpucol_carry_point(m(r, 0), m(r, 1), m(r, 2), x, y, z, t[r]);
+  }
+}
+
+}  // namespace
+
+// The device's hits, their contacts clipped to the triangles' overlap as the CPU's are (runNearChunk), and
+// the proximity contacts of the candidates that do not cross (found here, on the CPU), as the CPU path's own.
 template <class Hit>
-void collectHits(const std::vector<Hit>& hits, const MeshShape& shapeA, const MeshShape& shapeB,
+void collectHits(const std::vector<Hit>& deviceHits, const MeshShape& shapeA, const MeshShape& shapeB,
                  const PairFrame& frame, const Config& config, MeshPairResult& result) {
+  std::vector<Hit> hits;
+  hits.reserve(deviceHits.size());
+  for (const Hit& deviceHit : deviceHits) {
+    hits.push_back(deviceHit);
+    if (!deviceHit.hasContact) continue;
+    Eigen::Vector3f a[3], b[3];
+    const TrianglePair& pair = result.candidatePairs[deviceHit.candidate];
+    loadPairTriangles(shapeA, shapeB, frame, pair, a, b);
+    TriangleContact corners[kMaxOverlapCorners];
+    const int more = clipToOverlap(shapeA, shapeB, frame, pair, a, b, hits.back().contact, corners);
+    for (int k = 0; k < more; ++k) {
+      Hit corner = deviceHit;
+      corner.contact = corners[k];
+      hits.push_back(corner);
+    }
+  }
   std::vector<NearbyHit> nearby;
   if (frame.reach > 0) {
     std::vector<std::uint8_t> crossing(result.candidatePairs.size(), 0);

@@ -1,6 +1,10 @@
 #include "narrowphase/triangle_contact.h"
 
+#include <algorithm>
+#include <cmath>
+
 #include "narrowphase/triangle_plane.h"
+#include "narrowphase/triangle_proximity.h"
 #include "shared_math/triangle_test.h"
 
 namespace gpucol {
@@ -8,6 +12,105 @@ namespace gpucol {
 std::optional<TriangleContact> generateContact(const Eigen::Vector3f (&a)[3], const Eigen::Vector3f (&b)[3]) {
   bool intersects = false;
   return detail::generateContactAndTest(a, b, intersects);
+}
+
+int clipContactToOverlap(const Eigen::Vector3f (&a)[3], const Eigen::Vector3f (&b)[3],
+                         const EdgeWings& flatWingsA, const EdgeWings& flatWingsB, TriangleContact& contact,
+                         TriangleContact (&corners)[kMaxOverlapCorners]) {
+  if (!(contact.depth < 0)) return 0;
+  const EdgeWings& fixedWings = contact.onFaceOfB ? flatWingsB : flatWingsA;
+  // The moving triangle leaves the fixed one's plane along `out`: B's normal when A moves, A's when B does.
+  // Everything relative to the fixed triangle's first vertex, in double.
+  const Eigen::Vector3f(&moving)[3] = contact.onFaceOfB ? a : b;
+  const Eigen::Vector3f(&fixed)[3] = contact.onFaceOfB ? b : a;
+  const Eigen::Vector3d out =
+      (contact.onFaceOfB ? contact.normalOnB : Eigen::Vector3f(-contact.normalOnB)).cast<double>();
+  const Eigen::Vector3d origin = fixed[0].cast<double>();
+  const Eigen::Vector3d f[3] = {Eigen::Vector3d::Zero(), fixed[1].cast<double>() - origin,
+                                fixed[2].cast<double>() - origin};
+  // The region over the fixed face: the prism of the fixed triangle along `out`, each side a plane through an
+  // edge that contains `out`, turned towards the triangle. At a flat diagonal (a wing given) the face goes
+  // on: the two far sides of the triangle across it stand for that edge, so that the two triangles of a flat
+  // quad share one region. Each side is moved out by 1e-5 of the triangle's size: a moving face that lies in
+  // it (the sides of two boxes stacked flush) is kept whole rather than cut by rounding. A side keeps p where
+  // side.dot(p) >= limit.
+  const double size =
+      std::sqrt(std::max({f[1].squaredNorm(), (f[2] - f[1]).squaredNorm(), f[2].squaredNorm()}));
+  Eigen::Vector3d sides[6];
+  double limits[6];
+  int planes = 0;
+  const auto addSide = [&](const Eigen::Vector3d& from, const Eigen::Vector3d& to,
+                           const Eigen::Vector3d& inner) {
+    Eigen::Vector3d side = out.cross(to - from);
+    if (side.dot(inner - from) < 0) side = -side;
+    sides[planes] = side;
+    limits[planes++] = side.dot(from) - 1e-5 * size * side.norm();
+  };
+  for (int k = 0; k < 3; ++k) {
+    const Eigen::Vector3d& from = f[k];
+    const Eigen::Vector3d& to = f[(k + 1) % 3];
+    const Eigen::Vector3f& wing = fixedWings.across[k];
+    if (wing.allFinite()) {
+      const Eigen::Vector3d w = wing.cast<double>() - origin;
+      addSide(from, w, to);
+      addSide(w, to, from);
+    } else {
+      addSide(from, to, f[(k + 2) % 3]);
+    }
+  }
+  // Sutherland-Hodgman against each side.
+  Eigen::Vector3d polygon[kMaxOverlapCorners + 1], clipped[kMaxOverlapCorners + 1];
+  int count = 3;
+  for (int k = 0; k < 3; ++k) polygon[k] = moving[k].cast<double>() - origin;
+  for (int k = 0; k < planes && count > 0; ++k) {
+    double distance[kMaxOverlapCorners + 1];
+    bool allInside = true;
+    for (int i = 0; i < count; ++i) {
+      distance[i] = sides[k].dot(polygon[i]) - limits[k];
+      allInside &= distance[i] >= 0;
+    }
+    if (allInside) continue;
+    int kept = 0;
+    for (int i = 0; i < count; ++i) {
+      const int j = i + 1 == count ? 0 : i + 1;
+      const double dp = distance[i], dq = distance[j];
+      if (dp >= 0) clipped[kept++] = polygon[i];
+      if ((dp >= 0) != (dq >= 0)) clipped[kept++] = polygon[i] + (polygon[j] - polygon[i]) * (dp / (dp - dq));
+    }
+    count = kept;
+    for (int i = 0; i < count; ++i) polygon[i] = clipped[i];
+  }
+  // An empty polygon is rounding at a grazing pair (the triangles cross, so their common segment is over
+  // the fixed triangle): the contact stays as it was.
+  if (count == 0) return 0;
+  double deepest = 0;
+  int at = -1;
+  for (int i = 0; i < count; ++i) {
+    const double below = -out.dot(polygon[i]);
+    if (below > deepest) {
+      deepest = below;
+      at = i;
+    }
+  }
+  if (at < 0) {
+    contact.depth = 0;
+    contact.deepestPoint = contact.point;
+    return 0;
+  }
+  // The other corners below the plane, each with its own depth, at the corner moved halfway out.
+  int more = 0;
+  for (int i = 0; i < count; ++i) {
+    const double below = -out.dot(polygon[i]);
+    if (i == at || !(below > 0)) continue;
+    TriangleContact& corner = corners[more++];
+    corner = contact;
+    corner.depth = -static_cast<float>(below);
+    corner.deepestPoint = (polygon[i] + origin).cast<float>();
+    corner.point = (polygon[i] + origin + out * (0.5 * below)).cast<float>();
+  }
+  contact.depth = -static_cast<float>(deepest);
+  contact.deepestPoint = (polygon[at] + origin).cast<float>();
+  return more;
 }
 
 namespace detail {

@@ -5,6 +5,8 @@
 
 namespace gpucol {
 
+struct EdgeWings;
+
 /// One contact between triangle A and triangle B, in Bullet's conventions and the frame of the inputs.
 struct TriangleContact {
   /// A point shared by both triangles: the midpoint of their common segment on the planes' intersection
@@ -52,5 +54,26 @@ struct TriangleContact {
 /// face-on-face contact), at the mean of the corners of the overlap polygon; coplanar triangles facing the
 /// same way (flush faces side by side) give no contact.
 std::optional<TriangleContact> generateContact(const Eigen::Vector3f (&a)[3], const Eigen::Vector3f (&b)[3]);
+
+/// The most corners an overlap has besides its deepest: a triangle clipped by up to six sides has at most
+/// nine.
+inline constexpr int kMaxOverlapCorners = 8;
+
+/// Takes `contact` (generateContact's answer for triangles a and b) over the part of the moving triangle that
+/// lies over the other one, its overlap: the moving triangle clipped to the prism the other spans along the
+/// contact's normal. The overlap's corner deepest below the other's plane becomes deepestPoint, its depth the
+/// contact's; each other corner below the plane gives a contact of its own in `corners` (returns how many),
+/// with the same normal, its own depth, and `point` that corner moved halfway out. A long triangle crossing a
+/// small one (the faces of two crossed rods) thus gives contacts where the two overlap and as deep as they
+/// overlap there, not at its far vertex, which can lie beyond the other body, and a face resting on a face
+/// is held at every corner of their overlap that dips in (thesis §5.3.4 keeps the deepest vertex alone).
+/// Where `flatWingsA` or `flatWingsB` gives the far vertex across an edge of the other triangle (NaN
+/// elsewhere), that edge is a diagonal of a flat face, not the face's end: the two far edges of the triangle
+/// across it bound the overlap instead. Each side is moved out by 1e-5 of the other triangle's size, so that
+/// a face lying in it (the sides of two boxes stacked flush) is not cut by rounding. A contact that is not
+/// below 0 is left as it is.
+int clipContactToOverlap(const Eigen::Vector3f (&a)[3], const Eigen::Vector3f (&b)[3],
+                         const EdgeWings& flatWingsA, const EdgeWings& flatWingsB, TriangleContact& contact,
+                         TriangleContact (&corners)[kMaxOverlapCorners]);
 
 }  // namespace gpucol
