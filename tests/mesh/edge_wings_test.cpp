@@ -1,9 +1,11 @@
-// buildEdgeWings: for each triangle edge, the far vertex of the one triangle across it, matched by position.
+// buildEdgeWings: for each triangle edge, the far vertex of the one triangle across it, matched by position;
+// findFlatDiagonals: which of those edges are diagonals of a flat face.
 #include "mesh/edge_wings.h"
 
 #include <gtest/gtest.h>
 
 #include <cmath>
+#include <cstdint>
 #include <vector>
 
 #include "gpucol/triangle_mesh.h"
@@ -70,6 +72,34 @@ TEST(EdgeWings, NoWingAcrossDisagreeingOrNonManifoldEdges) {
   EXPECT_FALSE(known(wings, 0, 1));
   EXPECT_FALSE(known(wings, 1, 0));
   EXPECT_FALSE(known(wings, 2, 0));
+}
+
+// findFlatDiagonals: a box of one quad per face has one flat diagonal per triangle, a box of 3 x 3 quads per
+// face also flat edges between its quads; a tessellated sphere, none; a quad bent by 1e-3 of its size is not
+// flat, one bent by 1e-6 is.
+TEST(EdgeWings, FlatDiagonalsOfBoxesButNotOfBentFaces) {
+  for (int detail : {1, 3}) {
+    const TriangleMesh box = scenes::makeBox(1, 2, 3, detail);
+    const std::vector<std::uint8_t> flat = findFlatDiagonals(box, buildEdgeWings(box));
+    ASSERT_EQ(flat.size(), box.triangleCount());
+    std::size_t flatEdges = 0;
+    for (std::uint8_t bits : flat) flatEdges += (bits & 1) + ((bits >> 1) & 1) + ((bits >> 2) & 1);
+    // A face of d x d quads, each split by a diagonal, has 3 d^2 + 2 d edges, 4 d of them on its rim; the
+    // others are flat and counted from both sides.
+    const std::size_t d = std::size_t(detail);
+    EXPECT_EQ(flatEdges, 6 * 2 * (3 * d * d - 2 * d)) << "detail " << detail;
+  }
+  const TriangleMesh sphere = scenes::makeIcosphere(1, 2);
+  for (std::uint8_t bits : findFlatDiagonals(sphere, buildEdgeWings(sphere))) EXPECT_EQ(bits, 0);
+  for (float bend : {1e-3f, 1e-6f}) {
+    // Two triangles of a unit square, the far corner of the second lifted by `bend`.
+    const TriangleMesh quad =
+        TriangleMesh::fromArrays({0, 0, 0, 1, 0, 0, 1, 1, 0, 0, 1, bend}, {0, 1, 2, 0, 2, 3}, "quad");
+    const std::vector<std::uint8_t> flat = findFlatDiagonals(quad, buildEdgeWings(quad));
+    // The shared edge is edge 2 of the first triangle (2 -> 0) and edge 0 of the second (0 -> 2).
+    EXPECT_EQ(flat[0], bend < 1e-4f ? 4 : 0) << bend;
+    EXPECT_EQ(flat[1], bend < 1e-4f ? 1 : 0) << bend;
+  }
 }
 
 }  // namespace
