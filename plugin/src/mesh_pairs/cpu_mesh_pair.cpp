@@ -274,6 +274,19 @@ int clipToOverlap(const MeshShape& shapeA, const MeshShape& shapeB, const PairFr
       contact.onFaceOfB ? flatDiagonalWings(shapeB, pair.triangleB, false, frame) : none, contact, corners);
 }
 
+// The hits of a candidate whose triangles a and b give `contact`: the contact clipped to their overlap
+// (clipToOverlap), then the overlap's other corners. Out of line: inlined, its code made the near phase's
+// vector loops over the chunk slower.
+[[gnu::noinline]] void pushOverlapHits(const MeshShape& shapeA, const MeshShape& shapeB, const PairFrame& frame,
+                                       const std::vector<TrianglePair>& candidates, std::size_t candidate,
+                                       const Eigen::Vector3f (&a)[3], const Eigen::Vector3f (&b)[3],
+                                       TriangleContact contact, std::vector<NearHit>& hits) {
+  TriangleContact corners[kMaxOverlapCorners];
+  const int more = clipToOverlap(shapeA, shapeB, frame, candidates[candidate], a, b, contact, corners);
+  hits.push_back({candidate, true, contact});
+  for (int k = 0; k < more; ++k) hits.push_back({candidate, true, corners[k]});
+}
+
 // B's faces and edge wings of one chunk's proximity tests, by B's triangle, in a small direct-mapped cache:
 // after the first run of candidates sharing A's triangle, the next runs meet mostly the same triangles of B.
 class RecentFacesB {
@@ -419,24 +432,19 @@ GPUCOL_AVX2_CLONES void runNearChunk(const MeshShape& shapeA, const MeshShape& s
         contact.deepestPoint = Eigen::Vector3f(c[7 * n + t], c[8 * n + t], c[9 * n + t]);
         Eigen::Vector3f a[3], b[3];
         triangles.load(t, a, b);
-        TriangleContact corners[kMaxOverlapCorners];
-        const int more = clipToOverlap(shapeA, shapeB, frame, candidates[begin + j], a, b, contact, corners);
-        hits.push_back({begin + j, true, contact});
-        for (int k = 0; k < more; ++k) hits.push_back({begin + j, true, corners[k]});
+        pushOverlapHits(shapeA, shapeB, frame, candidates, begin + j, a, b, contact, hits);
         break;
       }
       default: {
         Eigen::Vector3f a[3], b[3];
         triangles.load(t, a, b);
         bool intersects = false;
-        std::optional<TriangleContact> contact = detail::generateContactAndTest(a, b, intersects);
-        TriangleContact corners[kMaxOverlapCorners];
-        const int more =
-            contact ? clipToOverlap(shapeA, shapeB, frame, candidates[begin + j], a, b, *contact, corners)
-                    : 0;
-        if (intersects)
-          hits.push_back({begin + j, contact.has_value(), contact ? *contact : TriangleContact{}});
-        for (int k = 0; k < more; ++k) hits.push_back({begin + j, true, corners[k]});
+        const std::optional<TriangleContact> contact = detail::generateContactAndTest(a, b, intersects);
+        if (contact) {
+          pushOverlapHits(shapeA, shapeB, frame, candidates, begin + j, a, b, *contact, hits);
+        } else if (intersects) {
+          hits.push_back({begin + j, false, TriangleContact{}});
+        }
       }
     }
   }
