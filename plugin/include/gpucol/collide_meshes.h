@@ -29,10 +29,14 @@ struct TrianglePair {
 struct MeshContact {
   std::uint32_t triangleA = 0;  ///< Triangle of mesh A that generated the contact.
   std::uint32_t triangleB = 0;  ///< Triangle of mesh B that generated the contact.
-  btVector3 pointWorld;         ///< A point shared by both triangles, in world space.
-  /// Bullet's point on B. The triangle pushed out of the other's face contributes its deepest vertex: when it is
-  /// B's, that vertex is this point; when it is A's, this point is that vertex moved out along the normal by the
-  /// depth (onto B's face plane). Bullet's point on A is pointOnBWorld + normalWorldOnB * depth.
+  /// In world space: a point shared by both triangles (the middle of their common segment) for a pair's
+  /// deepest contact; for a contact at another corner of their overlap (a pair gives one per corner that dips
+  /// in, after its deepest), that corner moved halfway out.
+  btVector3 pointWorld;
+  /// Bullet's point on B. The triangle pushed out of the other's face contributes a corner of the part of it
+  /// that lies over the other triangle: when it is B's, that corner is this point; when it is A's, this point
+  /// is that corner moved out along the normal by the depth (onto B's face plane). Bullet's point on A is
+  /// pointOnBWorld + normalWorldOnB * depth.
   btVector3 pointOnBWorld;
   btVector3 normalWorldOnB;     ///< Unit normal on B pointing towards A, in world space.
   btScalar depth = 0;           ///< Signed distance along the normal: negative when penetrating.

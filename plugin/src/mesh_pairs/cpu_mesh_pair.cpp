@@ -241,6 +241,22 @@ EdgeWings pairFrameWings(const MeshShape& shape, std::uint32_t triangle, bool is
   return out;
 }
 
+// The triangles of one candidate in A's scaled frame, bit for bit as fetchChunkRows puts them in its rows.
+void loadPairTriangles(const MeshShape& shapeA, const MeshShape& shapeB, const PairFrame& frame,
+                       const TrianglePair& pair, Eigen::Vector3f (&a)[3], Eigen::Vector3f (&b)[3]) {
+  const float* pa = shapeA.triangleSoup() + 9 * std::size_t(pair.triangleA);
+  const float* pb = shapeB.triangleSoup() + 9 * std::size_t(pair.triangleB);
+  const int rowA[3] = {0, frame.flipA ? 2 : 1, frame.flipA ? 1 : 2};
+  const int rowB[3] = {0, frame.flipB ? 2 : 1, frame.flipB ? 1 : 2};
+  const Eigen::Matrix3f& m = frame.bLinear;
+  const Eigen::Vector3f& t = frame.bTranslation;
+  for (int v = 0; v < 3; ++v) {
+    for (int c = 0; c < 3; ++c) a[rowA[v]][c] = pa[3 * v + c] * frame.scaleA[c];
+    const float x = pb[3 * v], y = pb[3 * v + 1], z = pb[3 * v + 2];
+    for (int r = 0; r < 3; ++r) b[rowB[v]][r] = gpucol_carry_point(m(r, 0), m(r, 1), m(r, 2), x, y, z, t[r]);
+  }
+}
+
 // The wings (pairFrameWings) of a triangle's edges that are diagonals of a flat face
 // (MeshShape::flatDiagonals), NaN at the others.
 EdgeWings flatDiagonalWings(const MeshShape& shape, std::uint32_t triangle, bool isA,
@@ -569,26 +585,6 @@ void assembleResult(const std::vector<Hit>& hits, const std::vector<NearbyHit>& 
     result.reducedContacts.push_back(result.contacts[kept]);
   }
   result.stats.reductionMs = millisecondsSince(start);
-}
-
-}  // namespace
-
-namespace {
-
-// The triangles of one candidate in A's scaled frame, bit for bit as fetchChunkRows puts them in its rows.
-void loadPairTriangles(const MeshShape& shapeA, const MeshShape& shapeB, const PairFrame& frame,
-                       const TrianglePair& pair, Eigen::Vector3f (&a)[3], Eigen::Vector3f (&b)[3]) {
-  const float* pa = shapeA.triangleSoup() + 9 * std::size_t(pair.triangleA);
-  const float* pb = shapeB.triangleSoup() + 9 * std::size_t(pair.triangleB);
-  const int rowA[3] = {0, frame.flipA ? 2 : 1, frame.flipA ? 1 : 2};
-  const int rowB[3] = {0, frame.flipB ? 2 : 1, frame.flipB ? 1 : 2};
-  const Eigen::Matrix3f& m = frame.bLinear;
-  const Eigen::Vector3f& t = frame.bTranslation;
-  for (int v = 0; v < 3; ++v) {
-    for (int c = 0; c < 3; ++c) a[rowA[v]][c] = pa[3 * v + c] * frame.scaleA[c];
-    const float x = pb[3 * v], y = pb[3 * v + 1], z = pb[3 * v + 2];
-    for (int r = 0; r < 3; ++r) b[rowB[v]][r] = gpucol_carry_point(m(r, 0), m(r, 1), m(r, 2), x, y, z, t[r]);
-  }
 }
 
 }  // namespace

@@ -10,7 +10,8 @@ struct EdgeWings;
 /// One contact between triangle A and triangle B, in Bullet's conventions and the frame of the inputs.
 struct TriangleContact {
   /// A point shared by both triangles: the midpoint of their common segment on the planes' intersection
-  /// line (coplanar pairs: the mean of the corners of their overlap polygon).
+  /// line (coplanar pairs: the mean of the corners of their overlap polygon). A contact at another corner of
+  /// the overlap (clipContactToOverlap): that corner moved halfway out.
   Eigen::Vector3f point;
   /// Unit normal on B pointing towards A: moving A along it by -depth separates the pair.
   Eigen::Vector3f normalOnB;
