@@ -5,9 +5,9 @@
 // overlap of two of its bodies (measured on their solids' convex pieces, as for the reference:
 // scenes/body_overlap.h) within 1.5 times the reference's (the issue asks for no deeper; docs/limits.md says
 // where that is not met); after the reference's kinetic energy first fell below 1% of its peak, its bodies
-// overlap no deeper than the reference's by more than 5% of the smallest body's size, and (the pile only:
-// the stack's and the thin pile's are not met, docs/measured-results.md) the mesh pile's kinetic energy never
-// exceeds 5% of that peak.
+// overlap no deeper than the reference's by more than 5% of the smallest body's size, and (the pile and the
+// stack: the thin pile's is not met, docs/measured-results.md) the mesh pile's kinetic energy never exceeds 5%
+// of that peak.
 #include <gtest/gtest.h>
 
 #include <algorithm>
@@ -142,8 +142,10 @@ TEST(PileReference, SmallThinPileSettlesLikeConvexShapes) {
   expectLikeTheReference(piles, "thin pile of 16", false);
 }
 
+// Its bursts are held since a crossing pair's contacts lie at every corner of the triangles' overlap that dips
+// in (2.7% of the peak here; over 20 shifted stacks of gpucol-bench piles, 3.1% in the median, 5.6% at most).
 TEST(PileReference, StackOfTenSettlesLikeConvexBoxes) {
-  expectLikeTheReference({scenes::makeStackScene(10, 0.01f)}, "stack of 10, 1 cm gaps", false);
+  expectLikeTheReference({scenes::makeStackScene(10, 0.01f)}, "stack of 10, 1 cm gaps", true);
 }
 
 }  // namespace
