@@ -101,7 +101,7 @@ inline FlatWings referenceFlatWings(const MeshShape& shape, const btTransform& t
   };
   const Eigen::Vector3d own[3] = {vertex(t, 0), vertex(t, 1), vertex(t, 2)};
   const Eigen::Vector3d normal = (own[1] - own[0]).cross(own[2] - own[0]).normalized();
-  std::array<std::optional<Eigen::Vector3d>, 3> wings;
+  FlatWings wings;
   for (int k = 0; k < 3; ++k) {
     const Eigen::Vector3d& p = own[k];
     const Eigen::Vector3d& q = own[(k + 1) % 3];
