@@ -162,7 +162,7 @@ TEST(TriangleContact, CrossedRodFacesMeetWhereTheyOverlap) {
   EXPECT_NEAR(c->deepestPoint.x(), 0.4f, 1e-6f);
   TriangleContact clipped = *c;
   TriangleContact corners[kMaxOverlapCorners];
-  const int more = clipContactToOverlap(top, bottom, noWings(), noWings(), clipped, corners);
+  const int more = clipContactToOverlap(top, bottom, noWings(), clipped, corners);
   EXPECT_EQ(clipped.normalOnB, c->normalOnB);
   EXPECT_EQ(clipped.point, c->point);
   // Every corner of the overlap that dips in is held, over B.
@@ -214,7 +214,7 @@ TEST(TriangleContact, ClippedToOverlapMatchesTheDoubleReference) {
     }
     TriangleContact clipped = *c;
     TriangleContact corners[kMaxOverlapCorners];
-    const int more = clipContactToOverlap(pa, pb, wingsA, wingsB, clipped, corners);
+    const int more = clipContactToOverlap(pa, pb, c->onFaceOfB ? wingsB : wingsA, clipped, corners);
     const TriangleD& moving = c->onFaceOfB ? da : db;
     const TriangleD& fixed = c->onFaceOfB ? db : da;
     const Eigen::Vector3d out = (c->onFaceOfB ? c->normalOnB : Eigen::Vector3f(-c->normalOnB)).cast<double>();

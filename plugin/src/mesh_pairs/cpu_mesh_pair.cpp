@@ -225,19 +225,22 @@ std::size_t keepProximityCandidates(const float* rows, std::size_t count, float 
   return left;
 }
 
-// The edge wings (MeshShape::edgeWings) of a triangle whose vertices went into the rows as fetchChunkRows
-// puts them, in the pair's frame: A's scaled, B's carried into A's. A mirroring scale swaps vertices 1 and 2,
-// so the rows' edge i is the mesh's edge 2 - i.
+// Wing i (MeshShape::edgeWings) of a triangle whose vertices went into the rows as fetchChunkRows puts them,
+// in the pair's frame: A's scaled, B's carried into A's. A mirroring scale swaps vertices 1 and 2, so the
+// rows' edge i is the mesh's edge 2 - i.
+Eigen::Vector3f pairFrameWing(const MeshShape& shape, std::uint32_t triangle, bool isA,
+                              const PairFrame& frame, int i) {
+  const int k = (isA ? frame.flipA : frame.flipB) ? 2 - i : i;
+  const float* w = shape.edgeWings() + 9 * std::size_t(triangle) + 3 * k;
+  const Eigen::Vector3f p(w[0], w[1], w[2]);
+  return isA ? Eigen::Vector3f(p.cwiseProduct(frame.scaleA))
+             : Eigen::Vector3f(frame.bLinear * p + frame.bTranslation);
+}
+
+// The three wings of a triangle in the pair's frame (pairFrameWing).
 EdgeWings pairFrameWings(const MeshShape& shape, std::uint32_t triangle, bool isA, const PairFrame& frame) {
-  const float* w = shape.edgeWings() + 9 * std::size_t(triangle);
-  const bool flip = isA ? frame.flipA : frame.flipB;
   EdgeWings out;
-  for (int i = 0; i < 3; ++i) {
-    const int k = flip ? 2 - i : i;
-    const Eigen::Vector3f p(w[3 * k], w[3 * k + 1], w[3 * k + 2]);
-    out.across[i] = isA ? Eigen::Vector3f(p.cwiseProduct(frame.scaleA))
-                        : Eigen::Vector3f(frame.bLinear * p + frame.bTranslation);
-  }
+  for (int i = 0; i < 3; ++i) out.across[i] = pairFrameWing(shape, triangle, isA, frame, i);
   return out;
 }
 
@@ -257,37 +260,31 @@ void loadPairTriangles(const MeshShape& shapeA, const MeshShape& shapeB, const P
   }
 }
 
-// The wings (pairFrameWings) of a triangle's edges that are diagonals of a flat face
+// The wings (pairFrameWing) of a triangle's edges that are diagonals of a flat face
 // (MeshShape::flatDiagonals), NaN at the others.
 EdgeWings flatDiagonalWings(const MeshShape& shape, std::uint32_t triangle, bool isA,
                             const PairFrame& frame) {
   const std::uint8_t flat = shape.flatDiagonals()[triangle];
-  EdgeWings out;
-  for (Eigen::Vector3f& wing : out.across) wing.setConstant(std::numeric_limits<float>::quiet_NaN());
-  if (flat == 0) return out;
-  const float* w = shape.edgeWings() + 9 * std::size_t(triangle);
   const bool flip = isA ? frame.flipA : frame.flipB;
+  EdgeWings out;
   for (int i = 0; i < 3; ++i) {
-    const int k = flip ? 2 - i : i;
-    if (!(flat & (1u << k))) continue;
-    const Eigen::Vector3f p(w[3 * k], w[3 * k + 1], w[3 * k + 2]);
-    out.across[i] = isA ? Eigen::Vector3f(p.cwiseProduct(frame.scaleA))
-                        : Eigen::Vector3f(frame.bLinear * p + frame.bTranslation);
+    const bool flatEdge = flat & (1u << (flip ? 2 - i : i));
+    out.across[i] = flatEdge ? pairFrameWing(shape, triangle, isA, frame, i)
+                             : Eigen::Vector3f::Constant(std::numeric_limits<float>::quiet_NaN());
   }
   return out;
 }
 
-// clipContactToOverlap of a candidate's contact (a and b: its triangles in the pair's frame); returns how
-// many contacts at the overlap's other corners it wrote to `corners`.
+// clipContactToOverlap of a candidate's contact (a and b: its triangles in the pair's frame), over the flat
+// diagonals of the triangle its moving triangle leaves (B's when A moves); returns how many contacts at the
+// overlap's other corners it wrote to `corners`.
 int clipToOverlap(const MeshShape& shapeA, const MeshShape& shapeB, const PairFrame& frame,
                   const TrianglePair& pair, const Eigen::Vector3f (&a)[3], const Eigen::Vector3f (&b)[3],
                   TriangleContact& contact, TriangleContact (&corners)[kMaxOverlapCorners]) {
   if (!(contact.depth < 0)) return 0;
-  EdgeWings none;
-  for (Eigen::Vector3f& wing : none.across) wing.setConstant(std::numeric_limits<float>::quiet_NaN());
-  return clipContactToOverlap(
-      a, b, contact.onFaceOfB ? none : flatDiagonalWings(shapeA, pair.triangleA, true, frame),
-      contact.onFaceOfB ? flatDiagonalWings(shapeB, pair.triangleB, false, frame) : none, contact, corners);
+  const EdgeWings flatWings = contact.onFaceOfB ? flatDiagonalWings(shapeB, pair.triangleB, false, frame)
+                                                : flatDiagonalWings(shapeA, pair.triangleA, true, frame);
+  return clipContactToOverlap(a, b, flatWings, contact, corners);
 }
 
 // The hits of a candidate whose triangles a and b give `contact`: the contact clipped to their overlap

@@ -15,10 +15,9 @@ std::optional<TriangleContact> generateContact(const Eigen::Vector3f (&a)[3], co
 }
 
 int clipContactToOverlap(const Eigen::Vector3f (&a)[3], const Eigen::Vector3f (&b)[3],
-                         const EdgeWings& flatWingsA, const EdgeWings& flatWingsB, TriangleContact& contact,
+                         const EdgeWings& flatWings, TriangleContact& contact,
                          TriangleContact (&corners)[kMaxOverlapCorners]) {
   if (!(contact.depth < 0)) return 0;
-  const EdgeWings& fixedWings = contact.onFaceOfB ? flatWingsB : flatWingsA;
   // The moving triangle leaves the fixed one's plane along `out`: B's normal when A moves, A's when B does.
   // Everything relative to the fixed triangle's first vertex, in double.
   const Eigen::Vector3f(&moving)[3] = contact.onFaceOfB ? a : b;
@@ -49,7 +48,7 @@ int clipContactToOverlap(const Eigen::Vector3f (&a)[3], const Eigen::Vector3f (&
   for (int k = 0; k < 3; ++k) {
     const Eigen::Vector3d& from = f[k];
     const Eigen::Vector3d& to = f[(k + 1) % 3];
-    const Eigen::Vector3f& wing = fixedWings.across[k];
+    const Eigen::Vector3f& wing = flatWings.across[k];
     if (wing.allFinite()) {
       const Eigen::Vector3d w = wing.cast<double>() - origin;
       addSide(from, w, to);
