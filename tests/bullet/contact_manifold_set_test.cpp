@@ -1,9 +1,8 @@
 // ContactManifoldSet, the pair's persistent manifolds, on Bullet's own btPersistentManifold: a face's corners
-// stay in their points from step to step, of a dozen contacts on a face the widest support goes in, held
-// points across a ring stay when only one arc dips in, the
+// stay in their points from step to step, of a dozen contacts on a face the widest support goes in, the
 // nearest of a fast pair's speculative contacts is held, and contacts whose normals point other ways get
 // manifolds of their own.
-#include "bullet/contact_manifold_set.h"
+#include <gtest/gtest.h>
 
 #include <BulletCollision/CollisionDispatch/btCollisionDispatcher.h>
 #include <BulletCollision/CollisionDispatch/btCollisionObject.h>
@@ -11,9 +10,10 @@
 #include <BulletCollision/CollisionDispatch/btDefaultCollisionConfiguration.h>
 #include <BulletCollision/CollisionDispatch/btManifoldResult.h>
 #include <BulletCollision/CollisionShapes/btBoxShape.h>
-#include <gtest/gtest.h>
 
 #include <vector>
+
+#include "bullet/contact_manifold_set.h"
 
 namespace gpucol {
 namespace {
@@ -118,41 +118,6 @@ TEST_F(RestingPair, OfManyContactsOnAFaceTheCornersGoIn) {
   const std::vector<Point> ps = points();
   ASSERT_EQ(ps.size(), 4u);
   EXPECT_TRUE(has(ps, -0.5f, -0.5f) && has(ps, 0.5f, -0.5f) && has(ps, 0.5f, 0.5f) && has(ps, -0.5f, 0.5f));
-}
-
-TEST_F(RestingPair, HeldPointsAcrossARingStayWhenOneArcDipsIn) {
-  // A ring (a torus lying on a floor) touches all round, then rocks: a step's crossing contacts come from one
-  // arc only, the rest of the ring touching at distance 0 without crossing. The widest support is chosen
-  // among the held points and the new contacts together, so the ring stays held across; fed the arc's
-  // contacts alone, Bullet's replacement rule kept one point across and three on the arc, and the ring
-  // tipped about them.
-  std::vector<PairContact> ring;
-  for (int k = 0; k < 12; ++k) {
-    const btScalar a = btScalar(k) * SIMD_PI / 6;
-    ring.push_back(onTop(0.4f * btCos(a), 0.4f * btSin(a), -1e-3f));
-  }
-  write(ring);
-  for (int step = 0; step < 3; ++step) {
-    std::vector<PairContact> arc;
-    for (int k = -2; k <= 2; ++k) {
-      const btScalar a = btScalar(k) * SIMD_PI / 8 + 0.3f * btScalar(step);
-      arc.push_back(onTop(0.4f * btCos(a), 0.4f * btSin(a), k == 0 ? -3e-3f : -2e-3f));
-    }
-    write(arc);
-    const std::vector<Point> ps = points();
-    ASSERT_EQ(ps.size(), 4u);
-    // Held on every side of the ring's centre, and as deep as the arc's deepest contact.
-    bool left = false, right = false, near = false, far = false;
-    for (const Point& p : ps) {
-      left = left || p.x < -0.3f, right = right || p.x > 0.3f;
-      near = near || p.z < -0.3f, far = far || p.z > 0.3f;
-    }
-    EXPECT_TRUE(left && right && near && far) << "step " << step;
-    btScalar deepest = 0;
-    for (int k = 0; k < held()[0]->getNumContacts(); ++k)
-      deepest = btMin(deepest, held()[0]->getContactPoint(k).getDistance());
-    EXPECT_NEAR(deepest, -3e-3f, 1e-5f) << "step " << step;
-  }
 }
 
 TEST_F(RestingPair, NearestSpeculativeContactOfAFastPairIsHeld) {

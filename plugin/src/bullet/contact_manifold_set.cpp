@@ -4,7 +4,6 @@
 
 #include <algorithm>
 #include <cmath>
-#include <optional>
 #include <utility>
 
 namespace gpucol {
@@ -60,71 +59,6 @@ std::vector<std::size_t> chooseSupport(const std::vector<PairContact>& contacts,
   return chosen;
 }
 
-// Held point k of `manifold` where refreshContactPoints will put it this step, as a contact of the pair
-// (body1 as B); none when the refresh will drop it (beyond the breaking threshold, or drifted sideways).
-std::optional<PairContact> heldThisStep(const btPersistentManifold& manifold, int k,
-                                        const btCollisionObjectWrapper& body0,
-                                        const btCollisionObjectWrapper& body1) {
-  const bool swapped = manifold.getBody0() != body0.getCollisionObject();
-  const btManifoldPoint& point = manifold.getContactPoint(k);
-  const btVector3 a = (swapped ? body1 : body0).getWorldTransform()(point.m_localPointA);
-  const btVector3 b = (swapped ? body0 : body1).getWorldTransform()(point.m_localPointB);
-  const btScalar distance = (a - b).dot(point.m_normalWorldOnB);
-  const btScalar threshold = manifold.getContactBreakingThreshold();
-  if (distance > threshold ||
-      (b - (a - point.m_normalWorldOnB * distance)).length2() > threshold * threshold) {
-    return std::nullopt;
-  }
-  PairContact c;
-  c.pointOnB = swapped ? a : b;
-  c.normalOnB = swapped ? -point.m_normalWorldOnB : point.m_normalWorldOnB;
-  c.distance = distance;
-  return c;
-}
-
-// The widest support (chooseSupport) among this step's contacts and the points `manifold` holds that none of
-// them takes the place of (Bullet matches an added point to the nearest held one within the breaking
-// threshold, `matchRadius`). A ring on a floor whose crossings come from one arc this step, the rest of it
-// touching without crossing, stays held all round, as Bullet's convex manifolds collect their points over
-// steps; chosen from the new contacts alone, the held points across were pushed out and the ring tipped.
-// Held points that are neither chosen nor taken over by a chosen contact are removed; returns the chosen
-// contacts (indices into `contacts`), which the caller adds.
-std::vector<std::size_t> keepSupport(const std::vector<PairContact>& contacts, btPersistentManifold& manifold,
-                                     btScalar matchRadius, const btCollisionObjectWrapper& body0,
-                                     const btCollisionObjectWrapper& body1, const btVector3& normal) {
-  std::vector<PairContact> candidates = contacts;
-  const std::size_t fresh = contacts.size();
-  std::vector<int> takenBy(std::size_t(manifold.getNumContacts()), -1);  // the contact that takes its place
-  std::vector<int> heldPoint;  // candidate fresh + j is point heldPoint[j]
-  for (int k = 0; k < manifold.getNumContacts(); ++k) {
-    const std::optional<PairContact> held = heldThisStep(manifold, k, body0, body1);
-    if (!held) continue;
-    btScalar nearest2 = matchRadius * matchRadius;
-    for (std::size_t i = 0; i < fresh; ++i) {
-      const btScalar d2 = (contacts[i].pointOnB - held->pointOnB).length2();
-      if (d2 < nearest2) nearest2 = d2, takenBy[std::size_t(k)] = int(i);
-    }
-    if (takenBy[std::size_t(k)] >= 0) continue;
-    heldPoint.push_back(k);
-    candidates.push_back(*held);
-  }
-  std::vector<char> keep(takenBy.size(), 0);
-  std::vector<std::size_t> chosen;
-  for (std::size_t i : chooseSupport(candidates, normal)) {
-    if (i >= fresh) {
-      keep[std::size_t(heldPoint[i - fresh])] = 1;
-      continue;
-    }
-    chosen.push_back(i);
-    for (std::size_t k = 0; k < keep.size(); ++k) keep[k] |= takenBy[k] == int(i);
-  }
-  // From the end: Bullet moves the last point into the removed one's place.
-  for (int k = manifold.getNumContacts() - 1; k >= 0; --k) {
-    if (!keep[std::size_t(k)]) manifold.removeContactPoint(k);
-  }
-  return chosen;
-}
-
 }  // namespace
 
 std::vector<PairContact> swapSides(std::vector<PairContact> contacts) {
@@ -152,8 +86,7 @@ void ContactManifoldSet::write(const std::vector<PairContact>& contacts,
   for (const PairContact& contact : contacts) {
     const btVector3 normalInBody1 = body1Basis.transpose() * contact.normalOnB;
     std::size_t group = 0;
-    while (group < m_groups.size() && m_groups[group].normalInBody1.dot(normalInBody1) < kSameManifoldCos)
-      ++group;
+    while (group < m_groups.size() && m_groups[group].normalInBody1.dot(normalInBody1) < kSameManifoldCos) ++group;
     if (group == m_groups.size()) {
       btPersistentManifold* manifold =
           m_dispatcher->getNewManifold(body0->getCollisionObject(), body1->getCollisionObject());
@@ -167,9 +100,7 @@ void ContactManifoldSet::write(const std::vector<PairContact>& contacts,
     m_groups[g].manifold->setContactBreakingThreshold(
         btMax(m_groups[g].breakingThreshold, speculativeDistance));
     result->setPersistentManifold(m_groups[g].manifold);
-    const std::vector<std::size_t> chosen =
-        keepSupport(byGroup[g], *m_groups[g].manifold, m_groups[g].breakingThreshold, *body0, *body1,
-                    body1Basis * m_groups[g].normalInBody1);
+    const std::vector<std::size_t> chosen = chooseSupport(byGroup[g], body1Basis * m_groups[g].normalInBody1);
     // Bullet takes an added point for the held point nearest to it within the breaking threshold and
     // overwrites it. With a speculative pair's threshold raised to its whole reach (centimetres to
     // decimetres), chosen contacts would overwrite each other (the deepest, which bounds how far the bodies
