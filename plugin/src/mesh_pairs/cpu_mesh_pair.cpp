@@ -290,10 +290,11 @@ int clipToOverlap(const MeshShape& shapeA, const MeshShape& shapeB, const PairFr
 // The hits of a candidate whose triangles a and b give `contact`: the contact clipped to their overlap
 // (clipToOverlap), then the overlap's other corners. Out of line: inlined, its code made the near phase's
 // vector loops over the chunk slower.
-[[gnu::noinline]] void pushOverlapHits(const MeshShape& shapeA, const MeshShape& shapeB, const PairFrame& frame,
-                                       const std::vector<TrianglePair>& candidates, std::size_t candidate,
-                                       const Eigen::Vector3f (&a)[3], const Eigen::Vector3f (&b)[3],
-                                       TriangleContact contact, std::vector<NearHit>& hits) {
+[[gnu::noinline]] void pushOverlapHits(const MeshShape& shapeA, const MeshShape& shapeB,
+                                       const PairFrame& frame, const std::vector<TrianglePair>& candidates,
+                                       std::size_t candidate, const Eigen::Vector3f (&a)[3],
+                                       const Eigen::Vector3f (&b)[3], TriangleContact contact,
+                                       std::vector<NearHit>& hits) {
   TriangleContact corners[kMaxOverlapCorners];
   const int more = clipToOverlap(shapeA, shapeB, frame, candidates[candidate], a, b, contact, corners);
   hits.push_back({candidate, true, contact});
@@ -362,8 +363,9 @@ void proximityOfKept(const MeshShape& shapeA, const MeshShape& shapeB, const Chu
 // One chunk of the near phase: the candidates from `begin` on (at most kNearChunk), their hits appended to
 // `hits` and, when the pair has a reach, the proximity contacts of those that do not cross to `nearby`. Its
 // passes: fetch the triangles into rows (A's once per run of equal triangleA: candidates come sorted by it)
-// and apply the pair's frame; keep aside the candidates the proximity pre-test cannot rule out; run the float
-// plane pre-test of triangle_plane.h over all of them without branches; gather the pairs it could not reject
+// and apply the pair's frame; keep aside the candidates the proximity pre-test cannot rule out; leave out
+// those whose triangles' boxes miss; run the float plane pre-test of triangle_plane.h over the rest without
+// branches; gather the pairs it could not reject
 // and run the float interval pre-test over those; then run the double test and the contact generation on the
 // pairs left; last, the proximity contacts of the kept candidates that do not cross. The pre-tests only
 // reject what the double tests reject, so the result is the double tests'; the plane test removes about two
@@ -385,11 +387,33 @@ GPUCOL_AVX2_CLONES void runNearChunk(const MeshShape& shapeA, const MeshShape& s
   const std::size_t nearCount =
       frame.reach > 0 ? keepProximityCandidates(rows, count, frame.reach, buffers.nearby.values(), nearIndex)
                       : 0;
+  // Candidates whose two triangles' boxes miss each other cannot cross: most of those of a pair with a reach,
+  // whose search widened every box. Min and max round nothing, so this leaves out only pairs the tests below
+  // reject. The rest are gathered to the front of the rows; boxed[k] is column k's place in the chunk.
+  std::uint8_t meet[kNearChunk];
+  for (std::size_t j = 0; j < count; ++j) {
+    bool boxesMeet = true;
+    for (std::size_t c = 0; c < 3; ++c) {
+      const float a0 = rows[c * n + j], a1 = rows[(3 + c) * n + j], a2 = rows[(6 + c) * n + j];
+      const float b0 = rows[(9 + c) * n + j], b1 = rows[(12 + c) * n + j], b2 = rows[(15 + c) * n + j];
+      const float aLow = std::min(a0, std::min(a1, a2)), aHigh = std::max(a0, std::max(a1, a2));
+      const float bLow = std::min(b0, std::min(b1, b2)), bHigh = std::max(b0, std::max(b1, b2));
+      boxesMeet = boxesMeet & (aLow <= bHigh) & (bLow <= aHigh);
+    }
+    meet[j] = static_cast<std::uint8_t>(boxesMeet);
+  }
+  std::uint16_t boxed[kNearChunk];
+  std::size_t meeting = 0;
+  for (std::size_t j = 0; j < count; ++j) {
+    if (!meet[j]) continue;
+    if (meeting != j) copyColumn(rows, j, rows, meeting);
+    boxed[meeting++] = static_cast<std::uint16_t>(j);
+  }
   // Plain pointers, loaded once: the stores into `apart` could alias the vector's own fields otherwise, and
   // the compiler would give up on vector code.
   const float* const v = triangles.data();
   std::uint8_t apart[kNearChunk];
-  for (std::size_t j = 0; j < count; ++j) {
+  for (std::size_t j = 0; j < meeting; ++j) {
     const RowTriangles t(v, j);
     apart[j] =
         static_cast<std::uint8_t>(detail::floatCertainlyApartBranchFree(t.a0, t.a1, t.a2, t.b0, t.b1, t.b2));
@@ -399,7 +423,7 @@ GPUCOL_AVX2_CLONES void runNearChunk(const MeshShape& shapeA, const MeshShape& s
   // planes but not each other.
   std::uint16_t survivor[kNearChunk];
   std::size_t survivors = 0;
-  for (std::size_t j = 0; j < count; ++j) {
+  for (std::size_t j = 0; j < meeting; ++j) {
     survivor[survivors] = static_cast<std::uint16_t>(j);
     survivors += !apart[j];
   }
@@ -428,7 +452,7 @@ GPUCOL_AVX2_CLONES void runNearChunk(const MeshShape& shapeA, const MeshShape& s
   detail::generateContactRows(rows, n, testedCount, c, outcome);
   const std::size_t firstHit = hits.size();
   for (std::size_t t = 0; t < testedCount; ++t) {
-    const std::size_t j = tested[t];
+    const std::size_t j = boxed[tested[t]];
     switch (outcome[t] & detail::kRowOutcomeMask) {
       case detail::kRowApart:
         break;
@@ -507,8 +531,8 @@ NearPhaseResult runNearPhase(const MeshShape& shapeA, const MeshShape& shapeB, c
 // The proximity contacts of every candidate that does not cross, in candidate order, in parallel, for the
 // device's near phase (the CPU's finds them in runNearChunk); `crossing[i]` is set for the candidates the
 // near phase found intersecting.
-std::vector<NearbyHit> runProximityPass(const MeshShape& shapeA, const MeshShape& shapeB, const PairFrame& frame,
-                                        const std::vector<TrianglePair>& candidates,
+std::vector<NearbyHit> runProximityPass(const MeshShape& shapeA, const MeshShape& shapeB,
+                                        const PairFrame& frame, const std::vector<TrianglePair>& candidates,
                                         const std::vector<std::uint8_t>& crossing) {
   const std::size_t chunks = (candidates.size() + kNearChunk - 1) / kNearChunk;
   std::vector<std::vector<NearbyHit>> chunkHits(chunks);
@@ -657,7 +681,7 @@ MeshPairResult collidePairOnCpu(const MeshPairQuery& query, const Config& config
 
 // The device's hits go through the same function (mesh_batch.cpp).
 template void collectHits<DeviceNearHit>(const std::vector<DeviceNearHit>& hits, const MeshShape& shapeA,
-                                         const MeshShape& shapeB, const PairFrame& frame, const Config& config,
-                                         MeshPairResult& result);
+                                         const MeshShape& shapeB, const PairFrame& frame,
+                                         const Config& config, MeshPairResult& result);
 
 }  // namespace gpucol
