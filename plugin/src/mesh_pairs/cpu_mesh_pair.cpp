@@ -290,11 +290,10 @@ int clipToOverlap(const MeshShape& shapeA, const MeshShape& shapeB, const PairFr
 // The hits of a candidate whose triangles a and b give `contact`: the contact clipped to their overlap
 // (clipToOverlap), then the overlap's other corners. Out of line: inlined, its code made the near phase's
 // vector loops over the chunk slower.
-[[gnu::noinline]] void pushOverlapHits(const MeshShape& shapeA, const MeshShape& shapeB,
-                                       const PairFrame& frame, const std::vector<TrianglePair>& candidates,
-                                       std::size_t candidate, const Eigen::Vector3f (&a)[3],
-                                       const Eigen::Vector3f (&b)[3], TriangleContact contact,
-                                       std::vector<NearHit>& hits) {
+[[gnu::noinline]] void pushOverlapHits(const MeshShape& shapeA, const MeshShape& shapeB, const PairFrame& frame,
+                                       const std::vector<TrianglePair>& candidates, std::size_t candidate,
+                                       const Eigen::Vector3f (&a)[3], const Eigen::Vector3f (&b)[3],
+                                       TriangleContact contact, std::vector<NearHit>& hits) {
   TriangleContact corners[kMaxOverlapCorners];
   const int more = clipToOverlap(shapeA, shapeB, frame, candidates[candidate], a, b, contact, corners);
   hits.push_back({candidate, true, contact});
@@ -360,18 +359,17 @@ void proximityOfKept(const MeshShape& shapeA, const MeshShape& shapeB, const Chu
   }
 }
 
-// One chunk of the near phase: the candidates from `begin` on (at most kNearChunk), their hits appended to
-// `hits` and, when the pair has a reach, the proximity contacts of those that do not cross to `nearby`. Its
-// passes: fetch the triangles into rows (A's once per run of equal triangleA: candidates come sorted by it)
-// and apply the pair's frame; keep aside the candidates the proximity pre-test cannot rule out; leave out
-// those whose triangles' boxes miss; run the float plane pre-test of triangle_plane.h over the rest without
-// branches; gather the pairs it could not reject
-// and run the float interval pre-test over those; then run the double test and the contact generation on the
-// pairs left; last, the proximity contacts of the kept candidates that do not cross. The pre-tests only
-// reject what the double tests reject, so the result is the double tests'; the plane test removes about two
-// thirds of the candidates of the thesis scene, and without a branch per pair (its outcome is close to a
-// coin toss). Compiled for AVX2 and baseline x86-64 (bvh/avx2_clones.h): with AVX2 the row loops below run
-// on 8 lanes instead of 4, and the results are the same bits.
+// One chunk of the near phase: the candidates from `begin` on (at most kNearChunk), their hits appended to `hits`
+// and, when the pair has a reach, the proximity contacts of those that do not cross to `nearby`. Its passes: fetch
+// the triangles into rows (A's once per run of equal triangleA: candidates come sorted by it) and apply the pair's
+// frame; keep aside the candidates the proximity pre-test cannot rule out; leave out those whose triangles' boxes
+// miss; run the float plane pre-test of triangle_plane.h over the rest without branches; gather the pairs it could
+// not reject and run the float interval pre-test over those; then run the double test and the contact generation
+// on the pairs left; last, the proximity contacts of the kept candidates that do not cross. The pre-tests only
+// reject what the double tests reject, so the result is the double tests'; the plane test removes about two thirds
+// of the candidates of the thesis scene, and without a branch per pair (its outcome is close to a coin toss).
+// Compiled for AVX2 and baseline x86-64 (bvh/avx2_clones.h): with AVX2 the row loops below run on 8 lanes instead
+// of 4, and the results are the same bits.
 GPUCOL_AVX2_CLONES void runNearChunk(const MeshShape& shapeA, const MeshShape& shapeB, const PairFrame& frame,
                                      const std::vector<TrianglePair>& candidates, std::size_t begin,
                                      ChunkBuffers& buffers, std::vector<NearHit>& hits,
