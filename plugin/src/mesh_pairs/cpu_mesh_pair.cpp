@@ -50,6 +50,16 @@ struct NearHit {
   TriangleContact contact;
 };
 
+// The contact of a hit that has none: zeroed, so that copying the hit reads no uninitialised floats (Eigen's
+// vectors start uninitialised, TriangleContact{} included).
+TriangleContact noContact() {
+  TriangleContact contact;
+  contact.point.setZero();
+  contact.normalOnB.setZero();
+  contact.depth = 0;
+  return contact;
+}
+
 // A contact of a candidate whose triangles do not cross but come within the pair's reach (the shapes' margins
 // and the speculative reach).
 struct NearbyHit {
@@ -287,17 +297,24 @@ int clipToOverlap(const MeshShape& shapeA, const MeshShape& shapeB, const PairFr
   return clipContactToOverlap(a, b, flatWings, contact, corners);
 }
 
-// The hits of a candidate whose triangles a and b give `contact`: the contact clipped to their overlap
-// (clipToOverlap), then the overlap's other corners. Out of line: inlined, its code made the near phase's
-// vector loops over the chunk slower.
-[[gnu::noinline]] void pushOverlapHits(const MeshShape& shapeA, const MeshShape& shapeB, const PairFrame& frame,
-                                       const std::vector<TrianglePair>& candidates, std::size_t candidate,
+// A hit with a contact, of a candidate `pair` whose triangles in the pair's frame are a and b, appended to
+// `hits` with its contact clipped to their overlap (clipToOverlap), then a copy per other corner of the
+// overlap with that corner's contact. Serves the CPU's hits (NearHit) and the device's (DeviceNearHit). Out
+// of line: inlined, its code made the near phase's vector loops over the chunk slower.
+template <class Hit>
+[[gnu::noinline]] void pushOverlapHits(const MeshShape& shapeA, const MeshShape& shapeB,
+                                       const PairFrame& frame, const TrianglePair& pair,
                                        const Eigen::Vector3f (&a)[3], const Eigen::Vector3f (&b)[3],
-                                       TriangleContact contact, std::vector<NearHit>& hits) {
+                                       const Hit& hit, std::vector<Hit>& hits) {
+  TriangleContact contact = hit.contact;
   TriangleContact corners[kMaxOverlapCorners];
-  const int more = clipToOverlap(shapeA, shapeB, frame, candidates[candidate], a, b, contact, corners);
-  hits.push_back({candidate, true, contact});
-  for (int k = 0; k < more; ++k) hits.push_back({candidate, true, corners[k]});
+  const int more = clipToOverlap(shapeA, shapeB, frame, pair, a, b, contact, corners);
+  hits.push_back(hit);
+  hits.back().contact = contact;
+  for (int k = 0; k < more; ++k) {
+    hits.push_back(hit);
+    hits.back().contact = corners[k];
+  }
 }
 
 // B's faces and edge wings of one chunk's proximity tests, by B's triangle, in a small direct-mapped cache:
@@ -455,7 +472,7 @@ GPUCOL_AVX2_CLONES void runNearChunk(const MeshShape& shapeA, const MeshShape& s
       case detail::kRowApart:
         break;
       case detail::kRowIntersectsNoContact:
-        hits.push_back({begin + j, false, TriangleContact{}});
+        hits.push_back({begin + j, false, noContact()});
         break;
       case detail::kRowContact: {
         TriangleContact contact;
@@ -467,7 +484,8 @@ GPUCOL_AVX2_CLONES void runNearChunk(const MeshShape& shapeA, const MeshShape& s
         contact.deepestPoint = Eigen::Vector3f(c[7 * n + t], c[8 * n + t], c[9 * n + t]);
         Eigen::Vector3f a[3], b[3];
         triangles.load(t, a, b);
-        pushOverlapHits(shapeA, shapeB, frame, candidates, begin + j, a, b, contact, hits);
+        pushOverlapHits(shapeA, shapeB, frame, candidates[begin + j], a, b, NearHit{begin + j, true, contact},
+                        hits);
         break;
       }
       default: {
@@ -476,9 +494,10 @@ GPUCOL_AVX2_CLONES void runNearChunk(const MeshShape& shapeA, const MeshShape& s
         bool intersects = false;
         const std::optional<TriangleContact> contact = detail::generateContactAndTest(a, b, intersects);
         if (contact) {
-          pushOverlapHits(shapeA, shapeB, frame, candidates, begin + j, a, b, *contact, hits);
+          pushOverlapHits(shapeA, shapeB, frame, candidates[begin + j], a, b,
+                          NearHit{begin + j, true, *contact}, hits);
         } else if (intersects) {
-          hits.push_back({begin + j, false, TriangleContact{}});
+          hits.push_back({begin + j, false, noContact()});
         }
       }
     }
@@ -616,18 +635,14 @@ void collectHits(const std::vector<Hit>& deviceHits, const MeshShape& shapeA, co
   std::vector<Hit> hits;
   hits.reserve(deviceHits.size());
   for (const Hit& deviceHit : deviceHits) {
-    hits.push_back(deviceHit);
-    if (!deviceHit.hasContact) continue;
-    Eigen::Vector3f a[3], b[3];
-    const TrianglePair& pair = result.candidatePairs[deviceHit.candidate];
-    loadPairTriangles(shapeA, shapeB, frame, pair, a, b);
-    TriangleContact corners[kMaxOverlapCorners];
-    const int more = clipToOverlap(shapeA, shapeB, frame, pair, a, b, hits.back().contact, corners);
-    for (int k = 0; k < more; ++k) {
-      Hit corner = deviceHit;
-      corner.contact = corners[k];
-      hits.push_back(corner);
+    if (!deviceHit.hasContact) {
+      hits.push_back(deviceHit);
+      continue;
     }
+    const TrianglePair& pair = result.candidatePairs[deviceHit.candidate];
+    Eigen::Vector3f a[3], b[3];
+    loadPairTriangles(shapeA, shapeB, frame, pair, a, b);
+    pushOverlapHits(shapeA, shapeB, frame, pair, a, b, deviceHit, hits);
   }
   std::vector<NearbyHit> nearby;
   if (frame.reach > 0) {
