@@ -82,9 +82,10 @@ constexpr std::size_t kSoupAhead = 32;
 constexpr std::size_t kNearRow = kNearChunk + 16;
 
 // The two triangles of column j of a chunk's rows (the layout of ChunkTriangles, below), read from a plain
-// pointer so that the row loops that use it stay vector code.
+// pointer so that the row loops that use it stay vector code. Forced inline: GCC had made the constructor a
+// call, which left the plane and interval pre-test loops scalar.
 struct RowTriangles {
-  RowTriangles(const float* rows, std::size_t j)
+  __attribute__((always_inline)) RowTriangles(const float* rows, std::size_t j)
       : a0(rows[j], rows[kNearRow + j], rows[2 * kNearRow + j]),
         a1(rows[3 * kNearRow + j], rows[4 * kNearRow + j], rows[5 * kNearRow + j]),
         a2(rows[6 * kNearRow + j], rows[7 * kNearRow + j], rows[8 * kNearRow + j]),
