@@ -1,7 +1,7 @@
 // ContactManifoldSet, the pair's persistent manifolds, on Bullet's own btPersistentManifold: a face's corners
-// stay in their points from step to step, of a dozen contacts on a face the widest support goes in, the
-// nearest of a fast pair's speculative contacts is held, and contacts whose normals point other ways get
-// manifolds of their own.
+// stay in their points from step to step, of a dozen contacts on one patch the widest support goes in, the
+// nearest of a fast pair's speculative contacts is held, contacts whose normals point other ways get
+// manifolds of their own, and a patch without a new contact keeps its points until they separate.
 #include <gtest/gtest.h>
 
 #include <BulletCollision/CollisionDispatch/btCollisionDispatcher.h>
@@ -58,19 +58,20 @@ class RestingPair : public ::testing::Test {
     return out;
   }
 
-  // The x, z of each point of the one manifold, with its lifetime.
+  // The x, z of each point of every manifold, with its lifetime and normal.
   struct Point {
     btScalar x, z;
     int lifeTime;
+    btVector3 normal;
   };
   std::vector<Point> points() const {
     std::vector<Point> out;
-    const std::vector<btPersistentManifold*> m = held();
-    EXPECT_EQ(m.size(), 1u);
-    if (m.size() != 1) return out;
-    for (int k = 0; k < m[0]->getNumContacts(); ++k) {
-      const btManifoldPoint& p = m[0]->getContactPoint(k);
-      out.push_back({p.getPositionWorldOnB().x(), p.getPositionWorldOnB().z(), p.getLifeTime()});
+    for (const btPersistentManifold* m : held()) {
+      for (int k = 0; k < m->getNumContacts(); ++k) {
+        const btManifoldPoint& p = m->getContactPoint(k);
+        out.push_back(
+            {p.getPositionWorldOnB().x(), p.getPositionWorldOnB().z(), p.getLifeTime(), p.m_normalWorldOnB});
+      }
     }
     return out;
   }
@@ -106,18 +107,22 @@ TEST_F(RestingPair, AFaceIsHeldAtItsCornersFromStepToStep) {
   for (const Point& p : ps) EXPECT_EQ(p.lifeTime, 5) << p.x << ", " << p.z;
 }
 
-TEST_F(RestingPair, OfManyContactsOnAFaceTheCornersGoIn) {
+TEST_F(RestingPair, OfManyContactsOnAPatchTheCornersGoIn) {
   // Bullet keeps 4 points per manifold and a new point always takes a place: fed one by one, the points
-  // inside the face after the corners would push corners out. The deepest is kept as well (a corner here).
-  std::vector<PairContact> contacts{onTop(0.5f, 0.5f, -2e-3f), onTop(-0.5f, -0.5f, -1e-3f),
-                                    onTop(0.5f, -0.5f, -1e-3f), onTop(-0.5f, 0.5f, -1e-3f)};
-  for (btScalar x : {-0.3f, 0.0f, 0.3f}) {
-    for (btScalar z : {-0.2f, 0.2f}) contacts.push_back(onTop(x, z, -1e-3f));
+  // inside a patch after its corners would push corners out. The deepest is kept as well (a corner here). The
+  // patch, 0.15 m square, lies within a quarter of the box's bounding radius of its first contact: one
+  // manifold.
+  const btScalar h = 0.075f;
+  std::vector<PairContact> contacts{onTop(h, h, -2e-3f), onTop(-h, -h, -1e-3f), onTop(h, -h, -1e-3f),
+                                    onTop(-h, h, -1e-3f)};
+  for (btScalar x : {-0.045f, 0.0f, 0.045f}) {
+    for (btScalar z : {-0.03f, 0.03f}) contacts.push_back(onTop(x, z, -1e-3f));
   }
   write(contacts);
+  ASSERT_EQ(held().size(), 1u);
   const std::vector<Point> ps = points();
   ASSERT_EQ(ps.size(), 4u);
-  EXPECT_TRUE(has(ps, -0.5f, -0.5f) && has(ps, 0.5f, -0.5f) && has(ps, 0.5f, 0.5f) && has(ps, -0.5f, 0.5f));
+  EXPECT_TRUE(has(ps, -h, -h) && has(ps, h, -h) && has(ps, h, h) && has(ps, -h, h));
 }
 
 TEST_F(RestingPair, NearestSpeculativeContactOfAFastPairIsHeld) {
@@ -137,12 +142,43 @@ TEST_F(RestingPair, NearestSpeculativeContactOfAFastPairIsHeld) {
 }
 
 TEST_F(RestingPair, ContactsOfAnotherDirectionGetTheirOwnManifold) {
-  restOnCorners(1);
+  // The wall's contact lies 0.5 m from the nearest corner, but also a patch of the same place would not take
+  // it: its normal is 90 degrees from theirs.
+  write({onTop(0.5f, -0.1f, -1e-3f), onTop(0.5f, 0.1f, -1e-3f)});
   PairContact wall = onTop(0.5f, 0.0f, -1e-3f);
   wall.normalOnB = btVector3(-1, 0, 0);
-  write({onTop(-0.5f, -0.5f, -1e-3f), onTop(0.5f, -0.5f, -1e-3f), onTop(0.5f, 0.5f, -1e-3f),
-         onTop(-0.5f, 0.5f, -1e-3f), wall});
-  EXPECT_EQ(held().size(), 2u);
+  write({onTop(0.5f, -0.1f, -1e-3f), onTop(0.5f, 0.1f, -1e-3f), wall});
+  const std::vector<btPersistentManifold*> m = held();
+  ASSERT_EQ(m.size(), 2u);
+  for (const btPersistentManifold* manifold : m) {
+    const btVector3 first = manifold->getContactPoint(0).m_normalWorldOnB;
+    for (int k = 1; k < manifold->getNumContacts(); ++k) {
+      EXPECT_GT(manifold->getContactPoint(k).m_normalWorldOnB.dot(first), 0.99f);
+    }
+  }
+  EXPECT_EQ(points().size(), 3u);
+}
+
+TEST_F(RestingPair, APatchWithoutANewContactKeepsItsPointsUntilTheySeparate) {
+  // A ring on a floor crosses it along one arc a step: the far side's points must stay while they touch, or
+  // the body tips onto the side it no longer holds. Here the box's corners rest for 3 steps, then only the
+  // side at z = -0.5 gets contacts, four of them: in one manifold they would take all of Bullet's 4 places.
+  restOnCorners(3);
+  const std::vector<PairContact> nearSide{onTop(-0.5f, -0.5f, -1e-3f), onTop(0.5f, -0.5f, -1e-3f),
+                                          onTop(-0.2f, -0.45f, -1e-3f), onTop(0.2f, -0.45f, -1e-3f)};
+  write(nearSide);
+  std::vector<Point> ps = points();
+  EXPECT_EQ(ps.size(), 6u);
+  EXPECT_TRUE(has(ps, -0.5f, 0.5f) && has(ps, 0.5f, 0.5f));
+  // Tipped about its edge at z = -0.5 until the far corners are 5 cm up, beyond Bullet's breaking threshold,
+  // the box loses their points at the refresh; the near corners' stay.
+  const btTransform pivot(btQuaternion::getIdentity(), btVector3(0, 0, -0.5f));
+  boxPose = pivot * btTransform(btQuaternion(btVector3(1, 0, 0), -btAsin(0.05f))) * pivot.inverse() * boxPose;
+  box.setWorldTransform(boxPose);
+  write(nearSide);
+  ps = points();
+  EXPECT_EQ(ps.size(), 4u);
+  EXPECT_FALSE(has(ps, -0.5f, 0.5f) || has(ps, 0.5f, 0.5f));
 }
 
 }  // namespace

@@ -109,18 +109,25 @@ TEST(MeshMeshAlgorithm, ManifoldsPersistAcrossSteps) {
   w.add(meshShape(scenes::makeBox(5, 0.5f, 5)), 0, at(0, -0.5f, 0));
   btRigidBody* box = w.add(meshShape(scenes::makeBox(0.5f, 0.5f, 0.5f)), 1, at(0, 0.5f, 0));
   box->setActivationState(DISABLE_DEACTIVATION);
+  const auto manifolds = [&] {
+    std::vector<const btPersistentManifold*> out;
+    for (int m = 0; m < w.dispatcher().getNumManifolds(); ++m)
+      out.push_back(w.dispatcher().getManifoldByIndexInternal(m));
+    return out;
+  };
   w.step(60);
-  ASSERT_EQ(w.dispatcher().getNumManifolds(), 1);
-  const btPersistentManifold* manifold = w.dispatcher().getManifoldByIndexInternal(0);
+  const std::vector<const btPersistentManifold*> first = manifolds();
+  ASSERT_FALSE(first.empty());
   w.step(100);
-  ASSERT_EQ(w.dispatcher().getNumManifolds(), 1);
-  EXPECT_EQ(w.dispatcher().getManifoldByIndexInternal(0), manifold);
-  // Bullet holds 4 points; when the reduction keeps more than 4, the one it trades each step is new, but a box
-  // face needs 3 that stay to stand on.
+  EXPECT_EQ(manifolds(), first);
+  // Bullet holds 4 points a manifold; when the reduction keeps more, the one it trades each step is new, but
+  // a box face needs 3 that stay to stand on.
   int old = 0;
-  for (int p = 0; p < manifold->getNumContacts(); ++p) {
-    const btManifoldPoint& point = manifold->getContactPoint(p);
-    if (point.getLifeTime() >= 100 && point.getAppliedImpulse() > 0) ++old;
+  for (const btPersistentManifold* manifold : first) {
+    for (int p = 0; p < manifold->getNumContacts(); ++p) {
+      const btManifoldPoint& point = manifold->getContactPoint(p);
+      if (point.getLifeTime() >= 100 && point.getAppliedImpulse() > 0) ++old;
+    }
   }
   EXPECT_GE(old, 3);
 }
@@ -137,14 +144,22 @@ TEST(MeshMeshAlgorithm, NormalsFarApartGetTheirOwnManifolds) {
   w.step(240);
   EXPECT_NEAR(box->getWorldTransform().getOrigin().x(), -0.5f, kRestTolerance);
   EXPECT_NEAR(box->getWorldTransform().getOrigin().y(), 0.5f, kRestTolerance);
-  ASSERT_EQ(w.dispatcher().getNumManifolds(), 2);
-  std::vector<btVector3> normals;
-  for (int m = 0; m < 2; ++m) {
+  // Every manifold's points share one normal, the floor's or the wall's, and both are there.
+  ASSERT_GE(w.dispatcher().getNumManifolds(), 2);
+  int floors = 0, walls = 0;
+  for (int m = 0; m < w.dispatcher().getNumManifolds(); ++m) {
     const btPersistentManifold* manifold = w.dispatcher().getManifoldByIndexInternal(m);
     ASSERT_GT(manifold->getNumContacts(), 0);
-    normals.push_back(manifold->getContactPoint(0).m_normalWorldOnB);
+    const btVector3 normal = manifold->getContactPoint(0).m_normalWorldOnB;
+    for (int p = 1; p < manifold->getNumContacts(); ++p) {
+      EXPECT_GT(manifold->getContactPoint(p).m_normalWorldOnB.dot(normal), 0.999f);
+    }
+    floors += std::abs(normal.y()) > 0.999f;
+    walls += std::abs(normal.x()) > 0.999f;
   }
-  EXPECT_NEAR(std::abs(normals[0].dot(normals[1])), 0.0f, 1e-3f);
+  EXPECT_GT(floors, 0);
+  EXPECT_GT(walls, 0);
+  EXPECT_EQ(floors + walls, w.dispatcher().getNumManifolds());
 }
 
 // Meshes of the data set on each other: a torus dropped on an armadillo that stands on a mesh ground. Both come to

@@ -1,6 +1,7 @@
 #include "bullet/contact_manifold_set.h"
 
 #include <BulletCollision/CollisionDispatch/btCollisionObject.h>
+#include <BulletCollision/CollisionShapes/btCollisionShape.h>
 
 #include <algorithm>
 #include <cmath>
@@ -13,6 +14,14 @@ namespace {
 // of each other; a box in a right-angled corner gives normals 90° apart, and a curved body on a floor all
 // nearly one. 30° keeps the first in one manifold and splits the second.
 const btScalar kSameManifoldCos = btCos(SIMD_PI / 6);
+
+// A manifold also covers one patch: contacts farther than this share of the smaller body's bounding radius
+// from a manifold's first contact start another, as a convex piece of a compound shape would have its own.
+// Bullet holds a manifold's points until they separate, but this pair's 4 places are chosen from the step's
+// contacts alone, and a margin-free mesh gives contacts only where triangles cross: a ring lying on a floor,
+// crossing it along one arc a step, lost its other arcs' points and rocked onto them (measured-results,
+// "Why the pile of real meshes stays awake"). Each patch keeps its points while it has no new contact.
+constexpr btScalar kPatchOfRadius = 0.25f;
 
 // The at most 4 contacts of one manifold's group that span the widest support: the deepest, the one farthest
 // from it, the one farthest from the line through those two, and the one farthest on the line's other side.
@@ -83,14 +92,27 @@ void ContactManifoldSet::write(const std::vector<PairContact>& contacts,
   btPersistentManifold* const original = result->getPersistentManifold();
   const btMatrix3x3& body1Basis = body1->getWorldTransform().getBasis();
   std::vector<std::vector<PairContact>> byGroup(m_groups.size());
+  // Patches are placed in the smaller body's frame, so that they turn and slide with it over the larger.
+  btVector3 centre;
+  btScalar radius0, radius1;
+  body0->getCollisionShape()->getBoundingSphere(centre, radius0);
+  body1->getCollisionShape()->getBoundingSphere(centre, radius1);
+  const btTransform smallInverse = (radius0 <= radius1 ? body0 : body1)->getWorldTransform().inverse();
+  const btScalar patch = kPatchOfRadius * btMin(radius0, radius1);
+  // A shape without a size (or with a broken one) makes one patch of everything.
+  const btScalar patch2 = patch > 0 && std::isfinite(patch) ? patch * patch : BT_INFINITY;
   for (const PairContact& contact : contacts) {
     const btVector3 normalInBody1 = body1Basis.transpose() * contact.normalOnB;
+    const btVector3 anchor = smallInverse * contact.pointOnB;
     std::size_t group = 0;
-    while (group < m_groups.size() && m_groups[group].normalInBody1.dot(normalInBody1) < kSameManifoldCos) ++group;
+    while (group < m_groups.size() && (m_groups[group].normalInBody1.dot(normalInBody1) < kSameManifoldCos ||
+                                       (m_groups[group].anchor - anchor).length2() > patch2)) {
+      ++group;
+    }
     if (group == m_groups.size()) {
       btPersistentManifold* manifold =
           m_dispatcher->getNewManifold(body0->getCollisionObject(), body1->getCollisionObject());
-      m_groups.push_back({manifold, normalInBody1, manifold->getContactBreakingThreshold()});
+      m_groups.push_back({manifold, normalInBody1, manifold->getContactBreakingThreshold(), anchor});
       byGroup.emplace_back();
     }
     byGroup[group].push_back(contact);

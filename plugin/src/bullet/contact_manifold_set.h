@@ -23,14 +23,16 @@ struct PairContact {
 /// The same contacts seen from the other side: body0 and body1 swap roles.
 std::vector<PairContact> swapSides(std::vector<PairContact> contacts);
 
-/// The persistent manifolds of one pair, one per direction of contact normal. Bullet keeps at most 4 points in
-/// a manifold, chosen for the largest area around the deepest point; contacts whose normals point different
-/// ways (a body in a corner, a peg in a hole) would fight over those 4 places, so each direction gets its
-/// own manifold. A contact joins the manifold whose reference normal (the first contact's normal, kept in
-/// body1's frame so that it turns with the body) is within kSameManifoldAngle of its own; otherwise it starts
-/// a new one. Manifolds live across steps: Bullet matches each new contact with a point already held (within
-/// the breaking threshold) and keeps that point's impulse, so the solver warm starts; refreshContactPoints
-/// drops points that drifted apart. A manifold left with no point at the end of a step is released.
+/// The persistent manifolds of one pair, one per direction of contact normal and patch of contact. Bullet
+/// keeps at most 4 points in a manifold, chosen for the largest area around the deepest point; contacts whose
+/// normals point different ways (a body in a corner, a peg in a hole) would fight over those 4 places, and a
+/// patch without a contact this step would lose its held points to the patches that have one. A contact joins
+/// the manifold whose reference normal (the first contact's normal, kept in body1's frame so that it turns
+/// with the body) is within 30° of its own and whose first contact lies within a quarter of the smaller
+/// body's bounding radius of it (kept in that body's frame); otherwise it starts a new one. Manifolds live
+/// across steps: Bullet matches each new contact with a point already held (within the breaking threshold)
+/// and keeps that point's impulse, so the solver warm starts; refreshContactPoints drops points that drifted
+/// apart. A manifold left with no point at the end of a step is released.
 class ContactManifoldSet {
  public:
   /// Manifolds come from and go back to `dispatcher`.
@@ -55,6 +57,7 @@ class ContactManifoldSet {
     btPersistentManifold* manifold;
     btVector3 normalInBody1;  // reference normal, in body1's frame
     btScalar breakingThreshold;  // Bullet's, as the dispatcher made the manifold
+    btVector3 anchor;            // the first contact's point, in the smaller body's frame (the patch's place)
   };
   btDispatcher* m_dispatcher;
   std::vector<Group> m_groups;
