@@ -58,19 +58,17 @@ class RestingPair : public ::testing::Test {
     return out;
   }
 
-  // The x, z of each point of every manifold, with its lifetime and normal.
+  // The x, z of each point of every manifold, with its lifetime.
   struct Point {
     btScalar x, z;
     int lifeTime;
-    btVector3 normal;
   };
   std::vector<Point> points() const {
     std::vector<Point> out;
     for (const btPersistentManifold* m : held()) {
       for (int k = 0; k < m->getNumContacts(); ++k) {
         const btManifoldPoint& p = m->getContactPoint(k);
-        out.push_back(
-            {p.getPositionWorldOnB().x(), p.getPositionWorldOnB().z(), p.getLifeTime(), p.m_normalWorldOnB});
+        out.push_back({p.getPositionWorldOnB().x(), p.getPositionWorldOnB().z(), p.getLifeTime()});
       }
     }
     return out;
@@ -142,8 +140,8 @@ TEST_F(RestingPair, NearestSpeculativeContactOfAFastPairIsHeld) {
 }
 
 TEST_F(RestingPair, ContactsOfAnotherDirectionGetTheirOwnManifold) {
-  // The wall's contact lies 0.5 m from the nearest corner, but also a patch of the same place would not take
-  // it: its normal is 90 degrees from theirs.
+  // The wall's contact lies 0.1 m from the floor's two, within their patch, but its normal is 90 degrees from
+  // theirs: it gets a manifold of its own.
   write({onTop(0.5f, -0.1f, -1e-3f), onTop(0.5f, 0.1f, -1e-3f)});
   PairContact wall = onTop(0.5f, 0.0f, -1e-3f);
   wall.normalOnB = btVector3(-1, 0, 0);
