@@ -12,6 +12,7 @@
 
 namespace gpucol {
 
+class CandidateCache;
 class ContactManifoldSet;
 class GImpactStandIns;
 class TriangleMeshPatch;
@@ -53,6 +54,11 @@ class MeshMeshAlgorithm : public btActivatingCollisionAlgorithm {
   /// other mesh pairs. processCollision uses it when the shapes and transforms are the ones given here.
   void setPrecomputedResult(const MeshPairQuery& query, MeshPairResult result);
 
+  /// For gpucol::CollisionDispatcher: where this pair keeps its candidate triangle pairs from step to step
+  /// between two MeshShapes (null for any other pair: a GImpact mesh's stand-in is rebuilt as its mesh
+  /// changes).
+  CandidateCache* candidateCache(const btCollisionShape* shape0, const btCollisionShape* shape1);
+
   /// The query this pair would run between two mesh shapes (a GImpact mesh through its stand-in) in a step of
   /// `timeStep` seconds, its speculative reach from the bodies' velocities (none for a closest-points
   /// algorithm); std::nullopt when it is not a mesh-mesh pair.
@@ -70,6 +76,7 @@ class MeshMeshAlgorithm : public btActivatingCollisionAlgorithm {
   std::unique_ptr<ContactManifoldSet> m_manifolds;
   std::unique_ptr<Precomputed> m_precomputed;
   std::unique_ptr<TriangleMeshPatch> m_patch;  // triangles of a btBvhTriangleMeshShape near the mesh, kept
+  std::unique_ptr<CandidateCache> m_candidates;  // a resting mesh pair's candidates, kept
 };
 
 }  // namespace gpucol

@@ -15,6 +15,7 @@
 #include "gpucol/collide_meshes.h"
 #include "gpucol/mesh_mesh_algorithm.h"
 #include "gpucol/mesh_shape.h"
+#include "mesh_pairs/mesh_batch.h"
 
 namespace gpucol {
 namespace {
@@ -49,6 +50,7 @@ class MeshPairCollector : public btOverlapCallback {
     if (std::optional<MeshPairQuery> query = algorithm->meshPairQuery(&wrapper0, &wrapper1, m_timeStep)) {
       algorithms.push_back(algorithm);
       queries.push_back(*query);
+      caches.push_back(algorithm->candidateCache(object0->getCollisionShape(), object1->getCollisionShape()));
       gimpactPairs += gimpact0 || gimpact1;
     }
     return false;  // keep the pair
@@ -56,6 +58,7 @@ class MeshPairCollector : public btOverlapCallback {
 
   std::vector<MeshMeshAlgorithm*> algorithms;
   std::vector<MeshPairQuery> queries;
+  std::vector<CandidateCache*> caches;
   std::uint64_t gimpactPairs = 0;
 
  private:
@@ -136,7 +139,8 @@ void CollisionDispatcher::dispatchAllCollisionPairs(btOverlappingPairCache* pair
     if (!collector.queries.empty()) {
       const auto start = std::chrono::steady_clock::now();
       try {
-        std::vector<MeshPairResult> results = collideMeshesBatch(collector.queries, m_config);
+        std::vector<MeshPairResult> results =
+            collideMeshesBatch(collector.queries, m_config, collector.caches);
         for (std::size_t i = 0; i < results.size(); ++i) {
           m_lastStepStats.rootBoxesMissed += results[i].stats.rootBoxesMissed;
           m_lastStepStats.openClPairs += results[i].stats.backendUsed == Backend::OpenCL;

@@ -21,6 +21,8 @@
 #include "bullet/triangle_mesh_patch.h"
 #include "bullet/warn_once.h"
 #include "gpucol/mesh_shape.h"
+#include "mesh_pairs/candidate_cache.h"
+#include "mesh_pairs/mesh_batch.h"
 
 namespace gpucol {
 
@@ -189,7 +191,8 @@ MeshMeshAlgorithm::MeshMeshAlgorithm(const btCollisionAlgorithmConstructionInfo&
       m_standIns(standIns),
       m_speculativeContacts(speculativeContacts),
       m_manifolds(std::make_unique<ContactManifoldSet>(info.m_dispatcher1)),
-      m_patch(std::make_unique<TriangleMeshPatch>()) {}
+      m_patch(std::make_unique<TriangleMeshPatch>()),
+      m_candidates(std::make_unique<CandidateCache>()) {}
 
 MeshMeshAlgorithm::~MeshMeshAlgorithm() = default;
 
@@ -214,6 +217,11 @@ std::optional<MeshPairQuery> MeshMeshAlgorithm::meshPairQuery(const btCollisionO
   query.transformB = body1->getWorldTransform();
   if (m_speculativeContacts) setSpeculativeReach(body0, body1, timeStep, query);
   return query;
+}
+
+CandidateCache* MeshMeshAlgorithm::candidateCache(const btCollisionShape* shape0,
+                                                  const btCollisionShape* shape1) {
+  return MeshShape::isMeshShape(shape0) && MeshShape::isMeshShape(shape1) ? m_candidates.get() : nullptr;
 }
 
 void MeshMeshAlgorithm::setPrecomputedResult(const MeshPairQuery& query, MeshPairResult result) {
@@ -245,7 +253,7 @@ void MeshMeshAlgorithm::processCollision(const btCollisionObjectWrapper* body0,
                            precomputed->query.speculativeMotion == query->speculativeMotion &&
                            precomputed->query.speculativeDistance == query->speculativeDistance;
       const MeshPairResult result =
-          batched ? std::move(precomputed->result) : collideMeshes(*query, m_config);
+          batched ? std::move(precomputed->result) : collideMeshes(*query, m_config, candidateCache(s0, s1));
       speculative = query->speculativeMotion.length() + query->speculativeDistance;
       contacts = toPairContacts(result.reducedContacts, *query->shapeA, *query->shapeB);
     } else {

@@ -97,6 +97,12 @@ static_assert(offsetof(AabbLeafEntry, max) == 12 && sizeof(AabbLeafEntry) >= 28,
 /// gets tens of start pairs per thread to balance.
 constexpr std::size_t kFrontPerThread = 32;
 
+/// Fewest triangles both meshes need for the traversal to run in parallel. A smaller pair's traversal is
+/// short, and its parallel machinery (workers' stacks and lists, their sort and merge) cost more than it
+/// saved; the pairs of a batch run in parallel anyway. The candidates are sorted either way, so the choice
+/// changes no result.
+constexpr std::size_t kParallelTriangles = 2048;
+
 /// Front pairs per parallel_for chunk: the front is small, and one start pair's subtree can be most of the
 /// work.
 constexpr std::size_t kParallelGrain = 2;
@@ -492,24 +498,32 @@ class Traverser {
   const BoxCarrier& m_intoB;  // A's boxes into B's frame
 };
 
-/// The breadth-first front: a growable array whose entries are left uninitialised until written (a
-/// std::vector::resize zero-filled four times the front per level, about a third of the serial part).
-class PairBuffer {
+/// A growable array whose entries are left uninitialised until written: the breadth-first front (a
+/// std::vector::resize zero-filled four times the front per level, about a third of the serial part) and the
+/// sort's buffers.
+template <class T>
+class ScratchArray {
  public:
   /// Room for at least n entries; the previous contents are not kept.
-  NodePair* reserve(std::size_t n) {
+  T* reserve(std::size_t n) {
     if (n > m_capacity) {
-      m_data.reset(new NodePair[n]);
+      m_data.reset(new T[n]);
       m_capacity = n;
     }
     return m_data.get();
   }
   /// The entries.
-  NodePair* data() const { return m_data.get(); }
+  T* data() const { return m_data.get(); }
 
  private:
-  std::unique_ptr<NodePair[]> m_data;
+  std::unique_ptr<T[]> m_data;
   std::size_t m_capacity = 0;
+};
+
+/// sortPairs' buffers: the packed keys, the radix sort's second array, its digit counters.
+struct SortScratch {
+  ScratchArray<std::uint64_t> keys, moved;
+  ScratchArray<std::uint32_t> counts;
 };
 
 /// What each worker thread keeps between the front's pairs.
@@ -558,13 +572,16 @@ void sortPairs(std::vector<TrianglePair>& pairs, std::size_t trianglesA, std::si
   const int totalBits = indexBits(trianglesA) + bitsB;  // at most 64: both counts fit 32 bits
   const RadixDigits digits(unsigned(totalBits), kMaxRadixBits);
 
-  // Uninitialised: every key is written before it is read (zero-filling them cost as much as a pass).
-  std::unique_ptr<std::uint64_t[]> keyBuffer(new std::uint64_t[n]), scratchBuffer(new std::uint64_t[n]);
-  std::unique_ptr<std::uint32_t[]> counts(new std::uint32_t[digits.buckets()]);
+  // The calling thread's buffers, kept from call to call (the sort starts no parallel work, so a thread is in
+  // one sort at a time); uninitialised, every key is written before it is read.
+  thread_local SortScratch scratch;
+  std::uint64_t* const keyBuffer = scratch.keys.reserve(n);
+  std::uint64_t* const scratchBuffer = scratch.moved.reserve(n);
+  std::uint32_t* const counts = scratch.counts.reserve(digits.buckets());
   for (std::size_t i = 0; i < n; ++i) {
     keyBuffer[i] = (std::uint64_t{pairs[i].triangleA} << bitsB) | pairs[i].triangleB;
   }
-  const std::uint64_t* keys = radixSort(keyBuffer.get(), scratchBuffer.get(), n, 0, digits, counts.get());
+  const std::uint64_t* keys = radixSort(keyBuffer, scratchBuffer, n, 0, digits, counts);
   const std::uint64_t maskB = bitsB == 0 ? 0 : (~std::uint64_t{0} >> (64 - bitsB));
   for (std::size_t i = 0; i < n; ++i) {
     pairs[i] = {static_cast<std::uint32_t>(keys[i] >> bitsB), static_cast<std::uint32_t>(keys[i] & maskB)};
@@ -590,13 +607,13 @@ GPUCOL_AVX2_CLONES void traverseFromRoot(const AabbTree& a, const AabbTree& b, c
                                          bool parallel) {
   const NodePair root{0, 0};
   const std::size_t bound = stackBound(a, b);
-  if (!parallel) {
+  if (!parallel || std::min(a.triangleCount(), b.triangleCount()) < kParallelTriangles) {
     std::vector<NodePair> stack(bound);
     traverser.run(root, stack, out, tests);
   } else {
     // Breadth-first until the front holds enough independent pairs (thesis §5.4.2 expands level by level
     // too), then each worker finishes its share depth first with its own stack and output.
-    PairBuffer frontBuffer, nextBuffer;
+    ScratchArray<NodePair> frontBuffer, nextBuffer;
     frontBuffer.reserve(1)[0] = root;
     std::size_t frontSize = 1;
     const std::size_t parallelFront =

@@ -2,7 +2,6 @@
 // thesis §5.3.4) and contact reduction (6-D binning, §5.3.5); the hits of either path into the pair's result.
 #include "mesh_pairs/cpu_mesh_pair.h"
 
-#include <tbb/enumerable_thread_specific.h>
 #include <tbb/parallel_for.h>
 
 #include <Eigen/Core>
@@ -20,6 +19,7 @@
 #include "bvh/prefetch.h"
 #include "bvh/tree_traversal.h"
 #include "gpucol/mesh_shape.h"
+#include "mesh_pairs/candidate_cache.h"
 #include "mesh_pairs/stage_clock.h"
 #include "narrowphase/contact_reduction.h"
 #include "narrowphase/contact_rows.h"
@@ -207,6 +207,13 @@ inline void fetchChunkRows(const MeshShape& shapeA, const MeshShape& shapeB, con
     }
   }
   transformRows(rows, count, frame);
+}
+
+// The calling thread's ChunkBuffers, kept from pair to pair and step to step: a chunk's rows are written
+// before they are read, and runNearChunk starts no parallel work, so a thread is in one chunk at a time.
+ChunkBuffers& threadChunkBuffers() {
+  thread_local ChunkBuffers buffers;
+  return buffers;
 }
 
 // Marks in `empty` the columns of `rows` that proximityCertainlyEmptyBranchFree proves have no proximity
@@ -535,12 +542,18 @@ std::vector<T> joinChunks(const std::vector<std::vector<T>>& chunks) {
 NearPhaseResult runNearPhase(const MeshShape& shapeA, const MeshShape& shapeB, const PairFrame& frame,
                              const std::vector<TrianglePair>& candidates) {
   const std::size_t chunks = (candidates.size() + kNearChunk - 1) / kNearChunk;
+  if (chunks <= 1) {
+    // Most pairs of a pile: one chunk, run here, its hits straight into the result.
+    NearPhaseResult result;
+    if (chunks == 1) {
+      runNearChunk(shapeA, shapeB, frame, candidates, 0, threadChunkBuffers(), result.hits, result.nearby);
+    }
+    return result;
+  }
   std::vector<std::vector<NearHit>> chunkHits(chunks);
   std::vector<std::vector<NearbyHit>> chunkNearby(chunks);
-  tbb::enumerable_thread_specific<ChunkBuffers> threadBuffers;
   tbb::parallel_for(std::size_t(0), chunks, [&](std::size_t chunk) {
-    // Per thread, not per chunk: a chunk's rows are written before they are read.
-    runNearChunk(shapeA, shapeB, frame, candidates, chunk * kNearChunk, threadBuffers.local(),
+    runNearChunk(shapeA, shapeB, frame, candidates, chunk * kNearChunk, threadChunkBuffers(),
                  chunkHits[chunk], chunkNearby[chunk]);
   });
   return {joinChunks(chunkHits), joinChunks(chunkNearby)};
@@ -554,12 +567,13 @@ std::vector<NearbyHit> runProximityPass(const MeshShape& shapeA, const MeshShape
                                         const std::vector<std::uint8_t>& crossing) {
   const std::size_t chunks = (candidates.size() + kNearChunk - 1) / kNearChunk;
   std::vector<std::vector<NearbyHit>> chunkHits(chunks);
-  // Per thread: the chunk's triangles, and those the proximity pre-test leaves.
-  tbb::enumerable_thread_specific<std::pair<ChunkTriangles, ChunkTriangles>> threadRows;
   tbb::parallel_for(std::size_t(0), chunks, [&](std::size_t chunk) {
     const std::size_t begin = chunk * kNearChunk;
     const std::size_t count = std::min(candidates.size(), begin + kNearChunk) - begin;
-    auto& [rows, kept] = threadRows.local();
+    // The chunk's triangles, and those the proximity pre-test leaves.
+    ChunkBuffers& buffers = threadChunkBuffers();
+    ChunkTriangles& rows = buffers.triangles;
+    ChunkTriangles& kept = buffers.nearby;
     fetchChunkRows(shapeA, shapeB, frame, candidates, begin, count, rows.values());
     std::uint16_t nearIndex[kNearChunk];
     const std::size_t nearCount =
@@ -662,7 +676,7 @@ void requireFinite(const btTransform& transformA, const btTransform& transformB)
   }
 }
 
-MeshPairResult collidePairOnCpu(const MeshPairQuery& query, const Config& config) {
+MeshPairResult collidePairOnCpu(const MeshPairQuery& query, const Config& config, CandidateCache* cache) {
   requireFinite(query.transformA, query.transformB);
   const MeshShape& shapeA = *query.shapeA;
   const MeshShape& shapeB = *query.shapeB;
@@ -680,10 +694,17 @@ MeshPairResult collidePairOnCpu(const MeshPairQuery& query, const Config& config
     result.stats.middlePhaseMs = millisecondsSince(start);
     return result;
   }
-  TraversalStats traversal;
-  findCandidatePairs(shapeA.tree(), shapeB.tree(), frame.treeMap, result.candidatePairs, &traversal, true,
-                     frame.candidateReach);
-  result.stats.nodeTests = traversal.nodeTests;
+  if (cache != nullptr && query.speculativeMotion.isZero() && query.speculativeDistance == 0) {
+    // A pair without a speculative reach may be at rest: its kept candidates, when they still cover it.
+    std::uint64_t nodeTests = 0;
+    result.candidatePairs = cache->candidates(shapeA, shapeB, frame, nodeTests);
+    if (nodeTests != 0) result.stats.nodeTests = nodeTests;  // a traversal ran, its root test included
+  } else {
+    TraversalStats traversal;
+    findCandidatePairs(shapeA.tree(), shapeB.tree(), frame.treeMap, result.candidatePairs, &traversal, true,
+                       frame.candidateReach);
+    result.stats.nodeTests = traversal.nodeTests;
+  }
   result.stats.middlePhaseMs = millisecondsSince(start);
 
   start = Clock::now();

@@ -14,8 +14,13 @@ namespace gpucol {
 /// Throws std::invalid_argument when either transform has a NaN or infinite component.
 void requireFinite(const btTransform& transformA, const btTransform& transformB);
 
-/// The query's pair on the CPU: root boxes, middle phase, near phase, contacts and their reduction.
-MeshPairResult collidePairOnCpu(const MeshPairQuery& query, const Config& config);
+class CandidateCache;
+
+/// The query's pair on the CPU: root boxes, middle phase, near phase, contacts and their reduction. With a
+/// `cache`, a pair without a speculative reach takes its candidates from it (the same contacts, fewer
+/// traversals while the pair rests).
+MeshPairResult collidePairOnCpu(const MeshPairQuery& query, const Config& config,
+                                CandidateCache* cache = nullptr);
 
 /// Fills `result`'s intersecting pairs, contacts and reduced contacts from the device's near phase's `hits`
 /// (DeviceNearHit, in candidate order, indexing result.candidatePairs), with the proximity contacts of the

@@ -1,5 +1,7 @@
 // A batch of mesh pairs (collideMeshesBatch, and collideMeshes as a batch of one): on the device through the
 // seam of mesh_batch_device.h when the backend choice wants it, else each pair on the CPU (cpu_mesh_pair.h).
+#include "mesh_pairs/mesh_batch.h"
+
 #include <tbb/parallel_for.h>
 
 #include <optional>
@@ -147,15 +149,29 @@ MeshPairResult collideMeshes(const MeshShape& shapeA, const btTransform& transfo
 }
 
 MeshPairResult collideMeshes(const MeshPairQuery& query, const Config& config) {
-  if (config.meshBackend != Backend::Cpu) return std::move(collideMeshesBatch({query}, config)[0]);
+  return collideMeshes(query, config, nullptr);
+}
+
+MeshPairResult collideMeshes(const MeshPairQuery& query, const Config& config, CandidateCache* cache) {
+  if (config.meshBackend != Backend::Cpu) return std::move(collideMeshesBatch({query}, config, {cache})[0]);
   if (query.shapeA == nullptr || query.shapeB == nullptr) {
     throw std::invalid_argument("collideMeshes: the query has a null shape");
   }
-  return collidePairOnCpu(query, config);
+  return collidePairOnCpu(query, config, cache);
 }
 
 std::vector<MeshPairResult> collideMeshesBatch(const std::vector<MeshPairQuery>& queries,
                                                const Config& config) {
+  return collideMeshesBatch(queries, config, {});
+}
+
+std::vector<MeshPairResult> collideMeshesBatch(const std::vector<MeshPairQuery>& queries,
+                                               const Config& config,
+                                               const std::vector<CandidateCache*>& caches) {
+  if (!caches.empty() && caches.size() != queries.size()) {
+    throw std::invalid_argument("collideMeshesBatch: " + std::to_string(caches.size()) + " caches for " +
+                                std::to_string(queries.size()) + " queries");
+  }
   for (std::size_t i = 0; i < queries.size(); ++i) {
     if (queries[i].shapeA == nullptr || queries[i].shapeB == nullptr) {
       throw std::invalid_argument("collideMeshesBatch: query " + std::to_string(i) + " has a null shape");
@@ -169,8 +185,9 @@ std::vector<MeshPairResult> collideMeshesBatch(const std::vector<MeshPairQuery>&
   }
   const auto start = Clock::now();
   // Pairs run in parallel; each pair's own stages are parallel too, and oneTBB balances the nesting.
-  tbb::parallel_for(std::size_t(0), queries.size(),
-                    [&](std::size_t i) { results[i] = collidePairOnCpu(queries[i], config); });
+  tbb::parallel_for(std::size_t(0), queries.size(), [&](std::size_t i) {
+    results[i] = collidePairOnCpu(queries[i], config, caches.empty() ? nullptr : caches[i]);
+  });
   if (timeCpu) {
     detail::meshAutoChoice().record(*timeCpu, MeasuredBackendChoice::Path::Cpu, millisecondsSince(start));
   }
