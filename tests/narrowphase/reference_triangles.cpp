@@ -142,10 +142,21 @@ std::vector<OverlapCorner> referenceOverlapCorners(const TriangleD& moving, cons
     if (n.dot(inner - from) < 0) n = -n;
     planes.push_back({from - n * (1e-5 * size), n});
   };
+  // The quad of the fixed triangle and the one across a flat diagonal, in order around it, turns the same way
+  // at every corner (seen along `out`) when it is convex.
+  const auto convexQuad = [&](const Eigen::Vector3d(&q)[4]) {
+    int left = 0, right = 0;
+    for (int i = 0; i < 4; ++i) {
+      const double turn = out.dot((q[(i + 1) % 4] - q[i]).cross(q[(i + 2) % 4] - q[(i + 1) % 4]));
+      left += turn > 0;
+      right += turn < 0;
+    }
+    return left == 0 || right == 0;
+  };
   for (int k = 0; k < 3; ++k) {
     const Eigen::Vector3d& from = fixed[k];
     const Eigen::Vector3d& to = fixed[(k + 1) % 3];
-    if (fixedWings[k]) {
+    if (fixedWings[k] && convexQuad({fixed[(k + 2) % 3], from, *fixedWings[k], to})) {
       add(from, *fixedWings[k], to);
       add(*fixedWings[k], to, from);
     } else {

@@ -58,7 +58,8 @@ struct OverlapCorner {
 /// The corners of the part of `moving` over `fixed` (the documented rule of clipContactToOverlap,
 /// triangle_contact.h, written again as an enumeration): the region over the fixed triangle is bounded by a
 /// plane through each edge that contains the unit direction `out`, or, at a flat diagonal (a wing in
-/// `fixedWings`), by the two far edges of the triangle across it; each moved out by 1e-5 of the fixed
+/// `fixedWings`) whose two triangles make a convex quad, by the two far edges of the triangle across it; each
+/// moved out by 1e-5 of the fixed
 /// triangle's size. The corners of moving ∩ region are among: moving's vertices, its edges crossing a plane,
 /// and the lines where two planes meet crossing its plane; those inside both are returned (a corner may come
 /// more than once).

@@ -198,13 +198,17 @@ TEST(TriangleContact, ClippedToOverlapMatchesTheDoubleReference) {
     const double scale = test::pairScale(da, db);
     const double tolerance = 1e-5 * scale;
     // Half the pairs get a flat neighbour across edge 0 of each triangle: the edge's mirror image of the
-    // third vertex, in the plane.
+    // third vertex, in the plane (a convex quad), or, for every other one of those, a far vertex beyond the
+    // edge's first end, just across the edge's line (the two make a quad that is not convex there, as two
+    // triangles meeting at the inner corner of an L's cap do).
     const bool flat = i % 2 == 1;
+    const bool reflex = i % 4 == 3;
     EdgeWings wingsA = noWings(), wingsB = noWings();
     test::FlatWings flatA, flatB;
     if (flat) {
-      const auto mirror = [](const TriangleF& t) {
+      const auto mirror = [&](const TriangleF& t) {
         const Eigen::Vector3f mid = 0.5f * (t[0] + t[1]);
+        if (reflex) return Eigen::Vector3f(t[0] + 2.0f * (t[0] - t[1]) + 0.2f * (mid - t[2]));
         return Eigen::Vector3f(2.0f * mid - t[2]);
       };
       wingsA.across[0] = mirror(a);
@@ -263,6 +267,38 @@ TEST(TriangleContact, ClippedToOverlapMatchesTheDoubleReference) {
   EXPECT_GT(compared, 1000);
   EXPECT_GT(changed, compared / 10);
   EXPECT_GT(cornerContacts, compared / 10);
+}
+
+/// A box hanging over the inner edge of a bin's rim, crossing the plane of the rim's top just inside the bin:
+/// the rim's top triangle there has two flat neighbours, the other half of its side's top (a convex quad) and
+/// the top of the side around the corner (the two make an L, not convex). The box's triangle crosses the top
+/// triangle's plane along a line that leaves it at its inner edge, so its overlap is a sliver 7 mm deep at
+/// that edge. The L's far sides had cut away the top triangle itself, the empty overlap left the contact
+/// whole, and the box was pushed up as if 0.544 m deep.
+TEST(TriangleContact, AFlatNeighbourAroundAnInnerCornerDoesNotBoundTheOverlap) {
+  const Eigen::Vector3f rim[3] = {{-3.0f, 2.5f, 3.0f}, {-3.0f, 2.5f, -3.0f}, {-3.5f, 2.5f, -3.5f}};
+  const Eigen::Vector3f box[3] = {
+      {-2.5372f, 2.6875f, -1.3685f}, {-3.0327f, 2.6321f, -1.8598f}, {-2.8735f, 1.9557f, -1.9443f}};
+  const std::optional<TriangleContact> c = generateContact(rim, box);
+  ASSERT_TRUE(c.has_value());
+  ASSERT_FALSE(c->onFaceOfB);  // the box's triangle moves out of the rim's top
+  EXPECT_NEAR(c->depth, -0.544f, 1e-3f);
+  EdgeWings wings = noWings();
+  wings.across[1] = Eigen::Vector3f(3.5f, 2.5f, -3.5f);  // around the corner: an L with this triangle
+  wings.across[2] = Eigen::Vector3f(-3.5f, 2.5f, 3.5f);  // the other half of the side's top
+  TriangleContact clipped = *c;
+  TriangleContact corners[kMaxOverlapCorners];
+  clipContactToOverlap(rim, box, wings, clipped, corners);
+  const Eigen::Vector3d out(0, 1, 0);
+  test::FlatWings flat;
+  flat[1] = wings.across[1].cast<double>();
+  flat[2] = wings.across[2].cast<double>();
+  const double reference =
+      test::referenceClippedMove(test::toDouble(TriangleF{box[0], box[1], box[2]}),
+                                 test::toDouble(TriangleF{rim[0], rim[1], rim[2]}), out, flat);
+  EXPECT_NEAR(reference, 0.007, 1e-3);
+  EXPECT_NEAR(clipped.depth, -reference, 1e-5);
+  EXPECT_NEAR(clipped.deepestPoint.x(), -3.0f, 1e-4f);
 }
 
 /// The sides of two stacked boxes when the upper one tilts a little: the faces face the same way and cross in a

@@ -45,16 +45,31 @@ int clipContactToOverlap(const Eigen::Vector3f (&a)[3], const Eigen::Vector3f (&
     sides[planes] = side;
     limits[planes++] = side.dot(from) - 1e-5 * size * side.norm();
   };
+  // The two far sides bound the two triangles together only where they make a convex quad: the far vertex
+  // lies across the edge from the triangle's own third vertex, and that third vertex on the inner side of
+  // both far sides. Where they do not (two triangles of a flat face meeting at its inner corner: an L's cap,
+  // a bin's rim at a corner), the far sides would cut away part of the triangle itself, and the edge bounds
+  // the region as any other does.
+  const auto convexAcross = [&](const Eigen::Vector3d& from, const Eigen::Vector3d& w,
+                                const Eigen::Vector3d& to, const Eigen::Vector3d& third) {
+    // The signs of `third` and of `other` against the line p -> q, along `out`, multiplied.
+    const auto sides = [&](const Eigen::Vector3d& p, const Eigen::Vector3d& q, const Eigen::Vector3d& other) {
+      const Eigen::Vector3d side = out.cross(q - p);
+      return side.dot(other - p) * side.dot(third - p);
+    };
+    return sides(from, to, w) < 0 && sides(from, w, to) >= 0 && sides(w, to, from) >= 0;
+  };
   for (int k = 0; k < 3; ++k) {
     const Eigen::Vector3d& from = f[k];
     const Eigen::Vector3d& to = f[(k + 1) % 3];
+    const Eigen::Vector3d& third = f[(k + 2) % 3];
     const Eigen::Vector3f& wing = flatWings.across[k];
-    if (wing.allFinite()) {
-      const Eigen::Vector3d w = wing.cast<double>() - origin;
+    const Eigen::Vector3d w = wing.cast<double>() - origin;
+    if (wing.allFinite() && convexAcross(from, w, to, third)) {
       addSide(from, w, to);
       addSide(w, to, from);
     } else {
-      addSide(from, to, f[(k + 2) % 3]);
+      addSide(from, to, third);
     }
   }
   // Sutherland-Hodgman against each side.

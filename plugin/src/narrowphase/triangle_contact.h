@@ -70,7 +70,9 @@ inline constexpr int kMaxOverlapCorners = 8;
 /// is held at every corner of their overlap that dips in (thesis §5.3.4 keeps the deepest vertex alone).
 /// Where `flatWings` gives the far vertex across an edge of the other triangle (the one the moving triangle
 /// leaves: B when onFaceOfB, else A; NaN elsewhere), that edge is a diagonal of a flat face, not the face's
-/// end: the two far edges of the triangle across it bound the overlap instead. Each side is moved out by 1e-5
+/// end: the two far edges of the triangle across it bound the overlap instead, where the two triangles make
+/// a convex quad (not at the inner corner of a flat face shaped like an L, where those edges would cut into
+/// the triangle itself). Each side is moved out by 1e-5
 /// of the other triangle's size, so that a face lying in it (the sides of two boxes stacked flush) is not cut
 /// by rounding. A contact that is not below 0 is left as it is.
 int clipContactToOverlap(const Eigen::Vector3f (&a)[3], const Eigen::Vector3f (&b)[3],
