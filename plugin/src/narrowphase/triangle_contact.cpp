@@ -52,12 +52,12 @@ int clipContactToOverlap(const Eigen::Vector3f (&a)[3], const Eigen::Vector3f (&
   // the region as any other does.
   const auto convexAcross = [&](const Eigen::Vector3d& from, const Eigen::Vector3d& w,
                                 const Eigen::Vector3d& to, const Eigen::Vector3d& third) {
-    // The signs of `third` and of `other` against the line p -> q, along `out`, multiplied.
-    const auto sides = [&](const Eigen::Vector3d& p, const Eigen::Vector3d& q, const Eigen::Vector3d& other) {
-      const Eigen::Vector3d side = out.cross(q - p);
-      return side.dot(other - p) * side.dot(third - p);
+    // The sides of `third` and of `other` from the line p -> q, seen along `out`: positive when the same.
+    const auto sameSide = [&](const Eigen::Vector3d& p, const Eigen::Vector3d& q, const Eigen::Vector3d& other) {
+      const Eigen::Vector3d normal = out.cross(q - p);
+      return normal.dot(other - p) * normal.dot(third - p);
     };
-    return sides(from, to, w) < 0 && sides(from, w, to) >= 0 && sides(w, to, from) >= 0;
+    return sameSide(from, to, w) < 0 && sameSide(from, w, to) >= 0 && sameSide(w, to, from) >= 0;
   };
   for (int k = 0; k < 3; ++k) {
     const Eigen::Vector3d& from = f[k];
