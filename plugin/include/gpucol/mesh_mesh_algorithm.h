@@ -55,8 +55,8 @@ class MeshMeshAlgorithm : public btActivatingCollisionAlgorithm {
   void setPrecomputedResult(const MeshPairQuery& query, MeshPairResult result);
 
   /// For gpucol::CollisionDispatcher: where this pair keeps its candidate triangle pairs from step to step
-  /// between two MeshShapes (null for any other pair: a GImpact mesh's stand-in is rebuilt as its mesh
-  /// changes).
+  /// between two MeshShapes (null for any other pair, a GImpact mesh's stand-in being rebuilt as its mesh
+  /// changes, and for a closest-points algorithm, which serves one query).
   CandidateCache* candidateCache(const btCollisionShape* shape0, const btCollisionShape* shape1);
 
   /// The query this pair would run between two mesh shapes (a GImpact mesh through its stand-in) in a step of

@@ -221,7 +221,11 @@ std::optional<MeshPairQuery> MeshMeshAlgorithm::meshPairQuery(const btCollisionO
 
 CandidateCache* MeshMeshAlgorithm::candidateCache(const btCollisionShape* shape0,
                                                   const btCollisionShape* shape1) {
-  return MeshShape::isMeshShape(shape0) && MeshShape::isMeshShape(shape1) ? m_candidates.get() : nullptr;
+  // A closest-points algorithm lives for one query (contactTest makes it and throws it away): a cache would
+  // only widen its one traversal.
+  return m_speculativeContacts && MeshShape::isMeshShape(shape0) && MeshShape::isMeshShape(shape1)
+             ? m_candidates.get()
+             : nullptr;
 }
 
 void MeshMeshAlgorithm::setPrecomputedResult(const MeshPairQuery& query, MeshPairResult result) {
