@@ -1,7 +1,8 @@
 // ContactManifoldSet, the pair's persistent manifolds, on Bullet's own btPersistentManifold: a face's corners
 // stay in their points from step to step, of a dozen contacts on one patch the widest support goes in, the
 // nearest of a fast pair's speculative contacts is held, contacts whose normals point other ways get
-// manifolds of their own, and a patch without a new contact keeps its points until they separate.
+// manifolds of their own, a patch without a new contact keeps its points until they separate, and two flat
+// faces in contact make one patch.
 #include <gtest/gtest.h>
 
 #include <BulletCollision/CollisionDispatch/btCollisionDispatcher.h>
@@ -177,6 +178,24 @@ TEST_F(RestingPair, APatchWithoutANewContactKeepsItsPointsUntilTheySeparate) {
   ps = points();
   EXPECT_EQ(ps.size(), 4u);
   EXPECT_FALSE(has(ps, -0.5f, 0.5f) || has(ps, 0.5f, 0.5f));
+}
+
+TEST_F(RestingPair, TwoFlatFacesInContactMakeOnePatch) {
+  // The box's bottom corners, 1 m apart, lie farther apart than a quarter of its bounding radius: on a curved
+  // surface each would be a patch of its own. On the box's flat bottom face resting on the slab's flat top
+  // they are one support, as Bullet's box pair holds them in one manifold.
+  std::vector<PairContact> corners{onTop(-0.5f, -0.5f, -1e-3f), onTop(0.5f, -0.5f, -1e-3f),
+                                   onTop(0.5f, 0.5f, -1e-3f), onTop(-0.5f, 0.5f, -1e-3f)};
+  write(corners);
+  EXPECT_EQ(held().size(), 4u);
+  for (PairContact& c : corners) c.flatSize = btSqrt(btScalar(2));  // the box face's diagonal
+  ContactManifoldSet flat(&dispatcher);
+  btManifoldResult result(&boxWrap, &slabWrap);
+  flat.write(corners, &boxWrap, &slabWrap, &result);
+  btManifoldArray array;
+  flat.appendTo(array);
+  ASSERT_EQ(array.size(), 1);
+  EXPECT_EQ(array[0]->getNumContacts(), 4);
 }
 
 }  // namespace

@@ -335,6 +335,27 @@ TEST(MeshShapeInertia, BoxMatchesAnalyticWithScaling) {
   }
 }
 
+// flatFaceSize: the diagonal of a triangle's flat face, scaled with the shape; a sphere's triangle is its
+// own.
+TEST(MeshShapeFlatFaces, ABoxTriangleSpansItsScaledSide) {
+  MeshShape box(shared(scenes::makeBox(0.5f, 1.0f, 1.5f, 3)));
+  box.setLocalScaling(btVector3(2.0f, -0.5f, 1.0f));  // sides 2 x 1 x 3 after scaling
+  const btScalar sides[3] = {2, 1, 3};
+  const float* soup = box.triangleSoup();
+  for (std::uint32_t t = 0; t < box.mesh().triangleCount(); ++t) {
+    // The side's normal axis: the one on which the triangle's three vertices agree.
+    int normalAxis = 0;
+    for (int c = 0; c < 3; ++c) {
+      if (soup[9 * t + c] == soup[9 * t + 3 + c] && soup[9 * t + c] == soup[9 * t + 6 + c]) normalAxis = c;
+    }
+    const btScalar a = sides[(normalAxis + 1) % 3], b = sides[(normalAxis + 2) % 3];
+    EXPECT_NEAR(box.flatFaceSize(t), btSqrt(a * a + b * b), 1e-5f) << t;
+  }
+  MeshShape sphere(shared(scenes::makeIcosphere(1.0f, 2)));
+  for (std::uint32_t t = 0; t < sphere.mesh().triangleCount(); ++t)
+    EXPECT_LT(sphere.flatFaceSize(t), 0.5f) << t;
+}
+
 TEST(MeshShapeInertia, IcosphereIsASolidSphereWithinItsTessellation) {
   // The icosphere lies between the sphere of its vertices (radius r) and the sphere touching its nearest face
   // plane (radius a). For a solid B with ball(a) ⊂ B ⊂ ball(r) and a² >= 3/5 r², the mean of |x|² over B lies

@@ -22,7 +22,7 @@ bool known(const std::vector<float>& wings, std::size_t t, int k) {
 // on the edge itself.
 TEST(EdgeWings, EveryEdgeOfAClosedBoxHasItsWing) {
   const TriangleMesh box = scenes::makeBox(1, 2, 3);
-  const std::vector<float> wings = buildEdgeWings(box);
+  const std::vector<float> wings = buildEdgeWings(box, matchEdges(box));
   ASSERT_EQ(wings.size(), 9 * box.triangleCount());
   for (std::size_t t = 0; t < box.triangleCount(); ++t) {
     for (int k = 0; k < 3; ++k) {
@@ -49,7 +49,7 @@ TEST(EdgeWings, SharedEdgeOfUnweldedTriangles) {
   std::vector<float> xyz = {0, 0, 0, 1, 0, 0, 0, 1, 0,      // triangle 0: edge 1 from (1,0,0) to (0,1,0)
                             0, 1, 0, 1, 0, 0, 1, 1, 0.5f};  // triangle 1: runs it back, far vertex (1,1,0.5)
   const TriangleMesh mesh = TriangleMesh::fromArrays(xyz, {0, 1, 2, 3, 4, 5}, "two triangles");
-  const std::vector<float> wings = buildEdgeWings(mesh);
+  const std::vector<float> wings = buildEdgeWings(mesh, matchEdges(mesh));
   EXPECT_EQ(wings[9 * 0 + 3 * 1 + 0], 1.0f);
   EXPECT_EQ(wings[9 * 0 + 3 * 1 + 1], 1.0f);
   EXPECT_EQ(wings[9 * 0 + 3 * 1 + 2], 0.5f);
@@ -64,11 +64,11 @@ TEST(EdgeWings, SharedEdgeOfUnweldedTriangles) {
 TEST(EdgeWings, NoWingAcrossDisagreeingOrNonManifoldEdges) {
   std::vector<float> xyz = {0, 0, 0, 1, 0, 0, 0, 1, 0, 1, 1, 0, 0.5f, 0.5f, 1};
   const TriangleMesh flipped = TriangleMesh::fromArrays(xyz, {0, 1, 2, 1, 2, 3}, "disagreeing");
-  std::vector<float> wings = buildEdgeWings(flipped);
+  std::vector<float> wings = buildEdgeWings(flipped, matchEdges(flipped));
   EXPECT_FALSE(known(wings, 0, 1));
   EXPECT_FALSE(known(wings, 1, 0));
   const TriangleMesh three = TriangleMesh::fromArrays(xyz, {0, 1, 2, 2, 1, 3, 2, 1, 4}, "three on an edge");
-  wings = buildEdgeWings(three);
+  wings = buildEdgeWings(three, matchEdges(three));
   EXPECT_FALSE(known(wings, 0, 1));
   EXPECT_FALSE(known(wings, 1, 0));
   EXPECT_FALSE(known(wings, 2, 0));
@@ -80,7 +80,7 @@ TEST(EdgeWings, NoWingAcrossDisagreeingOrNonManifoldEdges) {
 TEST(EdgeWings, FlatDiagonalsOfBoxesButNotOfBentFaces) {
   for (int detail : {1, 3}) {
     const TriangleMesh box = scenes::makeBox(1, 2, 3, detail);
-    const std::vector<std::uint8_t> flat = findFlatDiagonals(box, buildEdgeWings(box));
+    const std::vector<std::uint8_t> flat = findFlatDiagonals(box, buildEdgeWings(box, matchEdges(box)));
     ASSERT_EQ(flat.size(), box.triangleCount());
     std::size_t flatEdges = 0;
     for (std::uint8_t bits : flat) flatEdges += (bits & 1) + ((bits >> 1) & 1) + ((bits >> 2) & 1);
@@ -90,12 +90,13 @@ TEST(EdgeWings, FlatDiagonalsOfBoxesButNotOfBentFaces) {
     EXPECT_EQ(flatEdges, 6 * 2 * (3 * d * d - 2 * d)) << "detail " << detail;
   }
   const TriangleMesh sphere = scenes::makeIcosphere(1, 2);
-  for (std::uint8_t bits : findFlatDiagonals(sphere, buildEdgeWings(sphere))) EXPECT_EQ(bits, 0);
+  for (std::uint8_t bits : findFlatDiagonals(sphere, buildEdgeWings(sphere, matchEdges(sphere))))
+    EXPECT_EQ(bits, 0);
   for (float bend : {1e-3f, 1e-6f}) {
     // Two triangles of a unit square, the far corner of the second lifted by `bend`.
     const TriangleMesh quad =
         TriangleMesh::fromArrays({0, 0, 0, 1, 0, 0, 1, 1, 0, 0, 1, bend}, {0, 1, 2, 0, 2, 3}, "quad");
-    const std::vector<std::uint8_t> flat = findFlatDiagonals(quad, buildEdgeWings(quad));
+    const std::vector<std::uint8_t> flat = findFlatDiagonals(quad, buildEdgeWings(quad, matchEdges(quad)));
     // The shared edge is edge 2 of the first triangle (2 -> 0) and edge 0 of the second (0 -> 2).
     EXPECT_EQ(flat[0], bend < 1e-4f ? 4 : 0) << bend;
     EXPECT_EQ(flat[1], bend < 1e-4f ? 1 : 0) << bend;

@@ -66,6 +66,10 @@ ATTRIBUTE_ALIGNED16(class) MeshShape : public btConcaveShape {
   const std::uint8_t* flatDiagonals() const {
     return m_flatDiagonals.data();
   }
+  /// The diagonal of the box around the flat face that triangle `triangle` belongs to (the triangles joined
+  /// to it across flat diagonals), scaled: a box's side for one of its triangles, the triangle's own size on
+  /// a curved surface. Two flat faces in contact share one support as wide as the smaller.
+  btScalar flatFaceSize(std::uint32_t triangle) const;
 
   /// The largest ratio between the magnitudes of two local scaling components: beyond it the float transforms
   /// of the mesh pair query round the short axis so much that intersecting pairs are lost or made up.
@@ -127,6 +131,7 @@ ATTRIBUTE_ALIGNED16(class) MeshShape : public btConcaveShape {
   std::shared_ptr<const float[]> m_soup;
   std::vector<float> m_wings;
   std::vector<std::uint8_t> m_flatDiagonals;
+  std::vector<float> m_flatFaceHalfExtents;  // 3 per triangle, unscaled (flatFaceHalfExtents)
   btVector3 m_localScaling{1, 1, 1};
 };
 

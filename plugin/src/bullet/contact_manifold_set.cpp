@@ -23,6 +23,11 @@ const btScalar kSameManifoldCos = btCos(SIMD_PI / 6);
 // "Why the pile of real meshes stays awake"). Each patch keeps its points while it has no new contact.
 constexpr btScalar kPatchOfRadius = 0.25f;
 
+// Two flat faces in contact make one patch, reaching over the smaller face's box diagonal (contact to the
+// opposite corner, the farthest two contacts on it lie apart) and a quarter more, for contacts a little off
+// the face (by their depth, or over the other face's rim).
+constexpr btScalar kFlatFaceReach = 1.25f;
+
 // The at most 4 contacts of one manifold's group that span the widest support: the deepest, the one farthest
 // from it, the one farthest from the line through those two, and the one farthest on the line's other side.
 // Bullet holds 4 points per manifold; fed a dozen contacts one by one, it keeps what arrival order and its
@@ -99,20 +104,26 @@ void ContactManifoldSet::write(const std::vector<PairContact>& contacts,
   body1->getCollisionShape()->getBoundingSphere(centre, radius1);
   const btTransform smallInverse = (radius0 <= radius1 ? body0 : body1)->getWorldTransform().inverse();
   const btScalar patch = kPatchOfRadius * btMin(radius0, radius1);
-  // A shape without a size (or with a broken one) makes one patch of everything.
-  const btScalar patch2 = patch > 0 && std::isfinite(patch) ? patch * patch : BT_INFINITY;
+  // A contact's patch reaches a quarter of the smaller body's radius, or over the flat faces it lies on. A
+  // shape without a size (or with a broken one) makes one patch of everything.
+  const auto reach2Of = [&](const PairContact& contact) {
+    const btScalar reach = btMax(patch, kFlatFaceReach * contact.flatSize);
+    return reach > 0 && std::isfinite(reach) ? reach * reach : BT_INFINITY;
+  };
   for (const PairContact& contact : contacts) {
     const btVector3 normalInBody1 = body1Basis.transpose() * contact.normalOnB;
     const btVector3 anchor = smallInverse * contact.pointOnB;
+    const btScalar reach2 = reach2Of(contact);
     std::size_t group = 0;
-    while (group < m_groups.size() && (m_groups[group].normalInBody1.dot(normalInBody1) < kSameManifoldCos ||
-                                       (m_groups[group].anchor - anchor).length2() > patch2)) {
+    while (group < m_groups.size() &&
+           (m_groups[group].normalInBody1.dot(normalInBody1) < kSameManifoldCos ||
+            (m_groups[group].anchor - anchor).length2() > btMax(m_groups[group].reach2, reach2))) {
       ++group;
     }
     if (group == m_groups.size()) {
       btPersistentManifold* manifold =
           m_dispatcher->getNewManifold(body0->getCollisionObject(), body1->getCollisionObject());
-      m_groups.push_back({manifold, normalInBody1, manifold->getContactBreakingThreshold(), anchor});
+      m_groups.push_back({manifold, normalInBody1, manifold->getContactBreakingThreshold(), anchor, reach2});
       byGroup.emplace_back();
     }
     byGroup[group].push_back(contact);

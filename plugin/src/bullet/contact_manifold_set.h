@@ -18,6 +18,9 @@ struct PairContact {
   /// The part and triangle of body0's and body1's shape that made the contact (btManifoldPoint's m_partId0/1
   /// and m_index0/1, as Bullet's concave algorithms give them); -1 on a side without triangles (a plane).
   int partId0 = -1, index0 = -1, partId1 = -1, index1 = -1;
+  /// How far the flat surface both sides have around the contact reaches: the smaller of the two triangles'
+  /// flat faces (MeshShape::flatFaceSize; a plane's is unbounded). 0 where unknown.
+  btScalar flatSize = 0;
 };
 
 /// The same contacts seen from the other side: body0 and body1 swap roles.
@@ -29,7 +32,9 @@ std::vector<PairContact> swapSides(std::vector<PairContact> contacts);
 /// patch without a contact this step would lose its held points to the patches that have one. A contact joins
 /// the manifold whose reference normal (the first contact's normal, kept in body1's frame so that it turns
 /// with the body) is within 30° of its own and whose first contact lies within a quarter of the smaller
-/// body's bounding radius of it (kept in that body's frame); otherwise it starts a new one. Manifolds live
+/// body's bounding radius of it (kept in that body's frame), or within the flat surface either contact lies
+/// on (two box faces resting on each other make one patch, as Bullet's box pair has one manifold); otherwise
+/// it starts a new one. Manifolds live
 /// across steps: Bullet matches each new contact with a point already held (within the breaking threshold)
 /// and keeps that point's impulse, so the solver warm starts; refreshContactPoints drops points that drifted
 /// apart. A manifold left with no point at the end of a step is released.
@@ -58,6 +63,7 @@ class ContactManifoldSet {
     btVector3 normalInBody1;  // reference normal, in body1's frame
     btScalar breakingThreshold;  // Bullet's, as the dispatcher made the manifold
     btVector3 anchor;            // the first contact's point, in the smaller body's frame (the patch's place)
+    btScalar reach2;             // squared reach of the patch from its anchor
   };
   btDispatcher* m_dispatcher;
   std::vector<Group> m_groups;

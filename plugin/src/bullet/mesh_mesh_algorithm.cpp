@@ -75,6 +75,7 @@ std::vector<PairContact> toPairContacts(const std::vector<MeshContact>& reduced,
     p.index0 = t0.index;
     p.partId1 = t1.part;
     p.index1 = t1.index;
+    p.flatSize = btMin(a.flatFaceSize(c.triangleA), b.flatFaceSize(c.triangleB));
     out.push_back(p);
   }
   return out;

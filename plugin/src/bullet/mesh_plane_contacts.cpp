@@ -37,16 +37,17 @@ std::vector<PairContact> meshPlaneContacts(const MeshShape& mesh, const btTransf
   visitTreeTriangles(mesh.tree(), boxNearPlane, [&](std::uint32_t t) {
     for (int i = 0; i < 3; ++i) vertices.push_back((std::uint64_t(indices[3 * std::size_t(t) + i]) << 32) | t);
   });
-  // A vertex is shared by several triangles: it gives one contact, named by the lowest of them.
+  // A vertex is shared by several triangles: it gives one contact, named by the lowest of them, whose flat
+  // surface is the widest of their flat faces (a box's corner lies on its bottom face).
   std::sort(vertices.begin(), vertices.end());
-  vertices.erase(std::unique(vertices.begin(), vertices.end(),
-                             [](std::uint64_t a, std::uint64_t b) { return (a >> 32) == (b >> 32); }),
-                 vertices.end());
-
   std::vector<PairContact> contacts;
   std::vector<ReductionInput> binned;
-  for (const std::uint64_t vertexAndTriangle : vertices) {
-    const std::uint32_t v = std::uint32_t(vertexAndTriangle >> 32);
+  for (std::size_t first = 0, next = 0; first < vertices.size(); first = next) {
+    const std::uint32_t v = std::uint32_t(vertices[first] >> 32);
+    btScalar flatSize = 0;
+    for (next = first; next < vertices.size() && std::uint32_t(vertices[next] >> 32) == v; ++next) {
+      flatSize = btMax(flatSize, mesh.flatFaceSize(std::uint32_t(vertices[next])));
+    }
     const float* p = positions + 3 * std::size_t(v);
     const btScalar distance = normalInMesh.dot(btVector3(p[0], p[1], p[2])) + offset;
     if (distance > reach) continue;
@@ -55,9 +56,10 @@ std::vector<PairContact> meshPlaneContacts(const MeshShape& mesh, const btTransf
     const btVector3 onPlane = world - normalWorld * (distance - plane.getMargin());
     PairContact contact{onPlane, normalWorld, distance - margins};
     // The mesh's part and triangle; the plane has none.
-    const PartTriangle triangle = mesh.mesh().partTriangle(std::uint32_t(vertexAndTriangle));
+    const PartTriangle triangle = mesh.mesh().partTriangle(std::uint32_t(vertices[first]));
     contact.partId0 = triangle.part;
     contact.index0 = triangle.index;
+    contact.flatSize = flatSize;
     contacts.push_back(contact);
     binned.push_back({Eigen::Vector3f(float(world.x()), float(world.y()), float(world.z())),
                       Eigen::Vector3f(float(normalWorld.x()), float(normalWorld.y()), float(normalWorld.z())),

@@ -12,6 +12,7 @@
 #include "gpucol/mesh_error.h"
 #include "memory/large_array_allocator.h"
 #include "mesh/edge_wings.h"
+#include "mesh/flat_faces.h"
 #include "mesh/mesh_analysis.h"
 
 namespace gpucol {
@@ -38,8 +39,10 @@ MeshShape::MeshShape(std::shared_ptr<const TriangleMesh> mesh, const Config& con
   if (!m_mesh) throw MeshError("MeshShape: the mesh pointer is null");
   m_tree = std::make_shared<const AabbTree>(AabbTree::build(*m_mesh, config.trianglesPerLeaf));
   m_soup = buildTriangleSoup(*m_mesh);
-  m_wings = buildEdgeWings(*m_mesh);
+  const std::vector<std::uint32_t> across = matchEdges(*m_mesh);
+  m_wings = buildEdgeWings(*m_mesh, across);
   m_flatDiagonals = findFlatDiagonals(*m_mesh, m_wings);
+  m_flatFaceHalfExtents = flatFaceHalfExtents(*m_mesh, across, m_flatDiagonals);
   // Not CUSTOM_CONCAVE_SHAPE_TYPE: Bullet 3 gives that value to SDF_SHAPE_PROXYTYPE too, and its convex-concave
   // algorithm treats every shape of that type as a btSdfCollisionShape (boxes would fall through a mesh).
   // FAST_CONCAVE_MESH_PROXYTYPE is a concave type that nothing in Bullet special-cases, so Bullet's generic
@@ -89,6 +92,11 @@ void MeshShape::setLocalScaling(const btVector3& scaling) {
     }
   }
   m_localScaling = scaling;
+}
+
+btScalar MeshShape::flatFaceSize(std::uint32_t triangle) const {
+  const float* half = m_flatFaceHalfExtents.data() + 3 * std::size_t(triangle);
+  return 2 * (btVector3(half[0], half[1], half[2]) * m_localScaling).length();
 }
 
 void MeshShape::getAabb(const btTransform& t, btVector3& aabbMin, btVector3& aabbMax) const {

@@ -12,49 +12,54 @@
 
 namespace gpucol {
 
-std::vector<float> buildEdgeWings(const TriangleMesh& mesh) {
-  const std::vector<float>& positions = mesh.positions();
+std::vector<std::uint32_t> matchEdges(const TriangleMesh& mesh) {
   const std::vector<std::uint32_t>& indices = mesh.indices();
   const std::size_t triangles = indices.size() / 3;
-  std::vector<float> wings(9 * triangles, std::numeric_limits<float>::quiet_NaN());
-  std::vector<float> welded = positions;
+  std::vector<std::uint32_t> across(3 * triangles, kNoEdge);
+  std::vector<float> welded = mesh.positions();
   const std::vector<std::uint32_t> vertexOf = weldEqualPositions(welded);
 
   // Each edge once per triangle, keyed by its two welded ends (lower first), sorted so that the triangles
   // sharing an edge come together.
   struct Entry {
     std::uint64_t key;
-    std::uint32_t triangle;
-    std::uint8_t edge;
-    bool forward;  // runs from the lower welded index to the higher
+    std::uint32_t edge;  // 3 t + k
+    bool forward;        // runs from the lower welded index to the higher
   };
   std::vector<Entry> entries;
   entries.reserve(3 * triangles);
   for (std::size_t t = 0; t < triangles; ++t) {
-    for (std::uint8_t k = 0; k < 3; ++k) {
+    for (std::uint32_t k = 0; k < 3; ++k) {
       const std::uint32_t a = vertexOf[indices[3 * t + k]], b = vertexOf[indices[3 * t + (k + 1) % 3]];
       if (a == b) continue;
-      entries.push_back({(std::uint64_t{std::min(a, b)} << 32) | std::max(a, b), std::uint32_t(t), k, a < b});
+      entries.push_back(
+          {(std::uint64_t{std::min(a, b)} << 32) | std::max(a, b), std::uint32_t(3 * t + k), a < b});
     }
   }
-  std::sort(entries.begin(), entries.end(), [](const Entry& l, const Entry& r) {
-    return l.key != r.key             ? l.key < r.key
-           : l.triangle != r.triangle ? l.triangle < r.triangle
-                                      : l.edge < r.edge;
-  });
-  const auto setWing = [&](const Entry& of, const Entry& across) {
-    const std::uint32_t far = indices[3 * std::size_t(across.triangle) + (across.edge + 2) % 3];
-    for (int c = 0; c < 3; ++c)
-      wings[9 * std::size_t(of.triangle) + 3 * of.edge + c] = positions[3 * std::size_t(far) + c];
-  };
+  std::sort(entries.begin(), entries.end(),
+            [](const Entry& l, const Entry& r) { return l.key != r.key ? l.key < r.key : l.edge < r.edge; });
   for (std::size_t i = 0; i < entries.size();) {
     std::size_t j = i;
     while (j < entries.size() && entries[j].key == entries[i].key) ++j;
     if (j - i == 2 && entries[i].forward != entries[i + 1].forward) {
-      setWing(entries[i], entries[i + 1]);
-      setWing(entries[i + 1], entries[i]);
+      across[entries[i].edge] = entries[i + 1].edge;
+      across[entries[i + 1].edge] = entries[i].edge;
     }
     i = j;
+  }
+  return across;
+}
+
+std::vector<float> buildEdgeWings(const TriangleMesh& mesh, const std::vector<std::uint32_t>& across) {
+  const std::vector<float>& positions = mesh.positions();
+  const std::vector<std::uint32_t>& indices = mesh.indices();
+  std::vector<float> wings(3 * across.size(), std::numeric_limits<float>::quiet_NaN());
+  for (std::size_t edge = 0; edge < across.size(); ++edge) {
+    if (across[edge] == kNoEdge) continue;
+    // The far vertex of the triangle across: the one its shared edge does not start or end at.
+    const std::uint32_t other = across[edge], otherTriangle = other / 3;
+    const std::uint32_t far = indices[3 * std::size_t(otherTriangle) + (other % 3 + 2) % 3];
+    for (int c = 0; c < 3; ++c) wings[3 * edge + c] = positions[3 * std::size_t(far) + c];
   }
   return wings;
 }
