@@ -130,7 +130,8 @@ double pairScale(const TriangleD& a, const TriangleD& b) {
 }
 
 std::vector<OverlapCorner> referenceOverlapCorners(const TriangleD& moving, const TriangleD& fixed,
-                                                   const Eigen::Vector3d& out, const FlatWings& fixedWings) {
+                                                   const Eigen::Vector3d& out, const FlatWings& fixedWings,
+                                                   const FlatWings& convexWings) {
   const double size =
       std::max({(fixed[1] - fixed[0]).norm(), (fixed[2] - fixed[1]).norm(), (fixed[0] - fixed[2]).norm()});
   struct Plane {
@@ -199,15 +200,25 @@ std::vector<OverlapCorner> referenceOverlapCorners(const TriangleD& moving, cons
       const Eigen::Vector3d edge = moving[(e + 1) % 3] - moving[e];
       in = nMoving.cross(edge).dot(c - moving[e]) >= -tolerance * edge.norm();
     }
-    if (in) inside.push_back({c, -out.dot(c - fixed[0])});
+    if (!in) continue;
+    double below = -out.dot(c - fixed[0]);
+    for (int k = 0; k < 3; ++k) {
+      if (!convexWings[k]) continue;
+      // The face across the edge, facing away from the fixed triangle's third vertex.
+      const Eigen::Vector3d& from = fixed[k];
+      Eigen::Vector3d n = (fixed[(k + 1) % 3] - from).cross(*convexWings[k] - from).normalized();
+      if (n.dot(fixed[(k + 2) % 3] - from) > 0) n = -n;
+      below = std::min(below, -n.dot(c - from) + 0.05 * size);
+    }
+    inside.push_back({c, below});
   }
   return inside;
 }
 
 double referenceClippedMove(const TriangleD& moving, const TriangleD& fixed, const Eigen::Vector3d& out,
-                            const FlatWings& fixedWings) {
+                            const FlatWings& fixedWings, const FlatWings& convexWings) {
   double deepest = 0;
-  for (const OverlapCorner& c : referenceOverlapCorners(moving, fixed, out, fixedWings))
+  for (const OverlapCorner& c : referenceOverlapCorners(moving, fixed, out, fixedWings, convexWings))
     deepest = std::max(deepest, c.below);
   return deepest;
 }

@@ -62,15 +62,18 @@ struct OverlapCorner {
 /// moved out by 1e-5 of the fixed
 /// triangle's size. The corners of moving ∩ region are among: moving's vertices, its edges crossing a plane,
 /// and the lines where two planes meet crossing its plane; those inside both are returned (a corner may come
-/// more than once).
+/// more than once). A corner's `below` is at most how far it lies behind the face across each edge of
+/// `convexWings` (the far vertex across a convex edge of the fixed triangle) plus 5% of the fixed triangle's
+/// size.
 std::vector<OverlapCorner> referenceOverlapCorners(const TriangleD& moving, const TriangleD& fixed,
                                                    const Eigen::Vector3d& out,
-                                                   const FlatWings& fixedWings = {});
+                                                   const FlatWings& fixedWings = {},
+                                                   const FlatWings& convexWings = {});
 
 /// How far the part of `moving` over `fixed` must move along `out` to leave fixed's plane: the deepest of
 /// referenceOverlapCorners (0 when none is below the plane).
 double referenceClippedMove(const TriangleD& moving, const TriangleD& fixed, const Eigen::Vector3d& out,
-                            const FlatWings& fixedWings = {});
+                            const FlatWings& fixedWings = {}, const FlatWings& convexWings = {});
 
 /// Diagonal of the bounding box of both triangles: the length scale of a pair.
 double pairScale(const TriangleD& a, const TriangleD& b);

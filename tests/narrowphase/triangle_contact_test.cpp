@@ -162,7 +162,7 @@ TEST(TriangleContact, CrossedRodFacesMeetWhereTheyOverlap) {
   EXPECT_NEAR(c->deepestPoint.x(), 0.4f, 1e-6f);
   TriangleContact clipped = *c;
   TriangleContact corners[kMaxOverlapCorners];
-  const int more = clipContactToOverlap(top, bottom, noWings(), clipped, corners);
+  const int more = clipContactToOverlap(top, bottom, noWings(), noWings(), clipped, corners);
   EXPECT_EQ(clipped.normalOnB, c->normalOnB);
   EXPECT_EQ(clipped.point, c->point);
   // Every corner of the overlap that dips in is held, over B.
@@ -218,7 +218,8 @@ TEST(TriangleContact, ClippedToOverlapMatchesTheDoubleReference) {
     }
     TriangleContact clipped = *c;
     TriangleContact corners[kMaxOverlapCorners];
-    const int more = clipContactToOverlap(pa, pb, c->onFaceOfB ? wingsB : wingsA, clipped, corners);
+    const int more =
+        clipContactToOverlap(pa, pb, c->onFaceOfB ? wingsB : wingsA, noWings(), clipped, corners);
     const TriangleD& moving = c->onFaceOfB ? da : db;
     const TriangleD& fixed = c->onFaceOfB ? db : da;
     const Eigen::Vector3d out = (c->onFaceOfB ? c->normalOnB : Eigen::Vector3f(-c->normalOnB)).cast<double>();
@@ -269,6 +270,59 @@ TEST(TriangleContact, ClippedToOverlapMatchesTheDoubleReference) {
   EXPECT_GT(cornerContacts, compared / 10);
 }
 
+/// A box A rests tilted on the top edge of box B (a pile's step). A's side face crosses B's near-vertical
+/// side triangle just under B's top, and A's top corner lies 0.28 m behind that side's plane inside its
+/// prism, but only 2e-4 m inside B's bottom face across the side's convex edge. Pushed out along the side's
+/// normal it was a contact 0.28 m deep between boxes that touched; the face across the convex edge bounds it
+/// to within 5% of the side triangle's size of the 2e-4 m.
+TEST(TriangleContact, ACornerNearerTheFaceAcrossAConvexEdgeIsNotPushedThroughTheSide) {
+  const Eigen::Vector3f a[3] = {{-2.52928472f, 0.700031042f, -0.217490166f},
+                                {-1.99897695f, 4.40776348e-05f, -0.674427867f},
+                                {-1.99904776f, 0.700044036f, -0.674489975f}};
+  const Eigen::Vector3f b[3] = {{-2.7915535f, 0.868583739f, -0.444972128f},
+                                {-1.92039013f, 1.3193171f, -0.311129659f},
+                                {-2.12185478f, 0.690945387f, -0.544712484f}};
+  const std::optional<TriangleContact> c = generateContact(a, b);
+  ASSERT_TRUE(c.has_value());
+  ASSERT_TRUE(c->onFaceOfB);
+  EdgeWings flat = noWings(), convex = noWings();
+  flat.across[0] = Eigen::Vector3f(-2.59008884f, 1.49695539f, -0.211389244f);   // the side's other half
+  convex.across[1] = Eigen::Vector3f(-2.0915966f, 0.438767791f, 0.107584022f);  // B's bottom
+  convex.across[2] = Eigen::Vector3f(-2.76129532f, 0.616406143f, 0.207324415f);
+  TriangleContact unbounded = *c, bounded = *c;
+  TriangleContact corners[kMaxOverlapCorners];
+  clipContactToOverlap(a, b, flat, noWings(), unbounded, corners);
+  EXPECT_NEAR(unbounded.depth, -0.284f, 1e-3f);
+  const int more = clipContactToOverlap(a, b, flat, convex, bounded, corners);
+  const float size = std::max({(b[1] - b[0]).norm(), (b[2] - b[1]).norm(), (b[0] - b[2]).norm()});
+  EXPECT_LE(bounded.depth, 0);
+  EXPECT_GE(bounded.depth, -(2e-4f + 0.05f * size) - 1e-5f);
+  for (int k = 0; k < more; ++k) EXPECT_GE(corners[k].depth, bounded.depth);
+}
+
+/// A face overhanging a convex edge (box A's side crossing box B's top 5 mm deep, past B's rim at x = 0): the
+/// corner at the rim lies on the plane of B's side, but within the slack of it, so it keeps its 5 mm along
+/// the top's normal, as Bullet's box pair holds the overhanging face at the rim.
+TEST(TriangleContact, AFaceOverhangingAConvexEdgeKeepsItsCornerAtTheRim) {
+  const Eigen::Vector3f top[3] = {{0, 0, 0}, {0, 0, 1}, {1, 0, 1}};  // B's top, facing +y; edge 0 is the rim
+  const Eigen::Vector3f side[3] = {{-0.5f, -0.005f, 0.5f}, {0.5f, -0.005f, 0.5f}, {0.5f, 0.7f, 0.5f}};
+  const std::optional<TriangleContact> c = generateContact(side, top);
+  ASSERT_TRUE(c.has_value());
+  ASSERT_TRUE(c->onFaceOfB);
+  EdgeWings convex = noWings();
+  convex.across[0] = Eigen::Vector3f(0, -1, 0.5f);  // B's side face below the rim
+  TriangleContact clipped = *c;
+  TriangleContact corners[kMaxOverlapCorners];
+  const int more = clipContactToOverlap(side, top, noWings(), convex, clipped, corners);
+  EXPECT_NEAR(clipped.depth, -0.005f, 1e-5f);
+  bool rimHeld = std::abs(clipped.deepestPoint.x()) < 1e-4f;  // the sides are moved out by 1e-5 of the size
+  for (int k = 0; k < more; ++k) {
+    EXPECT_NEAR(corners[k].depth, -0.005f, 1e-5f);
+    rimHeld |= std::abs(corners[k].deepestPoint.x()) < 1e-4f;
+  }
+  EXPECT_TRUE(rimHeld);
+}
+
 /// A box hanging over the inner edge of a bin's rim, crossing the plane of the rim's top just inside the bin:
 /// the rim's top triangle there has two flat neighbours, the other half of its side's top (a convex quad) and
 /// the top of the side around the corner (the two make an L, not convex). The box's triangle crosses the top
@@ -288,7 +342,7 @@ TEST(TriangleContact, AFlatNeighbourAroundAnInnerCornerDoesNotBoundTheOverlap) {
   wings.across[2] = Eigen::Vector3f(-3.5f, 2.5f, 3.5f);  // the other half of the side's top
   TriangleContact clipped = *c;
   TriangleContact corners[kMaxOverlapCorners];
-  clipContactToOverlap(rim, box, wings, clipped, corners);
+  clipContactToOverlap(rim, box, wings, noWings(), clipped, corners);
   const Eigen::Vector3d out(0, 1, 0);
   test::FlatWings flat;
   flat[1] = wings.across[1].cast<double>();

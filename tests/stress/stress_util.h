@@ -87,12 +87,16 @@ inline ReferenceContact referenceContact(const TriangleD& a, const TriangleD& b)
   return r;
 }
 
-/// For each edge k of triangle `t` (corner k to k + 1) that is a diagonal of a flat face, the far vertex (in
-/// the world) of the one triangle of the shape that runs the same edge the other way, by brute force over the
-/// mesh (equal positions). None when no triangle or more than one shares the edge, one runs it the same way,
-/// or the far vertex lies off the triangle's plane by more than 1e-4 of the edge's length in the mesh's own
-/// coordinates.
-inline FlatWings referenceFlatWings(const MeshShape& shape, const btTransform& transform, std::uint32_t t) {
+/// For each edge k of triangle `t` (corner k to k + 1), the far vertex (in the world) of the one triangle of
+/// the shape that runs the same edge the other way, by brute force over the mesh (equal positions), and
+/// whether the edge is a diagonal of a flat face (the far vertex within 1e-4 of the edge's length of the
+/// triangle's plane in the mesh's own coordinates). None when no triangle or more than one shares the edge,
+/// or one runs it the same way.
+struct ReferenceWings {
+  FlatWings far;
+  std::array<bool, 3> flat{};
+};
+inline ReferenceWings referenceWings(const MeshShape& shape, const btTransform& transform, std::uint32_t t) {
   const TriangleMesh& mesh = shape.mesh();
   const auto vertex = [&](std::uint32_t triangle, int corner) {
     const float* p =
@@ -101,7 +105,7 @@ inline FlatWings referenceFlatWings(const MeshShape& shape, const btTransform& t
   };
   const Eigen::Vector3d own[3] = {vertex(t, 0), vertex(t, 1), vertex(t, 2)};
   const Eigen::Vector3d normal = (own[1] - own[0]).cross(own[2] - own[0]).normalized();
-  FlatWings wings;
+  ReferenceWings wings;
   for (int k = 0; k < 3; ++k) {
     const Eigen::Vector3d& p = own[k];
     const Eigen::Vector3d& q = own[(k + 1) % 3];
@@ -122,10 +126,34 @@ inline FlatWings referenceFlatWings(const MeshShape& shape, const btTransform& t
       }
     }
     if (sharing != 1 || !reversed) continue;
-    if (std::abs(normal.dot(vertex(farTriangle, farCorner) - p)) > 1e-4 * (q - p).norm()) continue;
-    wings[k] = worldTriangle(shape, transform, farTriangle)[farCorner];
+    wings.flat[std::size_t(k)] =
+        std::abs(normal.dot(vertex(farTriangle, farCorner) - p)) <= 1e-4 * (q - p).norm();
+    wings.far[std::size_t(k)] = worldTriangle(shape, transform, farTriangle)[farCorner];
   }
   return wings;
+}
+
+/// The far vertices of referenceWings across the edges of `t` that are diagonals of a flat face.
+inline FlatWings referenceFlatWings(const MeshShape& shape, const btTransform& transform, std::uint32_t t) {
+  const ReferenceWings wings = referenceWings(shape, transform, t);
+  FlatWings out;
+  for (std::size_t k = 0; k < 3; ++k) {
+    if (wings.flat[k]) out[k] = wings.far[k];
+  }
+  return out;
+}
+
+/// The far vertices of referenceWings across the edges of `t` that are convex: not flat, the far vertex
+/// behind the triangle's plane (in the world).
+inline FlatWings referenceConvexWings(const MeshShape& shape, const btTransform& transform, std::uint32_t t) {
+  const ReferenceWings wings = referenceWings(shape, transform, t);
+  const TriangleD own = worldTriangle(shape, transform, t);
+  const Eigen::Vector3d normal = (own[1] - own[0]).cross(own[2] - own[0]);
+  FlatWings out;
+  for (std::size_t k = 0; k < 3; ++k) {
+    if (wings.far[k] && !wings.flat[k] && normal.dot(*wings.far[k] - own[k]) < 0) out[k] = wings.far[k];
+  }
+  return out;
 }
 
 /// What checkQuery counted.
@@ -180,20 +208,22 @@ inline QueryCheck checkQuery(const MeshShape& a, const btTransform& ta, const Me
     double pointDistance = std::max(pointTriangleDistance(point, triA), pointTriangleDistance(point, triB));
     double depthError = 1e300, normalError = 1e300;
     const auto byCorners = [&](const TriangleD& moving, const TriangleD& fixed, const Eigen::Vector3d& out,
-                               const FlatWings& wings) {
+                               const FlatWings& wings, const FlatWings& convex) {
       // No deeper than the overlap's deepest corner, and not above the plane. (A corner where the moving
       // triangle's edge meets a side at a grazing angle is ill-conditioned: its own depth is not compared.)
-      const double deepest = referenceClippedMove(moving, fixed, out, wings);
+      const double deepest = referenceClippedMove(moving, fixed, out, wings, convex);
       depthError = std::min(depthError, std::max({0.0, -double(c.depth) - deepest, double(c.depth)}));
       const Eigen::Vector3d corner = point + out * (0.5 * double(c.depth));
       pointDistance = std::min(pointDistance, pointTriangleDistance(corner, moving));
     };
     if (aMayMove) {
-      byCorners(triA, triB, ref.nB, referenceFlatWings(b, tb, c.triangleB));
+      byCorners(triA, triB, ref.nB, referenceFlatWings(b, tb, c.triangleB),
+                referenceConvexWings(b, tb, c.triangleB));
       normalError = std::min(normalError, (normal - ref.nB).norm());
     }
     if (bMayMove) {
-      byCorners(triB, triA, ref.nA, referenceFlatWings(a, ta, c.triangleA));
+      byCorners(triB, triA, ref.nA, referenceFlatWings(a, ta, c.triangleA),
+                referenceConvexWings(a, ta, c.triangleA));
       normalError = std::min(normalError, (normal + ref.nA).norm());
     }
     check.worstPointDistance =
@@ -213,14 +243,16 @@ inline QueryCheck checkQuery(const MeshShape& a, const btTransform& ta, const Me
     const double tie = contactTolerance * scale;
     double error = 1e300;
     if (ref.moveA <= ref.moveB + tie) {
-      error =
-          std::min(error, std::abs(depth + referenceClippedMove(triA, triB, ref.nB,
-                                                                referenceFlatWings(b, tb, pair.triangleB))));
+      error = std::min(
+          error,
+          std::abs(depth + referenceClippedMove(triA, triB, ref.nB, referenceFlatWings(b, tb, pair.triangleB),
+                                                referenceConvexWings(b, tb, pair.triangleB))));
     }
     if (ref.moveB <= ref.moveA + tie) {
-      error =
-          std::min(error, std::abs(depth + referenceClippedMove(triB, triA, ref.nA,
-                                                                referenceFlatWings(a, ta, pair.triangleA))));
+      error = std::min(
+          error,
+          std::abs(depth + referenceClippedMove(triB, triA, ref.nA, referenceFlatWings(a, ta, pair.triangleA),
+                                                referenceConvexWings(a, ta, pair.triangleA))));
     }
     check.worstDepthError = std::max(check.worstDepthError, error / scale);
   }

@@ -302,7 +302,13 @@ int clipToOverlap(const MeshShape& shapeA, const MeshShape& shapeB, const PairFr
   if (!(contact.depth < 0)) return 0;
   const EdgeWings flatWings = contact.onFaceOfB ? flatDiagonalWings(shapeB, pair.triangleB, false, frame)
                                                 : flatDiagonalWings(shapeA, pair.triangleA, true, frame);
-  return clipContactToOverlap(a, b, flatWings, contact, corners);
+  EdgeWings otherWings = contact.onFaceOfB ? pairFrameWings(shapeB, pair.triangleB, false, frame)
+                                           : pairFrameWings(shapeA, pair.triangleA, true, frame);
+  for (int i = 0; i < 3; ++i) {
+    if (flatWings.across[i].allFinite())
+      otherWings.across[i].setConstant(std::numeric_limits<float>::quiet_NaN());
+  }
+  return clipContactToOverlap(a, b, flatWings, otherWings, contact, corners);
 }
 
 // A hit with a contact, of a candidate `pair` whose triangles in the pair's frame are a and b, appended to

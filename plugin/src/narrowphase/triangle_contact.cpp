@@ -8,6 +8,17 @@
 #include "shared_math/triangle_test.h"
 
 namespace gpucol {
+namespace {
+
+// A corner of the overlap deeper behind the face across a convex edge of the fixed triangle than this share
+// of the fixed triangle's size is not pushed out along the fixed face's normal beyond that depth and this
+// share: the face across (another pair's contact) answers for it. A box corner just inside another box's
+// bottom face lies a whole box side behind its side face; pushed out along the side's normal it was a contact
+// 0.28 m deep between boxes that touched. Nearer the edge, as at the rim of a face overhanging another, the
+// corner keeps its depth along the fixed face.
+constexpr double kConvexWingSlack = 0.05;
+
+}  // namespace
 
 std::optional<TriangleContact> generateContact(const Eigen::Vector3f (&a)[3], const Eigen::Vector3f (&b)[3]) {
   bool intersects = false;
@@ -15,7 +26,7 @@ std::optional<TriangleContact> generateContact(const Eigen::Vector3f (&a)[3], co
 }
 
 int clipContactToOverlap(const Eigen::Vector3f (&a)[3], const Eigen::Vector3f (&b)[3],
-                         const EdgeWings& flatWings, TriangleContact& contact,
+                         const EdgeWings& flatWings, const EdgeWings& otherWings, TriangleContact& contact,
                          TriangleContact (&corners)[kMaxOverlapCorners]) {
   if (!(contact.depth < 0)) return 0;
   // The moving triangle leaves the fixed one's plane along `out`: B's normal when A moves, A's when B does.
@@ -97,10 +108,36 @@ int clipContactToOverlap(const Eigen::Vector3f (&a)[3], const Eigen::Vector3f (&
   // An empty polygon is rounding at a grazing pair (the triangles cross, so their common segment is over
   // the fixed triangle): the contact stays as it was.
   if (count == 0) return 0;
+  // Convex edges of the fixed triangle (their wing behind its plane): the solid near it lies behind the face
+  // across them too, so a corner's depth is bounded by how far it lies behind that face (kConvexWingSlack).
+  Eigen::Vector3d wingNormals[3];
+  Eigen::Vector3d wingFrom[3];
+  int convex = 0;
+  for (int k = 0; k < 3; ++k) {
+    const Eigen::Vector3f& wing = otherWings.across[k];
+    if (!wing.allFinite()) continue;
+    const Eigen::Vector3d w = wing.cast<double>() - origin;
+    const Eigen::Vector3d& from = f[k];
+    const Eigen::Vector3d& to = f[(k + 1) % 3];
+    const Eigen::Vector3d& third = f[(k + 2) % 3];
+    if (!(out.dot(w - from) < -1e-6 * size)) continue;  // not convex
+    Eigen::Vector3d n = (to - from).cross(w - from);
+    if (n.dot(third - from) > 0) n = -n;
+    const double len = n.norm();
+    if (!(len > 0)) continue;
+    wingNormals[convex] = n / len;
+    wingFrom[convex++] = from;
+  }
+  const double slack = kConvexWingSlack * size;
+  const auto depthBelow = [&](const Eigen::Vector3d& p) {
+    double below = -out.dot(p);
+    for (int k = 0; k < convex; ++k) below = std::min(below, -wingNormals[k].dot(p - wingFrom[k]) + slack);
+    return below;
+  };
   double deepest = 0;
   int at = -1;
   for (int i = 0; i < count; ++i) {
-    const double below = -out.dot(polygon[i]);
+    const double below = depthBelow(polygon[i]);
     if (below > deepest) {
       deepest = below;
       at = i;
@@ -114,7 +151,7 @@ int clipContactToOverlap(const Eigen::Vector3f (&a)[3], const Eigen::Vector3f (&
   // The other corners below the plane, each with its own depth, at the corner moved halfway out.
   int more = 0;
   for (int i = 0; i < count; ++i) {
-    const double below = -out.dot(polygon[i]);
+    const double below = depthBelow(polygon[i]);
     if (i == at || !(below > 0)) continue;
     TriangleContact& corner = corners[more++];
     corner = contact;
