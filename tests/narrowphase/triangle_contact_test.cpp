@@ -270,8 +270,8 @@ TEST(TriangleContact, ClippedToOverlapMatchesTheDoubleReference) {
   EXPECT_GT(cornerContacts, compared / 10);
 }
 
-/// A box A rests tilted on the top edge of box B (a pile's step). A's side face crosses B's near-vertical
-/// side triangle just under B's top, and A's top corner lies 0.28 m behind that side's plane inside its
+/// Box B rests tilted on the top edge of box A (a step of a pile). B's near-vertical side triangle dips just
+/// under A's top and crosses A's side, and A's top corner lies 0.28 m behind that side's plane inside its
 /// prism, but only 2e-4 m inside B's bottom face across the side's convex edge. Pushed out along the side's
 /// normal it was a contact 0.28 m deep between boxes that touched; the face across the convex edge bounds it
 /// to within 5% of the side triangle's size of the 2e-4 m.
