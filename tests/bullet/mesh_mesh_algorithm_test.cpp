@@ -1,7 +1,8 @@
 // MeshMeshAlgorithm against analytic answers: a mesh box resting on a mesh ground, a btStaticPlaneShape and a
-// btBvhTriangleMeshShape (both pair orders) settles at the analytic height; overlapping boxes get the analytic
-// normal and depth; manifolds persist across steps and split by normal direction; the pieces wire into a stock
-// dispatcher; foreign concave shapes and NaN transforms neither crash nor reach the solver.
+// btBvhTriangleMeshShape (both pair orders) settles at the analytic height; overlapping boxes get the
+// analytic normal and depth; manifolds persist across steps, split by normal direction, and a face resting on
+// a face holds one; the pieces wire into a stock dispatcher; foreign concave shapes and NaN transforms
+// neither crash nor reach the solver.
 #include <gtest/gtest.h>
 
 #include <BulletCollision/CollisionDispatch/btEmptyCollisionAlgorithm.h>
@@ -160,6 +161,28 @@ TEST(MeshMeshAlgorithm, NormalsFarApartGetTheirOwnManifolds) {
   EXPECT_GT(floors, 0);
   EXPECT_GT(walls, 0);
   EXPECT_EQ(floors + walls, w.dispatcher().getNumManifolds());
+}
+
+// A box's face resting on a mesh ground's face, or on a plane, is one flat support: one manifold of 4 points,
+// as Bullet's box pair holds it, not a patch per quarter of the box (a stack of ten such faces landed
+// deeper).
+TEST(MeshMeshAlgorithm, AFaceRestingOnAFaceHoldsOneManifold) {
+  for (bool plane : {false, true}) {
+    TestWorld w(DispatchKind::Gpucol);
+    if (plane) {
+      w.add(floorPlane(), 0, at(0, 0, 0));
+    } else {
+      w.add(meshShape(scenes::makeBox(5, 0.5f, 5)), 0, at(0, -0.5f, 0));
+    }
+    btTransform pose = at(0.2f, 0.5f, -0.1f);
+    pose.setRotation(btQuaternion(btVector3(0, 1, 0), 0.35f));
+    btRigidBody* box = w.add(meshShape(scenes::makeBox(0.5f, 0.5f, 0.5f)), 1, pose);
+    box->setActivationState(DISABLE_DEACTIVATION);
+    w.step(120);
+    ASSERT_EQ(w.dispatcher().getNumManifolds(), 1) << (plane ? "plane" : "mesh ground");
+    EXPECT_EQ(w.dispatcher().getManifoldByIndexInternal(0)->getNumContacts(), 4);
+    EXPECT_NEAR(box->getWorldTransform().getOrigin().y(), 0.5f, kRestTolerance);
+  }
 }
 
 // Meshes of the data set on each other: a torus dropped on an armadillo that stands on a mesh ground. Both come to
