@@ -278,35 +278,33 @@ void loadPairTriangles(const MeshShape& shapeA, const MeshShape& shapeB, const P
   }
 }
 
-// The wings (pairFrameWing) of a triangle's edges that are diagonals of a flat face
-// (MeshShape::flatDiagonals), NaN at the others.
-EdgeWings flatDiagonalWings(const MeshShape& shape, std::uint32_t triangle, bool isA,
-                            const PairFrame& frame) {
-  const std::uint8_t flat = shape.flatDiagonals()[triangle];
+// The wings (pairFrameWings) of a triangle's edges, split by MeshShape::flatDiagonals: those of its flat
+// diagonals in `flat`, the others in `other`, NaN in the other one.
+void splitWings(const MeshShape& shape, std::uint32_t triangle, bool isA, const PairFrame& frame, EdgeWings& flat,
+                EdgeWings& other) {
+  const std::uint8_t flatBits = shape.flatDiagonals()[triangle];
   const bool flip = isA ? frame.flipA : frame.flipB;
-  EdgeWings out;
+  const EdgeWings wings = pairFrameWings(shape, triangle, isA, frame);
+  const Eigen::Vector3f none = Eigen::Vector3f::Constant(std::numeric_limits<float>::quiet_NaN());
   for (int i = 0; i < 3; ++i) {
-    const bool flatEdge = flat & (1u << (flip ? 2 - i : i));
-    out.across[i] = flatEdge ? pairFrameWing(shape, triangle, isA, frame, i)
-                             : Eigen::Vector3f::Constant(std::numeric_limits<float>::quiet_NaN());
+    const bool flatEdge = flatBits & (1u << (flip ? 2 - i : i));
+    flat.across[i] = flatEdge ? wings.across[i] : none;
+    other.across[i] = flatEdge ? none : wings.across[i];
   }
-  return out;
 }
 
 // clipContactToOverlap of a candidate's contact (a and b: its triangles in the pair's frame), over the flat
-// diagonals of the triangle its moving triangle leaves (B's when A moves); returns how many contacts at the
-// overlap's other corners it wrote to `corners`.
+// diagonals and bounded by the convex edges of the triangle its moving triangle leaves (B's when A moves);
+// returns how many contacts at the overlap's other corners it wrote to `corners`.
 int clipToOverlap(const MeshShape& shapeA, const MeshShape& shapeB, const PairFrame& frame,
                   const TrianglePair& pair, const Eigen::Vector3f (&a)[3], const Eigen::Vector3f (&b)[3],
                   TriangleContact& contact, TriangleContact (&corners)[kMaxOverlapCorners]) {
   if (!(contact.depth < 0)) return 0;
-  const EdgeWings flatWings = contact.onFaceOfB ? flatDiagonalWings(shapeB, pair.triangleB, false, frame)
-                                                : flatDiagonalWings(shapeA, pair.triangleA, true, frame);
-  EdgeWings otherWings = contact.onFaceOfB ? pairFrameWings(shapeB, pair.triangleB, false, frame)
-                                           : pairFrameWings(shapeA, pair.triangleA, true, frame);
-  for (int i = 0; i < 3; ++i) {
-    if (flatWings.across[i].allFinite())
-      otherWings.across[i].setConstant(std::numeric_limits<float>::quiet_NaN());
+  EdgeWings flatWings, otherWings;
+  if (contact.onFaceOfB) {
+    splitWings(shapeB, pair.triangleB, false, frame, flatWings, otherWings);
+  } else {
+    splitWings(shapeA, pair.triangleA, true, frame, flatWings, otherWings);
   }
   return clipContactToOverlap(a, b, flatWings, otherWings, contact, corners);
 }
