@@ -133,25 +133,22 @@ inline ReferenceWings referenceWings(const MeshShape& shape, const btTransform& 
   return wings;
 }
 
-/// The far vertices of referenceWings across the edges of `t` that are diagonals of a flat face.
-inline FlatWings referenceFlatWings(const MeshShape& shape, const btTransform& transform, std::uint32_t t) {
-  const ReferenceWings wings = referenceWings(shape, transform, t);
-  FlatWings out;
-  for (std::size_t k = 0; k < 3; ++k) {
-    if (wings.flat[k]) out[k] = wings.far[k];
-  }
-  return out;
-}
-
-/// The far vertices of referenceWings across the edges of `t` that are convex: not flat, the far vertex
-/// behind the triangle's plane (in the world).
-inline FlatWings referenceConvexWings(const MeshShape& shape, const btTransform& transform, std::uint32_t t) {
+/// The far vertices of referenceWings across the edges of `t` that are diagonals of a flat face (`flat`), and
+/// across those that are convex (`convex`: not flat, the far vertex behind the triangle's plane in the world).
+struct SplitWings {
+  FlatWings flat, convex;
+};
+inline SplitWings referenceSplitWings(const MeshShape& shape, const btTransform& transform, std::uint32_t t) {
   const ReferenceWings wings = referenceWings(shape, transform, t);
   const TriangleD own = worldTriangle(shape, transform, t);
   const Eigen::Vector3d normal = (own[1] - own[0]).cross(own[2] - own[0]);
-  FlatWings out;
+  SplitWings out;
   for (std::size_t k = 0; k < 3; ++k) {
-    if (wings.far[k] && !wings.flat[k] && normal.dot(*wings.far[k] - own[k]) < 0) out[k] = wings.far[k];
+    if (wings.flat[k]) {
+      out.flat[k] = wings.far[k];
+    } else if (wings.far[k] && normal.dot(*wings.far[k] - own[k]) < 0) {
+      out.convex[k] = wings.far[k];
+    }
   }
   return out;
 }
@@ -208,22 +205,20 @@ inline QueryCheck checkQuery(const MeshShape& a, const btTransform& ta, const Me
     double pointDistance = std::max(pointTriangleDistance(point, triA), pointTriangleDistance(point, triB));
     double depthError = 1e300, normalError = 1e300;
     const auto byCorners = [&](const TriangleD& moving, const TriangleD& fixed, const Eigen::Vector3d& out,
-                               const FlatWings& wings, const FlatWings& convex) {
+                               const SplitWings& wings) {
       // No deeper than the overlap's deepest corner, and not above the plane. (A corner where the moving
       // triangle's edge meets a side at a grazing angle is ill-conditioned: its own depth is not compared.)
-      const double deepest = referenceClippedMove(moving, fixed, out, wings, convex);
+      const double deepest = referenceClippedMove(moving, fixed, out, wings.flat, wings.convex);
       depthError = std::min(depthError, std::max({0.0, -double(c.depth) - deepest, double(c.depth)}));
       const Eigen::Vector3d corner = point + out * (0.5 * double(c.depth));
       pointDistance = std::min(pointDistance, pointTriangleDistance(corner, moving));
     };
     if (aMayMove) {
-      byCorners(triA, triB, ref.nB, referenceFlatWings(b, tb, c.triangleB),
-                referenceConvexWings(b, tb, c.triangleB));
+      byCorners(triA, triB, ref.nB, referenceSplitWings(b, tb, c.triangleB));
       normalError = std::min(normalError, (normal - ref.nB).norm());
     }
     if (bMayMove) {
-      byCorners(triB, triA, ref.nA, referenceFlatWings(a, ta, c.triangleA),
-                referenceConvexWings(a, ta, c.triangleA));
+      byCorners(triB, triA, ref.nA, referenceSplitWings(a, ta, c.triangleA));
       normalError = std::min(normalError, (normal + ref.nA).norm());
     }
     check.worstPointDistance =
@@ -243,16 +238,12 @@ inline QueryCheck checkQuery(const MeshShape& a, const btTransform& ta, const Me
     const double tie = contactTolerance * scale;
     double error = 1e300;
     if (ref.moveA <= ref.moveB + tie) {
-      error = std::min(
-          error,
-          std::abs(depth + referenceClippedMove(triA, triB, ref.nB, referenceFlatWings(b, tb, pair.triangleB),
-                                                referenceConvexWings(b, tb, pair.triangleB))));
+      const SplitWings wingsB = referenceSplitWings(b, tb, pair.triangleB);
+      error = std::min(error, std::abs(depth + referenceClippedMove(triA, triB, ref.nB, wingsB.flat, wingsB.convex)));
     }
     if (ref.moveB <= ref.moveA + tie) {
-      error = std::min(
-          error,
-          std::abs(depth + referenceClippedMove(triB, triA, ref.nA, referenceFlatWings(a, ta, pair.triangleA),
-                                                referenceConvexWings(a, ta, pair.triangleA))));
+      const SplitWings wingsA = referenceSplitWings(a, ta, pair.triangleA);
+      error = std::min(error, std::abs(depth + referenceClippedMove(triB, triA, ref.nA, wingsA.flat, wingsA.convex)));
     }
     check.worstDepthError = std::max(check.worstDepthError, error / scale);
   }
