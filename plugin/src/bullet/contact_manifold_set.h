@@ -34,10 +34,10 @@ std::vector<PairContact> swapSides(std::vector<PairContact> contacts);
 /// with the body) is within 30° of its own and whose first contact lies within a quarter of the smaller
 /// body's bounding radius of it (kept in that body's frame), or within the flat surface either contact lies
 /// on (two box faces resting on each other make one patch, as Bullet's box pair has one manifold); otherwise
-/// it starts a new one. Manifolds live
-/// across steps: Bullet matches each new contact with a point already held (within the breaking threshold)
-/// and keeps that point's impulse, so the solver warm starts; refreshContactPoints drops points that drifted
-/// apart. A manifold left with no point at the end of a step is released.
+/// it starts a new one. Manifolds live across steps: Bullet matches each new contact with a point already
+/// held (within the breaking threshold) and keeps that point's impulse, so the solver warm starts;
+/// refreshContactPoints drops points that drifted apart. A manifold left with no point at the end of a step
+/// is released.
 class ContactManifoldSet {
  public:
   /// Manifolds come from and go back to `dispatcher`.

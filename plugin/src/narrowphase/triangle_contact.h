@@ -72,12 +72,11 @@ inline constexpr int kMaxOverlapCorners = 8;
 /// leaves: B when onFaceOfB, else A; NaN elsewhere), that edge is a diagonal of a flat face, not the face's
 /// end: the two far edges of the triangle across it bound the overlap instead, where the two triangles make
 /// a convex quad (not at the inner corner of a flat face shaped like an L, where those edges would cut into
-/// the triangle itself). Each side is moved out by 1e-5
-/// of the other triangle's size, so that a face lying in it (the sides of two boxes stacked flush) is not cut
-/// by rounding. Where `otherWings` gives the far vertex across a convex edge of the other triangle (NaN
-/// elsewhere, flat diagonals included), a corner's depth is at most how far it lies behind the face across
-/// that edge and 5% of the other triangle's size: a corner nearer that face belongs to the pair it makes with
-/// that face. A contact that is not below 0 is left as it is.
+/// the triangle itself). Each side is moved out by 1e-5 of the other triangle's size, so that a face lying in
+/// it (the sides of two boxes stacked flush) is not cut by rounding. Where `otherWings` gives the far vertex
+/// across a convex edge of the other triangle (NaN elsewhere, flat diagonals included), a corner's depth is at
+/// most how far it lies behind the face across that edge and 5% of the other triangle's size: a corner nearer
+/// that face belongs to the pair it makes with that face. A contact that is not below 0 is left as it is.
 int clipContactToOverlap(const Eigen::Vector3f (&a)[3], const Eigen::Vector3f (&b)[3],
                          const EdgeWings& flatWings, const EdgeWings& otherWings, TriangleContact& contact,
                          TriangleContact (&corners)[kMaxOverlapCorners]);
